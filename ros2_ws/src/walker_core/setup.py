@@ -1,0 +1,25 @@
+"""Install walker_core: the ROS-free robot model and the shared parameter file."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'walker_core'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='walker maintainers',
+    maintainer_email='maintainers@walker-robot.org',
+    description='The walker robot model: parameter file, kinematics, dynamics, truss.',
+    license='Apache-2.0',
+    entry_points={'console_scripts': []},
+)

@@ -1,0 +1,229 @@
+"""The walker's robot, truss and gripper parameters, shared by every node.
+
+One YAML file (``config/walker.yaml``, section ``/**``) holds them; this module turns it into
+frozen, validated dataclasses. Units are SI (m, kg, s, rad, N*m; REP 103).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+from collections.abc import Mapping
+
+import numpy as np
+
+from walker_core.parameter_schema import (
+    ParameterError, load_parameter_file, parameter, section_from_flat)
+
+__all__ = [
+    'Geometry', 'Masses', 'Drive', 'Drives', 'Flexibility', 'RobotParameters',
+    'TrussParameters', 'GripperParameters', 'TimingParameters', 'WalkerParameters',
+    'JOINT_KINDS_BY_ROLE',
+    'default_parameter_file', 'load_walker_parameters',
+]
+
+#: Kind of drive at each joint role J1..J5 (the same motors serve mirrored roles).
+JOINT_KINDS_BY_ROLE = ('yaw', 'pitch', 'vertex', 'pitch', 'yaw')
+
+
+@dataclasses.dataclass(frozen=True)
+class Geometry:
+    """Link lengths of paper eq (1)."""
+
+    l1: float = parameter('wrist offset: pitch axis to gripper contact point', 'm', 0.01, 2.0)
+    l2: float = parameter('length of each of the two flexible links', 'm', 0.05, 5.0)
+
+    def __post_init__(self) -> None:
+        if self.l1 >= self.l2:
+            raise ParameterError(
+                f'robot.geometry.l1 ({self.l1} m) must be shorter than l2 ({self.l2} m)')
+
+
+@dataclasses.dataclass(frozen=True)
+class Masses:
+    """Masses of the bodies; the rigid model lumps them at J3, J4 and the tip (eqs (9)-(13))."""
+
+    gripper: float = parameter('gripper with its yaw drive, at each end', 'kg', 0.01, 100.0)
+    wrist: float = parameter('wrist pitch drive housing, at each end', 'kg', 0.0, 100.0)
+    vertex: float = parameter('vertex drive housing', 'kg', 0.0, 100.0)
+    link: float = parameter('each flexible link, uniformly distributed', 'kg', 0.01, 100.0)
+
+    @property
+    def lumped(self) -> tuple[float, float, float]:
+        """Point masses (m3, m4, m5) at the vertex J3, the tip wrist J4 and the tip, in kg.
+
+        Each link's mass is split half to each of its ends; the mass at the base end does not
+        move with J1-J5 and drops out of the inertia terms.
+        """
+        m3 = self.vertex + self.link
+        m4 = self.wrist + 0.5 * self.link
+        m5 = self.gripper
+        return m3, m4, m5
+
+
+@dataclasses.dataclass(frozen=True)
+class Drive:
+    """One kind of joint drive (harmonic-drive gear motor) and its joint's limits."""
+
+    gear_ratio: float = parameter('harmonic drive reduction n_i', '', 1.0, 1000.0)
+    torque_limit: float = parameter('maximum joint torque', 'N*m', 0.01, 1000.0)
+    friction_torque: float = parameter('Coulomb friction torque at the joint', 'N*m', 0.0, 1000.0)
+    stiction_torque: float = parameter('static friction (breakaway) torque', 'N*m', 0.0, 1000.0)
+    velocity_limit: float = parameter('maximum joint speed', 'rad/s', 0.01, 100.0)
+    position_min: float = parameter('lower joint limit', 'rad', -10.0, 10.0)
+    position_max: float = parameter('upper joint limit', 'rad', -10.0, 10.0)
+
+    def __post_init__(self) -> None:
+        if self.friction_torque <= 0.10 * self.torque_limit:
+            raise ParameterError(
+                f'friction_torque ({self.friction_torque} N*m) must exceed 10% of torque_limit '
+                f'({self.torque_limit} N*m): the paper measured friction above 10%')
+        if not self.friction_torque <= self.stiction_torque < self.torque_limit:
+            raise ParameterError(
+                f'need friction_torque <= stiction_torque < torque_limit, got '
+                f'{self.friction_torque}, {self.stiction_torque}, {self.torque_limit} N*m')
+        if self.position_min >= self.position_max:
+            raise ParameterError(f'position_min ({self.position_min} rad) must be below '
+                                 f'position_max ({self.position_max} rad)')
+
+
+@dataclasses.dataclass(frozen=True)
+class Drives:
+    """The three kinds of drive: yaw (J1, J5), pitch (J2, J4) and vertex (J3)."""
+
+    motor_inertia: float = parameter('rotor inertia I_m of every joint motor', 'kg*m^2',
+                                     0.0, 1.0)
+    yaw: Drive
+    pitch: Drive
+    vertex: Drive
+
+    def for_role(self, role: int) -> Drive:
+        """Drive of joint role ``role`` (1..5)."""
+        return getattr(self, JOINT_KINDS_BY_ROLE[role - 1])
+
+    def role_array(self, attribute: str) -> np.ndarray:
+        """Array over roles J1..J5 of one attribute, e.g. ``'torque_limit'``."""
+        return np.array([getattr(self.for_role(i), attribute) for i in range(1, 6)])
+
+
+@dataclasses.dataclass(frozen=True)
+class Flexibility:
+    """Structural modes of the flexible links, as seen at the joints (paper section 3)."""
+
+    joint1_mode: float = parameter('first structural mode seen at joint 1', 'rad/s', 1.0, 1000.0)
+    joints23_mode: float = parameter('first structural mode seen at joints 2 and 3', 'rad/s',
+                                     1.0, 1000.0)
+    damping_ratio: float = parameter('structural damping ratio of the modes', '', 0.0, 1.0)
+    segments_per_link: int = parameter('rigid segments each flexible link is split into', '',
+                                       2, 20)
+
+    def __post_init__(self) -> None:
+        if self.joint1_mode >= self.joints23_mode:
+            raise ParameterError('the joint-1 mode must be lower than the joints-2/3 mode '
+                                 f'({self.joint1_mode} >= {self.joints23_mode} rad/s)')
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotParameters:
+    """The robot: geometry, masses, drives and flexibility."""
+
+    name: str = parameter('robot name, also the ROS namespace of its topics')
+    geometry: Geometry
+    mass: Masses
+    drive: Drives
+    flexibility: Flexibility
+
+    def __post_init__(self) -> None:
+        if not self.name.isidentifier():
+            raise ParameterError(
+                f'robot.name {self.name!r} must be a valid ROS name token (letters, digits, _)')
+
+
+@dataclasses.dataclass(frozen=True)
+class TrussParameters:
+    """A flat truss face: nodes on a rectangular grid, each with a threaded hole (axis +z)."""
+
+    spacing: float = parameter('distance between neighbouring nodes', 'm', 0.05, 10.0)
+    columns: int = parameter('number of nodes along x', '', 1, 100)
+    rows: int = parameter('number of nodes along y', '', 1, 100)
+    origin_x: float = parameter('x of node n0_0 in the truss (world) frame', 'm', -100.0, 100.0)
+    origin_y: float = parameter('y of node n0_0 in the truss (world) frame', 'm', -100.0, 100.0)
+    hole_depth: float = parameter('depth of the threaded hole', 'm', 0.001, 1.0)
+
+    def __post_init__(self) -> None:
+        if self.columns * self.rows < 2:
+            raise ParameterError('the truss needs at least two nodes to stand on')
+
+
+@dataclasses.dataclass(frozen=True)
+class GripperParameters:
+    """Screw-in attachment of a gripper to a node."""
+
+    insertion_position_tolerance: float = parameter(
+        'largest tip distance from the hole axis at which the screw-in succeeds', 'm', 1e-5, 0.1)
+    insertion_axis_tolerance: float = parameter(
+        'largest angle between gripper and hole axes at which the screw-in succeeds', 'rad',
+        1e-4, 0.5)
+    approach_height: float = parameter(
+        'height above the hole where insertion starts and extraction ends', 'm', 0.001, 0.5)
+    screw_time: float = parameter('time to screw in or unscrew', 's', 0.0, 60.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class TimingParameters:
+    """Rates every node agrees on."""
+
+    control_rate: float = parameter(
+        'rate of joint states, effort commands and setpoints (the control period is its '
+        'inverse)', 'Hz', 10.0, 5000.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class WalkerParameters:
+    """Everything in the ``/**`` section that every node shares."""
+
+    robot: RobotParameters
+    truss: TrussParameters
+    gripper: GripperParameters
+    timing: TimingParameters
+
+    def __post_init__(self) -> None:
+        reach = 2.0 * self.robot.geometry.l2
+        if self.truss.spacing >= reach:
+            raise ParameterError(
+                f'truss.spacing ({self.truss.spacing} m) must be shorter than the reach '
+                f'2*l2 = {reach} m, or no step is possible')
+
+    @classmethod
+    def from_flat(cls, flat: Mapping[str, Any]) -> 'WalkerParameters':
+        """Build and validate from flat dotted names (``robot.geometry.l2``, ...)."""
+        return section_from_flat(cls, flat)
+
+
+def default_parameter_file() -> Path:
+    """Path of the installed (or source) ``walker.yaml``."""
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        candidate = Path(get_package_share_directory('walker_core')) / 'config' / 'walker.yaml'
+        if candidate.exists():
+            return candidate
+    except (ImportError, LookupError, ValueError):
+        pass
+    return Path(__file__).resolve().parents[1] / 'config' / 'walker.yaml'
+
+
+def load_walker_parameters(path: str | Path | None = None) -> WalkerParameters:
+    """Load and validate the shared parameters from a ``ros__parameters`` YAML file.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        Parameter file; the default is the package's ``config/walker.yaml``.
+
+    Raises
+    ------
+    ParameterError
+        Naming the missing or invalid parameter.
+    """
+    return WalkerParameters.from_flat(load_parameter_file(path or default_parameter_file()))
