@@ -18,5 +18,7 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='Records walks as rosbag2 bags in MCAP storage and reads them back.',
     license='Apache-2.0',
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': [
+        'bag_info = walker_bag.bag_info:main',
+    ]},
 )
