@@ -19,6 +19,7 @@ setup(
     description='Records walks as rosbag2 bags in MCAP storage and reads them back.',
     license='Apache-2.0',
     entry_points={'console_scripts': [
+        'recorder_node = walker_bag.recorder_node:main',
         'bag_info = walker_bag.bag_info:main',
     ]},
 )
