@@ -14,7 +14,6 @@ import time
 from pathlib import Path
 
 import pytest
-from ament_index_python.packages import get_package_prefix
 from mcap.exceptions import EndOfFile
 from mcap.reader import make_reader
 from mcap.records import Message
@@ -27,11 +26,11 @@ from walker_bag.core.bag_reader import BagReader
 from walker_bag.core.bag_recovery import recover_bag
 from walker_bag.core.errors import BagPathError, MetadataError
 from walker_bag.core.message_definitions import type_description_hash
+from walker_bag.recorder_command import recorder_command
 
 pytestmark = pytest.mark.integration
 
 PUBLISHER = str(Path(__file__).resolve().parent / 'walk_publisher.py')
-RECORDER = str(Path(get_package_prefix('walker_bag')) / 'lib' / 'walker_bag' / 'recorder_node')
 START_TIMEOUT = 60.0  # [s] a process starting on a loaded machine
 BURST = 40
 RELIABLE_TOPICS = {
@@ -51,12 +50,9 @@ def publisher(env, mode, *args):
 
 
 def recorder(env, bag_dir, *parameters):
-    args = [RECORDER, '--ros-args', '-r', '__ns:=/walker',
-            '-p', f'recorder.directory:={bag_dir.parent}',
-            '-p', f'recorder.bag_name:={bag_dir.name}']
-    for parameter in parameters:
-        args += ['-p', parameter]
-    return NodeProcess(args, env, 'recorder')
+    overrides = dict(p.split(':=', 1) for p in parameters)
+    return NodeProcess(recorder_command(bag_dir.parent, bag_name=bag_dir.name,
+                                        parameters=overrides), env, 'recorder')
 
 
 def flushed_counts(bag_dir):
@@ -288,3 +284,12 @@ def test_an_invalid_parameter_is_refused_by_name(ros_env, tmp_path):
         assert rec.process.wait(timeout=START_TIMEOUT) == 2
         assert 'recorder.flush_period' in rec.output
     assert not (tmp_path / 'never').exists()
+
+
+def test_the_command_line_is_that_of_ros2_run_with_the_overrides(tmp_path):
+    command = recorder_command(tmp_path, bag_name='b', params_file='walker.yaml',
+                               use_sim_time=True, parameters={'recorder.topics': "['x']"})
+    assert Path(command[0]).is_file() and os.access(command[0], os.X_OK)
+    assert command[1:] == ['--ros-args', '-r', '__ns:=/walker', '--params-file', 'walker.yaml',
+                           '-p', f'recorder.directory:={tmp_path}', '-p', 'recorder.bag_name:=b',
+                           '-p', 'use_sim_time:=true', '-p', "recorder.topics:=['x']"]
