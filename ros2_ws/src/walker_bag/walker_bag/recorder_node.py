@@ -9,8 +9,9 @@ recorded too; best effort when any publisher is). The subscriptions are raw: the
 written exactly as received, with the publishers' offered QoS and type hash in the bag.
 
 Timestamps: the log time is the receive time, in sim time when ``use_sim_time`` is true (the
-node's ROS clock, as ``ros2 bag record --use-sim-time`` stamps) and otherwise the middleware's
-receive timestamp; the publish time is the publisher's source timestamp [ns].
+node's ROS clock, as ``ros2 bag record --use-sim-time`` stamps; it reads 0 until the first
+``/clock`` message arrives) and otherwise the middleware's receive timestamp; the publish time
+is the publisher's source timestamp [ns].
 
 Nothing received is lost on the way out: SIGINT (Ctrl-C) and SIGTERM stop the spinning, the
 messages already received are taken and written, and the bag is closed (summary, footer,
@@ -196,6 +197,9 @@ class RecorderNode(Node):
         if self._writer.closed:
             return
         metadata = self._writer.close()
+        for name in self._selection.names:
+            if name not in self._subscriptions_by_topic and name not in self._skipped:
+                self.get_logger().info(f'{name} was asked for but never had a publisher')
         self.get_logger().info(
             f'closed {self._writer.path}: {metadata.message_count} messages on '
             f'{len(metadata.topics_with_message_count)} topics')
