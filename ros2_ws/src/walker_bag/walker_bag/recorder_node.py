@@ -27,6 +27,7 @@ import importlib
 import signal
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import rclpy
@@ -119,7 +120,7 @@ class RecorderNode(Node):
             raise
 
     @property
-    def bag_path(self) -> Any:
+    def bag_path(self) -> Path:
         """The bag directory being written."""
         return self._writer.path
 
