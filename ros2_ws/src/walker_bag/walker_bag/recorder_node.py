@@ -1,0 +1,247 @@
+"""The walk recorder: records the walker's topics into a rosbag2 bag (MCAP storage).
+
+Run as ``recorder_node --ros-args -r __ns:=/walker --params-file walker.yaml``. The node
+(``/walker/recorder``) looks for new topics every ``recorder.discovery_period`` and subscribes
+to those selected by ``recorder.topics`` (default: every topic of its namespace and ``/clock``)
+as soon as they have a publisher, with a QoS that matches every publisher's offer (transient
+local when all publishers are latched, so messages published before the recorder started are
+recorded too; best effort when any publisher is). The subscriptions are raw: the CDR bytes are
+written exactly as received, with the publishers' offered QoS and type hash in the bag.
+
+Timestamps: the log time is the receive time, in sim time when ``use_sim_time`` is true (the
+node's ROS clock, as ``ros2 bag record --use-sim-time`` stamps; it reads 0 until the first
+``/clock`` message arrives) and otherwise the middleware's receive timestamp; the publish time
+is the publisher's source timestamp [ns].
+
+Nothing received is lost on the way out: SIGINT (Ctrl-C) and SIGTERM stop the spinning, the
+messages already received are taken and written, and the bag is closed (summary, footer,
+``metadata.yaml``). Received messages are written out every ``recorder.flush_period``, so
+even a SIGKILL loses at most that much. All bag logic is in :mod:`walker_bag.core`.
+"""
+
+from __future__ import annotations
+
+import datetime
+import functools
+import importlib
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import (
+    DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
+from rclpy.signals import SignalHandlerOptions
+from rclpy.topic_endpoint_info import TopicEndpointInfo
+
+from walker_core.node_parameters import declare_section
+from walker_core.parameter_schema import ParameterError
+
+from walker_bag.core.bag_metadata import TopicMetadata
+from walker_bag.core.bag_writer import BagWriter
+from walker_bag.core.errors import BagError, MessageDefinitionError
+from walker_bag.core.message_definitions import message_definition, type_description_hash
+from walker_bag.core.qos import QosProfile, subscription_policies
+from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
+from walker_bag.core.topic_selection import TopicSelection
+
+__all__ = ['RecorderNode', 'offered_qos', 'main']
+
+#: Longest time spent taking already-received messages when asked to stop [s].
+DRAIN_LIMIT = 1.0
+#: How long the executor waits for work before the stop flag is checked again [s].
+_SPIN_TIMEOUT = 0.1
+#: Wait of one drain step [s]; two idle steps in a row mean nothing is left to take.
+_DRAIN_STEP = 0.02
+_INVALID_HASH = 'INVALID'
+
+
+def offered_qos(endpoint: TopicEndpointInfo) -> QosProfile:
+    """Return a publisher's offered QoS, as discovered, in the bag's form."""
+    profile = endpoint.qos_profile
+    return QosProfile(
+        reliability=profile.reliability.name.lower(),
+        durability=profile.durability.name.lower(),
+        history=profile.history.name.lower(), depth=int(profile.depth),
+        deadline_ns=profile.deadline.nanoseconds, lifespan_ns=profile.lifespan.nanoseconds,
+        liveliness=profile.liveliness.name.lower(),
+        liveliness_lease_duration_ns=profile.liveliness_lease_duration.nanoseconds,
+        avoid_ros_namespace_conventions=bool(profile.avoid_ros_namespace_conventions))
+
+
+def _message_class(type_name: str) -> Any:
+    """Import the Python class of ``pkg/msg/Type`` (rclpy needs it for the type support)."""
+    package, _, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{package}.msg'), name)
+
+
+class RecorderNode(Node):
+    """Subscribe to the selected topics and hand every received message to the bag writer.
+
+    Raises
+    ------
+    ParameterError
+        If the ``recorder`` parameters are invalid.
+    BagError
+        If the bag cannot be created (existing directory, unwritable location).
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('recorder', **kwargs)
+        self._settings: RecorderParameters = declare_section(
+            self, RecorderParameters, RECORDER_PREFIX)
+        self._selection = TopicSelection(self._settings.topics, self.get_namespace())
+        self._use_sim_time = bool(self.get_parameter('use_sim_time').value)
+        self._writer = BagWriter(
+            self._settings.bag_path(datetime.datetime.now()),
+            max_chunk_size=self._settings.max_chunk_size,
+            custom_data={'clock': 'sim_time' if self._use_sim_time else 'system_time'})
+        self._subscriptions_by_topic: dict[str, Any] = {}
+        self._skipped: set[str] = set()
+        self._received = 0
+        try:
+            steady = Clock(clock_type=ClockType.STEADY_TIME)
+            self._discovery_timer = self.create_timer(
+                self._settings.discovery_period, self._discover, clock=steady)
+            self._flush_timer = self.create_timer(
+                self._settings.flush_period, self._writer.flush, clock=steady)
+            self.get_logger().info(
+                f'recording {self._selection!r} to {self._writer.path} '
+                f'({"sim" if self._use_sim_time else "system"} time)')
+            self._discover()
+        except BaseException:
+            self._writer.close()
+            raise
+
+    @property
+    def bag_path(self) -> Path:
+        """The bag directory being written."""
+        return self._writer.path
+
+    @property
+    def received_count(self) -> int:
+        """Messages received (and handed to the writer) so far."""
+        return self._received
+
+    def _discover(self) -> None:
+        """Subscribe to selected topics that have appeared since the last look."""
+        for topic, types in self.get_topic_names_and_types():
+            if (topic in self._subscriptions_by_topic or topic in self._skipped
+                    or not self._selection.matches(topic)):
+                continue
+            if len(types) != 1:
+                self._skip(topic, f'it has several types ({", ".join(types)})')
+                continue
+            publishers = self.get_publishers_info_by_topic(topic)
+            if publishers:
+                self._subscribe(topic, types[0], publishers)
+
+    def _skip(self, topic: str, reason: str) -> None:
+        self._skipped.add(topic)
+        self.get_logger().error(f'not recording {topic}: {reason}')
+
+    def _subscribe(self, topic: str, type_name: str,
+                   publishers: list[TopicEndpointInfo]) -> None:
+        try:
+            message_class = _message_class(type_name)
+        except (ImportError, AttributeError, ValueError):
+            self._skip(topic, f'its type {type_name} is not installed here')
+            return
+        offers = tuple(offered_qos(p) for p in publishers)
+        type_hash = str(publishers[0].topic_type_hash)
+        if type_hash == _INVALID_HASH:
+            try:
+                type_hash = type_description_hash(type_name)
+            except MessageDefinitionError:
+                type_hash = ''
+        try:
+            definition = message_definition(type_name)
+        except MessageDefinitionError as error:
+            self.get_logger().warning(f'{topic}: {error}; recording it without a definition')
+            definition = None
+        reliability, durability = subscription_policies(offers)
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=self._settings.queue_depth,
+                         reliability=ReliabilityPolicy[reliability.upper()],
+                         durability=DurabilityPolicy[durability.upper()])
+        self._writer.add_topic(TopicMetadata(topic, type_name, offers, type_hash), definition)
+        self._subscriptions_by_topic[topic] = self.create_subscription(
+            message_class, topic, functools.partial(self._on_message, topic), qos, raw=True)
+        self.get_logger().info(f'recording {topic} [{type_name}] ({reliability}, {durability}, '
+                               f'{len(offers)} publisher(s))')
+
+    def _on_message(self, topic: str, data: bytes, info: dict[str, Any]) -> None:
+        received = info.get('received_timestamp') or 0
+        if self._use_sim_time or received <= 0:
+            received = self.get_clock().now().nanoseconds
+        self._writer.write(topic, data, received, info.get('source_timestamp') or received,
+                           info.get('publication_sequence_number') or 0)
+        self._received += 1
+
+    def drain(self, executor: SingleThreadedExecutor, limit: float = DRAIN_LIMIT) -> None:
+        """Take and write the messages already received, for at most ``limit`` seconds."""
+        self._discovery_timer.cancel()
+        deadline = time.monotonic() + limit
+        idle_steps = 0
+        while idle_steps < 2 and time.monotonic() < deadline:
+            before = self._received
+            executor.spin_once(timeout_sec=_DRAIN_STEP)
+            idle_steps = idle_steps + 1 if self._received == before else 0
+
+    def close_bag(self) -> None:
+        """Close the bag (idempotent) and log what it holds."""
+        if self._writer.closed:
+            return
+        metadata = self._writer.close()
+        for name in self._selection.names:
+            if name not in self._subscriptions_by_topic and name not in self._skipped:
+                self.get_logger().info(f'{name} was asked for but never had a publisher')
+        self.get_logger().info(
+            f'closed {self._writer.path}: {metadata.message_count} messages on '
+            f'{len(metadata.topics_with_message_count)} topics')
+
+
+class _StopRequest:
+    """Turns SIGINT and SIGTERM into a flag the spin loop checks (no exception mid-write)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, self._handle)
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.requested = True
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the recorder until SIGINT or SIGTERM, then close the bag; return the exit code."""
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = _StopRequest()
+    node = None
+    try:
+        node = RecorderNode()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while not stop.requested and rclpy.ok():
+            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
+        node.drain(executor)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ParameterError, ParameterException, BagError) as error:
+        print(f'[recorder] refused to start: {error}', file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.close_bag()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
