@@ -1,0 +1,102 @@
+"""Process supervision (nothing left behind), graph command lines, the summary table."""
+
+import json
+import math
+import os
+import sys
+import time
+from types import SimpleNamespace
+
+import pytest
+
+from walker_bringup.graph import NodeSpec, controller_node_name, walker_graph
+from walker_bringup.processes import ProcessGroup
+from walker_bringup.summary import format_table, rows_from_reports, write_json
+
+ENV = {**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
+SPEC = NodeSpec('pkg', 'exe', 'child', '/walker', 'walker.yaml')
+
+
+def python_child(code):
+    return [sys.executable, '-c', code]
+
+
+def test_the_graph_has_every_node_with_its_arguments():
+    graph = walker_graph('/tmp/walker.yaml', sim_time=True, record=True)
+    names = [n.name for n in graph]
+    assert names[0] == 'recorder' and names[1] == 'plant'
+    assert names[2:7] == ['controller_a_yaw', 'controller_a_pitch', 'controller_vertex',
+                          'controller_b_pitch', 'controller_b_yaw']
+    assert names[-2:] == ['planner', 'supervisor']
+    command = graph[2].command(executable='/bin/true')
+    assert command[:6] == ['/bin/true', '--ros-args', '-r', '__node:=controller_a_yaw',
+                           '-r', '__ns:=/walker']
+    assert '--params-file' in command and 'joint_name:=a_yaw_joint' in command
+    assert 'use_sim_time:=true' in command
+    assert all('use_sim_time:=false' in n.command('/bin/true')
+               for n in walker_graph('/tmp/walker.yaml'))
+    assert controller_node_name('vertex_joint') == 'controller_vertex'
+
+
+def test_refuses_to_start_nodes_without_loopback_discovery(tmp_path):
+    with pytest.raises(ValueError, match='LOCALHOST'):
+        ProcessGroup(tmp_path, {k: v for k, v in ENV.items()
+                                if k != 'ROS_AUTOMATIC_DISCOVERY_RANGE'})
+
+
+def test_a_dead_child_is_reported_once(tmp_path):
+    with ProcessGroup(tmp_path, ENV) as group:
+        group.start(SPEC, python_child('import sys; print("bye"); sys.exit(3)'))
+        deadline = time.monotonic() + 10
+        dead = []
+        while not dead and time.monotonic() < deadline:
+            dead = group.poll_deaths()
+            time.sleep(0.05)
+        assert [p.popen.returncode for p in dead] == [3]
+        assert 'bye' in dead[0].log_tail()
+        assert group.poll_deaths() == []
+
+
+def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
+    stubborn = ('import signal, time\n'
+                'signal.signal(signal.SIGINT, signal.SIG_IGN)\n'
+                'signal.signal(signal.SIGTERM, signal.SIG_IGN)\n'
+                'print("ready", flush=True)\n'
+                'time.sleep(60)\n')
+    polite = 'import time\ntry:\n    time.sleep(60)\nexcept KeyboardInterrupt:\n    pass\n'
+    group = ProcessGroup(tmp_path, ENV)
+    a = group.start(NodeSpec('p', 'e', 'stubborn', '/w', 'f'), python_child(stubborn))
+    b = group.start(NodeSpec('p', 'e', 'polite', '/w', 'f'), python_child(polite))
+    time.sleep(0.5)
+    codes = group.stop_all(timeout=1.0)
+    assert not a.alive and not b.alive
+    assert codes['polite'] == 0
+    assert codes['stubborn'] == -9
+    for process in (a, b):
+        with pytest.raises(ProcessLookupError):
+            os.kill(process.popen.pid, 0)
+
+
+def report(index, success=True, duration=6.0, bound=4.0):
+    return SimpleNamespace(
+        step_index=index, moving_gripper='b', from_node='n2_1', to_node='n0_1', sweep=math.pi,
+        success=success, phase_names=['extraction', 'coarse', 'fine', 'insertion'],
+        phase_durations=[0.6, 3.0, 1.2, 1.2], duration=duration, time_optimal_bound=bound,
+        insertion_error=0.0004, insertion_error_estimated=0.0003, residual_vibration=0.0002,
+        insertion_attempts=1, message='' if success else 'insertion jammed 3 times')
+
+
+def test_summary_table_and_json(tmp_path):
+    rows = rows_from_reports([report(0), report(1, success=False, bound=0.0)])
+    assert rows[0].bound_ratio == pytest.approx(1.5)
+    assert math.isnan(rows[1].bound_ratio)
+    table = format_table(rows)
+    lines = table.splitlines()
+    assert 'ratio' in lines[0] and 'ins. err mm' in lines[0]
+    assert '1.50' in lines[2] and '0.40' in lines[2] and '+180' in lines[2]
+    assert 'NO' in lines[3] and 'step 2: insertion jammed 3 times' in table
+    assert lines[4].split()[0] == 'all'
+    write_json(rows, tmp_path / 's.json', {'target': 'n0_1'})
+    data = json.loads((tmp_path / 's.json').read_text())
+    assert data['target'] == 'n0_1' and data['steps'][1]['bound_ratio'] is None
+    assert data['steps'][0]['phase_durations']['coarse'] == 3.0

@@ -1,0 +1,207 @@
+"""Talk to a running walker graph from a script: readiness, walking, hold, step reports.
+
+Used by ``run_all.py``, the tests and the benchmarks. Every wait takes a ``should_stop``
+callable, checked several times a second, so a caller that supervises processes can interrupt
+a wait the moment a child dies.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+
+import rclpy
+from rclpy.action import ActionClient
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from std_srvs.srv import Trigger
+from walker_msgs.action import Step, WalkTo
+from walker_msgs.msg import GripperStates, StepPhase, StepReport
+from walker_msgs.srv import GripperCommand, PlanTrajectory
+
+__all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
+           'init_context']
+
+_POLL = 0.1  # [s]
+_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+_REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class GraphNotReadyError(RuntimeError):
+    """The graph did not come up in time; the message lists what is missing."""
+
+
+class WalkInterruptedError(RuntimeError):
+    """A wait was interrupted by ``should_stop`` (a child died, or the user pressed Ctrl-C)."""
+
+
+@dataclasses.dataclass
+class Readiness:
+    """What is up and what is still missing."""
+
+    ready: list[str]
+    missing: list[str]
+
+    @property
+    def complete(self) -> bool:
+        """True when nothing is missing."""
+        return not self.missing
+
+
+class GraphClient:
+    """A client node in the robot's namespace.
+
+    Parameters
+    ----------
+    namespace : str
+        The robot's namespace, e.g. ``/walker``.
+    context : rclpy.context.Context, optional
+        The rclpy context (initialised by the caller).
+    """
+
+    def __init__(self, namespace: str = '/walker', context=None) -> None:
+        self.namespace = namespace
+        self.node = Node('walker_graph_client', namespace=namespace, context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.walk_client = ActionClient(self.node, WalkTo, 'walk_to')
+        self.step_client = ActionClient(self.node, Step, 'step')
+        self.hold_client = self.node.create_client(Trigger, 'hold')
+        self.resume_client = self.node.create_client(Trigger, 'resume')
+        self.gripper_client = self.node.create_client(GripperCommand, 'gripper_command')
+        self.plan_client = self.node.create_client(PlanTrajectory, 'plan_trajectory')
+        self.reports: list[StepReport] = []
+        self.phase: StepPhase | None = None
+        self.grippers: GripperStates | None = None
+        self.node.create_subscription(StepReport, 'step_reports', self.reports.append, _REPORTS)
+        self.node.create_subscription(StepPhase, 'phase', self._on_phase, _LATCHED)
+        self.node.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
+                                      _LATCHED)
+
+    def _on_phase(self, msg: StepPhase) -> None:
+        self.phase = msg
+
+    def _on_grippers(self, msg: GripperStates) -> None:
+        self.grippers = msg
+
+    def close(self) -> None:
+        """Destroy the client node."""
+        self.executor.remove_node(self.node)
+        self.node.destroy_node()
+
+    # ------------------------------------------------------------------ waiting
+    def spin_for(self, seconds: float) -> None:
+        """Process callbacks for a while (wall time)."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=min(_POLL, max(0.0, deadline - time.monotonic())))
+
+    def _wait(self, future, timeout: float, should_stop: Callable[[], bool] | None, what: str):
+        deadline = time.monotonic() + timeout
+        while not future.done():
+            if should_stop is not None and should_stop():
+                raise WalkInterruptedError(f'interrupted while waiting for {what}')
+            if time.monotonic() > deadline:
+                raise TimeoutError(f'no answer to {what} within {timeout:.0f} s')
+            self.executor.spin_until_future_complete(future, timeout_sec=_POLL)
+        return future.result()
+
+    def readiness(self, node_names: list[str]) -> Readiness:
+        """Which expected nodes and servers of the walker graph are up now."""
+        present = {f'{ns.rstrip("/")}/{name}' for name, ns
+                   in self.node.get_node_names_and_namespaces()}
+        ready, missing = [], []
+        for name in node_names:
+            (ready if name in present else missing).append(name)
+        servers = {'walk_to action': self.walk_client.server_is_ready(),
+                   'step action': self.step_client.server_is_ready(),
+                   'hold service': self.hold_client.service_is_ready(),
+                   'gripper_command service': self.gripper_client.service_is_ready(),
+                   'plan_trajectory service': self.plan_client.service_is_ready(),
+                   'joint_states': self.node.count_publishers(
+                       f'{self.namespace}/joint_states') > 0,
+                   'gripper states': self.grippers is not None}
+        for name, up in servers.items():
+            (ready if up else missing).append(name)
+        return Readiness(ready, missing)
+
+    def wait_until_ready(self, node_names: list[str], timeout: float,
+                         progress: Callable[[Readiness], None] | None = None,
+                         should_stop: Callable[[], bool] | None = None) -> Readiness:
+        """Wait until every expected node and server is up (checked, not slept).
+
+        Raises
+        ------
+        GraphNotReadyError
+            After ``timeout`` [s], naming what is still missing.
+        WalkInterruptedError
+            When ``should_stop`` returns True.
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            self.spin_for(_POLL)
+            state = self.readiness(node_names)
+            if progress is not None:
+                progress(state)
+            if state.complete:
+                return state
+            if should_stop is not None and should_stop():
+                raise WalkInterruptedError('interrupted while bringing the graph up')
+            if time.monotonic() > deadline:
+                raise GraphNotReadyError('the graph did not come up within '
+                                    f'{timeout:.0f} s; missing: {", ".join(state.missing)}')
+
+    # ------------------------------------------------------------------ commands
+    def walk_to(self, target: str, timeout: float,
+                feedback: Callable[[WalkTo.Feedback], None] | None = None,
+                should_stop: Callable[[], bool] | None = None) -> tuple[int, WalkTo.Result]:
+        """Send a ``walk_to`` goal and wait for its result; return (status, result).
+
+        On interruption the goal is cancelled (the step under way finishes) before
+        :class:`WalkInterruptedError` propagates.
+        """
+        goal = WalkTo.Goal(target_node=target)
+        return self._run_goal(self.walk_client, goal, timeout, feedback, should_stop,
+                              f'the walk to {target}')
+
+    def step(self, target: str, timeout: float,
+             feedback: Callable[[Step.Feedback], None] | None = None,
+             should_stop: Callable[[], bool] | None = None) -> tuple[int, Step.Result]:
+        """Send a ``step`` goal and wait for its result; return (status, result)."""
+        return self._run_goal(self.step_client, Step.Goal(target_node=target), timeout,
+                              feedback, should_stop, f'the step to {target}')
+
+    def _run_goal(self, client, goal, timeout, feedback, should_stop, what):
+        if not client.wait_for_server(timeout_sec=min(timeout, 10.0)):
+            raise GraphNotReadyError(f'no action server for {what}')
+        callback = (lambda msg: feedback(msg.feedback)) if feedback is not None else None
+        handle = self._wait(client.send_goal_async(goal, feedback_callback=callback), timeout,
+                            should_stop, f'acceptance of {what}')
+        if not handle.accepted:
+            raise RuntimeError(f'{what} was rejected')
+        try:
+            wrapped = self._wait(handle.get_result_async(), timeout, should_stop, what)
+        except (WalkInterruptedError, TimeoutError):
+            handle.cancel_goal_async()
+            self.spin_for(0.2)
+            raise
+        return wrapped.status, wrapped.result
+
+    def call_trigger(self, which: str, timeout: float = 5.0) -> Trigger.Response:
+        """Call the supervisor's ``hold`` or ``resume`` service."""
+        client = {'hold': self.hold_client, 'resume': self.resume_client}[which]
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise GraphNotReadyError(f'the {which} service is not available')
+        return self._wait(client.call_async(Trigger.Request()), timeout, None, which)
+
+
+def init_context(domain_id: int | None = None):
+    """Create and initialise an rclpy context (optionally in a given domain)."""
+    context = rclpy.context.Context()
+    kwargs = {} if domain_id is None else {'domain_id': domain_id}
+    rclpy.init(context=context, **kwargs)
+    return context

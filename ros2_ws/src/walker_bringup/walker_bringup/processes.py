@@ -1,0 +1,155 @@
+"""Start, watch and stop the node processes of a graph, leaving nothing behind.
+
+Each node runs in a process group of its own with its output in a log file. A child that dies
+is reported at the next :meth:`ProcessGroup.poll_deaths`. Stopping sends SIGINT (the clean
+shutdown every node handles), then SIGTERM, then SIGKILL to whatever is left, and removes the
+Fast DDS shared-memory files that killed children leave in ``/dev/shm`` (only files created
+during the run and mapped by no live process).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+from walker_bringup.graph import NodeSpec
+
+__all__ = ['ManagedProcess', 'ProcessGroup', 'stale_shared_memory_files']
+
+_SHM = Path('/dev/shm')
+
+
+@dataclasses.dataclass
+class ManagedProcess:
+    """A started node process."""
+
+    spec: NodeSpec
+    popen: subprocess.Popen
+    log_path: Path
+    started_at: float
+    reported_dead: bool = False
+
+    @property
+    def alive(self) -> bool:
+        """True while the process runs."""
+        return self.popen.poll() is None
+
+    def log_tail(self, lines: int = 15) -> str:
+        """Last lines of the process's output."""
+        try:
+            text = self.log_path.read_text(errors='replace')
+        except OSError:
+            return ''
+        return '\n'.join(text.splitlines()[-lines:])
+
+
+def _fastdds_files() -> set[Path]:
+    if not _SHM.is_dir():
+        return set()
+    return {p for p in _SHM.iterdir() if 'fastrtps' in p.name or 'fastdds' in p.name}
+
+
+def _mapped_shared_memory() -> set[str]:
+    mapped: set[str] = set()
+    for maps in Path('/proc').glob('[0-9]*/maps'):
+        with contextlib.suppress(OSError):
+            for line in maps.read_text().splitlines():
+                if '/dev/shm/' in line:
+                    mapped.add(line.split('/dev/shm/', 1)[1].split(' ')[0])
+    return mapped
+
+
+def stale_shared_memory_files(before: set[Path]) -> list[Path]:
+    """Fast DDS files in /dev/shm created since ``before`` and mapped by no live process."""
+    mapped = _mapped_shared_memory()
+    return sorted(p for p in _fastdds_files() - before
+                  if p.name not in mapped and p.name.removeprefix('sem.') not in mapped)
+
+
+class ProcessGroup:
+    """The processes of one graph run.
+
+    Parameters
+    ----------
+    log_dir : Path
+        Directory for one ``<node>.log`` per process.
+    env : dict
+        Environment of the children (it must keep DDS discovery on loopback).
+    """
+
+    def __init__(self, log_dir: Path, env: dict[str, str]) -> None:
+        if env.get('ROS_AUTOMATIC_DISCOVERY_RANGE') != 'LOCALHOST':
+            raise ValueError('refusing to start nodes without '
+                             'ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST')
+        self.log_dir = Path(log_dir)
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.env = dict(env)
+        self.processes: list[ManagedProcess] = []
+        self._shm_before = _fastdds_files()
+
+    def start(self, spec: NodeSpec, command: list[str] | None = None) -> ManagedProcess:
+        """Start a node (its installed executable, or ``command``)."""
+        log_path = self.log_dir / f'{spec.name}.log'
+        with open(log_path, 'w') as log:
+            popen = subprocess.Popen(command or spec.command(), env=self.env, stdout=log,
+                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                     start_new_session=True)
+        process = ManagedProcess(spec, popen, log_path, time.monotonic())
+        self.processes.append(process)
+        return process
+
+    def poll_deaths(self) -> list[ManagedProcess]:
+        """Return the processes that have exited since the last call (each reported once)."""
+        dead = [p for p in self.processes if not p.alive and not p.reported_dead]
+        for process in dead:
+            process.reported_dead = True
+        return dead
+
+    def stop(self, process: ManagedProcess, timeout: float = 5.0) -> int | None:
+        """Stop one process: SIGINT, then SIGTERM, then SIGKILL; return its exit code."""
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+            if not process.alive:
+                break
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(process.popen.pid, sig)
+            try:
+                process.popen.wait(timeout=timeout if sig != signal.SIGKILL else 10.0)
+            except subprocess.TimeoutExpired:
+                continue
+        return process.popen.returncode
+
+    def stop_all(self, timeout: float = 5.0, last: tuple[str, ...] = ('recorder',)
+                 ) -> dict[str, int | None]:
+        """Stop every process, those named in ``last`` after the others; return exit codes.
+
+        The others are interrupted together (so shutdown takes one timeout, not one per node).
+        """
+        first = [p for p in self.processes if p.spec.name not in last]
+        final = [p for p in self.processes if p.spec.name in last]
+        codes: dict[str, int | None] = {}
+        for group in (first, final):
+            for process in group:
+                if process.alive:
+                    with contextlib.suppress(ProcessLookupError, PermissionError):
+                        os.killpg(process.popen.pid, signal.SIGINT)
+            deadline = time.monotonic() + timeout
+            for process in group:
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    process.popen.wait(timeout=max(0.0, deadline - time.monotonic()))
+            for process in group:
+                codes[process.spec.name] = self.stop(process, timeout)
+        for path in stale_shared_memory_files(self._shm_before):
+            with contextlib.suppress(OSError):
+                path.unlink()
+        return codes
+
+    def __enter__(self) -> 'ProcessGroup':
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop_all()

@@ -1,0 +1,249 @@
+"""The step-phase state machine, driven by a simulated world with ideal joint tracking."""
+
+import math
+
+import numpy as np
+import pytest
+
+from walker_core.kinematics import WalkerKinematics
+from walker_core.parameter_schema import ParameterError
+from walker_core.robot_parameters import load_walker_parameters
+from walker_core.truss import Truss
+from walker_supervisor.core.route import PlannedStep, Stance, plan_route, possible_steps
+from walker_supervisor.core.sequencer import (
+    CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode, StepSequencer,
+    SupervisorParameters, TrajectoryRequest)
+from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
+
+PARAMS = load_walker_parameters()
+KIN = WalkerKinematics.from_parameters(PARAMS)
+TRUSS = Truss.from_parameters(PARAMS)
+SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
+                                  settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
+                                  max_insertion_attempts=3)
+DT = 0.01
+START = Stance('a', 'n1_1', 'n2_1')
+
+
+class World:
+    """Executes the sequencer's commands: ideal tracking, scripted gripper results."""
+
+    def __init__(self, stance=START, jams=0, refuse_unscrew=False,
+                 stall_trajectories=False):
+        self.stance = stance
+        self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
+        self.now = 0.0
+        base, other = TRUSS.position(stance.base_node), TRUSS.position(stance.other_node)
+        frame_guess = KIN.inverse([0.0, TRUSS.spacing, 0.0, 0.0, 0.0])
+        self.theta = frame_guess
+        self.grippers = {'a': 'attached', 'b': 'attached'}
+        self.frame = BaseFrame.from_stance(KIN, self.theta, base, other)
+        self.jams, self.refuse_unscrew, self.stall = jams, refuse_unscrew, stall_trajectories
+        self.log = []
+        self.phases = []
+        self.motion = None
+
+    def run_step(self, step, max_time=60.0):
+        targets = plan_step_targets(KIN, self.frame, step, TRUSS.position(step.from_node),
+                                    TRUSS.position(step.to_node), self.theta,
+                                    PARAMS.gripper.approach_height)
+        self.targets = targets
+        self.execute(self.sequencer.start(step, targets, self.now, dict(self.grippers)))
+        while self.sequencer.busy and self.now < max_time:
+            self.advance()
+        return self.sequencer.outcome
+
+    def execute(self, commands):
+        for command in commands:
+            self.log.append(command)
+            if isinstance(command, GripperRequest):
+                self.gripper(command)
+            elif isinstance(command, TrajectoryRequest):
+                self.motion = [command, self.now, 1.0]
+                self.sequencer.trajectory_started(1.0, self.now)
+            elif isinstance(command, CancelTrajectory):
+                self.motion = None
+
+    def gripper(self, request):
+        assert not (request.action == 'unscrew'
+                    and self.grippers[_other(request.gripper)] != 'attached'), \
+            'released a gripper while the other was not attached'
+        if request.action == 'unscrew':
+            if self.refuse_unscrew:
+                self.execute(self.sequencer.gripper_done(False, 'interlock', self.now))
+                return
+            self.grippers[request.gripper] = 'free'
+            self.execute(self.sequencer.gripper_done(True, '', self.now))
+        else:
+            if self.jams > 0:
+                self.jams -= 1
+                self.execute(self.sequencer.gripper_done(False, 'jammed 3 mm off', self.now))
+                return
+            self.grippers[request.gripper] = 'attached'
+            self.execute(self.sequencer.gripper_done(True, '', self.now))
+
+    def advance(self):
+        self.now += DT
+        velocities = np.zeros(5)
+        if self.motion is not None and not self.stall:
+            request, started, duration = self.motion
+            fraction = min(1.0, (self.now - started) / duration)
+            previous = self.theta
+            self.theta = request.start + fraction * (request.goal - request.start)
+            velocities = (self.theta - previous) / DT
+            if fraction >= 1.0:
+                self.motion = None
+                self.execute(self.sequencer.trajectory_done(True, '', self.now))
+        assert any(state == 'attached' for state in self.grippers.values())
+        self.phases.append(self.sequencer.phase)
+        self.execute(self.sequencer.tick(self.now, self.theta, velocities, dict(self.grippers)))
+
+
+def _other(gripper):
+    return 'b' if gripper == 'a' else 'a'
+
+
+@pytest.mark.parametrize('to_node', ['n1_2', 'n1_0', 'n0_1'])
+def test_a_step_runs_the_four_phases_in_order_and_swaps_the_base(to_node):
+    world = World()
+    step = next(s for s in possible_steps(TRUSS, world.stance) if s.to_node == to_node)
+    outcome = world.run_step(step)
+    assert outcome.success, outcome.message
+    order = [p for i, p in enumerate(world.phases) if i == 0 or world.phases[i - 1] != p]
+    assert order[:4] == [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]
+    assert world.sequencer.phase == Phase.IDLE
+    assert world.sequencer.base_gripper == 'b'
+    assert world.log[-1] == SetControlMode('hold', 'b')
+    assert world.grippers == {'a': 'attached', 'b': 'attached'}
+    assert set(outcome.phase_durations) == {'extraction', 'coarse', 'fine', 'insertion'}
+    assert outcome.insertion_error <= SUPERVISOR.insertion_alignment
+    tip = KIN.forward(world.theta)[:3]
+    np.testing.assert_allclose(world.frame.to_truss(tip), TRUSS.position(to_node), atol=1e-9)
+
+
+def test_controller_modes_follow_the_phases():
+    world = World()
+    world.run_step(possible_steps(TRUSS, world.stance)[0])
+    modes = [c.mode for c in world.log if isinstance(c, SetControlMode)]
+    assert modes[0] == 'fine' and 'coarse' in modes
+    assert modes.index('coarse') < len(modes) - 1 - modes[::-1].index('fine')
+    purposes = [c.purpose for c in world.log if isinstance(c, TrajectoryRequest)]
+    assert purposes[0] == 'extraction' and purposes[1] == 'coarse'
+    assert purposes[-1] == 'insertion' and 'fine' in purposes
+
+
+def test_coarse_hands_over_to_fine_inside_the_region_cancelling_the_stream():
+    world = World()
+    world.run_step(possible_steps(TRUSS, world.stance)[0])
+    index = next(i for i, c in enumerate(world.log)
+                 if isinstance(c, TrajectoryRequest) and c.purpose == 'fine')
+    assert isinstance(world.log[index - 2], CancelTrajectory), 'coarse stream not cancelled'
+
+
+def test_the_unscrew_waits_for_the_base_and_never_releases_it():
+    world = World()
+    world.run_step(possible_steps(TRUSS, world.stance)[1])
+    releases = [c for c in world.log if isinstance(c, GripperRequest) and c.action == 'unscrew']
+    assert releases == [GripperRequest('b', 'unscrew')]
+
+
+def test_a_jammed_insertion_is_retried():
+    world = World(jams=2)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success and outcome.insertion_attempts == 3
+    lifts = [c for c in world.log
+             if isinstance(c, TrajectoryRequest) and c.purpose == 'retry_lift']
+    assert len(lifts) == 2
+
+
+def test_too_many_jams_abort_to_safe_hold_with_the_base_attached():
+    world = World(jams=5)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert not outcome.success and 'jammed 3 times' in outcome.message
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.grippers['a'] == 'attached'
+    assert world.log[-1] == SetControlMode('hold', 'a')
+
+
+def test_a_refused_unscrew_aborts_before_anything_moves():
+    world = World(refuse_unscrew=True)
+    start = world.theta.copy()
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert not outcome.success and 'interlock' in outcome.message
+    assert not any(isinstance(c, TrajectoryRequest) for c in world.log)
+    np.testing.assert_array_equal(world.theta, start)
+
+
+def test_a_stalled_trajectory_times_out_to_safe_hold():
+    world = World(stall_trajectories=True)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0], max_time=30.0)
+    assert not outcome.success and 'overran' in outcome.message
+    assert world.now == pytest.approx(1.0 + SUPERVISOR.phase_timeout, abs=3 * DT)
+    assert isinstance(world.log[-2], CancelTrajectory)
+
+
+def test_losing_the_base_during_a_step_aborts():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    world.execute(world.sequencer.start(step, targets, 0.0, dict(world.grippers)))
+    commands = world.sequencer.tick(0.1, world.theta, np.zeros(5), {'a': 'free', 'b': 'free'})
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert 'base gripper a' in world.sequencer.reason
+    assert commands[-1] == SetControlMode('hold', 'a')
+
+
+def test_steps_are_refused_unless_both_grippers_are_attached_and_idle():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    with pytest.raises(SequencerError, match='both grippers attached'):
+        world.sequencer.start(step, targets, 0.0, {'a': 'attached', 'b': 'free'})
+    world.sequencer.start(step, targets, 0.0, dict(world.grippers))
+    with pytest.raises(SequencerError, match='already under way'):
+        world.sequencer.start(step, targets, 0.0, dict(world.grippers))
+    world.sequencer.hold('operator hold', 0.5)
+    with pytest.raises(SequencerError, match='SAFE_HOLD'):
+        world.sequencer.start(step, targets, 0.0, dict(world.grippers))
+    wrong_base = PlannedStep('b', 'n2_1', 'n1_1', 'n3_1', math.pi)
+    fresh = StepSequencer(SUPERVISOR, KIN, 'a')
+    with pytest.raises(SequencerError, match='base is gripper a'):
+        fresh.start(wrong_base, targets, 0.0, dict(world.grippers))
+
+
+def test_hold_then_clear_needs_both_grippers():
+    world = World()
+    world.sequencer.hold('operator', 0.0)
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    world.sequencer.tick(0.0, world.theta, np.zeros(5), {'a': 'attached', 'b': 'free'})
+    with pytest.raises(SequencerError, match='not attached'):
+        world.sequencer.clear_hold()
+    world.sequencer.tick(0.1, world.theta, np.zeros(5), dict(world.grippers))
+    world.sequencer.clear_hold()
+    assert world.sequencer.phase == Phase.IDLE
+
+
+def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
+    world = World()
+    stance = world.stance
+    route = plan_route(TRUSS, stance, 'n4_3')
+    route += plan_route(TRUSS, route[-1].stance_after(), 'n0_0')
+    assert any(step.is_half_turn for step in route) and len(route) >= 6
+    for step in route:
+        world.frame = BaseFrame.from_stance(KIN, world.theta, TRUSS.position(stance.base_node),
+                                            TRUSS.position(stance.other_node))
+        outcome = world.run_step(step)
+        assert outcome.success, outcome.message
+        assert KIN.within_limits(world.theta)
+        tip = world.frame.to_truss(KIN.forward(world.theta)[:3])
+        np.testing.assert_allclose(tip, TRUSS.position(step.to_node), atol=1e-9)
+        stance = step.stance_after()
+        world.stance = stance
+        world.theta = world.theta[::-1].copy()  # the roles mirror with the new base
+
+
+def test_parameters_refuse_an_alignment_looser_than_the_region():
+    with pytest.raises(ParameterError, match='smaller'):
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3)

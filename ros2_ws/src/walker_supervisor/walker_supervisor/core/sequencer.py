@@ -1,0 +1,414 @@
+"""The step-phase state machine (paper section 2, Figure 2), free of ROS.
+
+A step runs EXTRACTION -> COARSE -> FINE -> INSERTION. The sequencer takes events (a gripper
+command finished, a trajectory started or finished, a periodic tick with the measured joints and
+gripper states) and returns the commands the node must carry out (set the controllers' mode,
+screw a gripper in or out, run or cancel a trajectory). It never blocks and never talks to ROS,
+so every path through a step, faults included, is tested with plain pytest.
+
+Rules it enforces:
+
+* a step starts only with both grippers attached, and the moving gripper is unscrewed only while
+  the base gripper is verified attached;
+* coarse motion (controllers in COARSE mode: low gains, acceleration feedback) ends when the tip
+  error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``;
+* fine motion (FINE mode: higher gains, integral action) ends when the tip is within
+  ``insertion_alignment`` of the point above the hole and the joints have settled;
+* insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
+  ``max_insertion_attempts`` times, then the step is aborted to SAFE_HOLD;
+* any failure or a phase that overruns its planned time by ``phase_timeout`` ends in SAFE_HOLD:
+  trajectories cancelled, controllers holding, grippers untouched (the base stays attached).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+
+import numpy as np
+
+from walker_core.kinematics import WalkerKinematics
+from walker_core.parameter_schema import ParameterError, parameter
+from walker_supervisor.core.route import PlannedStep
+from walker_supervisor.core.step_geometry import StepTargets
+
+__all__ = [
+    'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',
+    'CancelTrajectory', 'StepOutcome', 'StepSequencer', 'SequencerError',
+]
+
+
+class Phase(enum.IntEnum):
+    """Phases of a step; the values are those of ``walker_msgs/StepPhase``."""
+
+    IDLE = 0
+    EXTRACTION = 1
+    COARSE = 2
+    FINE = 3
+    INSERTION = 4
+    SAFE_HOLD = 5
+
+
+class SequencerError(ValueError):
+    """An event that the sequencer cannot accept in its current state."""
+
+
+@dataclasses.dataclass(frozen=True)
+class SupervisorParameters:
+    """Switching regions and fault limits of the step (section ``supervisor.``)."""
+
+    coarse_to_fine_region: float = parameter(
+        'tip distance from the point above the target at which coarse motion hands over to '
+        'fine motion', 'm', 0.001, 0.5, read_only=False)
+    insertion_alignment: float = parameter(
+        'largest tip distance from the point above the hole at which insertion may start',
+        'm', 1e-5, 0.05, read_only=False)
+    settle_velocity: float = parameter(
+        'every joint speed must stay below this for settle_time before insertion and screw-in',
+        'rad/s', 1e-4, 1.0, read_only=False)
+    settle_time: float = parameter('time the joints must stay settled', 's', 0.0, 10.0,
+                                   read_only=False)
+    phase_timeout: float = parameter(
+        'time a phase may overrun its planned duration before the step is aborted', 's',
+        0.1, 600.0, read_only=False)
+    max_insertion_attempts: int = parameter(
+        'screw-in attempts before a jammed insertion aborts the step', '', 1, 10,
+        read_only=False)
+
+    def __post_init__(self) -> None:
+        if self.insertion_alignment >= self.coarse_to_fine_region:
+            raise ParameterError(
+                f'supervisor.insertion_alignment ({self.insertion_alignment} m) must be smaller '
+                f'than supervisor.coarse_to_fine_region ({self.coarse_to_fine_region} m)')
+
+
+@dataclasses.dataclass(frozen=True)
+class SetControlMode:
+    """Put all five controllers in ``mode`` ('off', 'hold', 'coarse', 'fine') for a base."""
+
+    mode: str
+    base_gripper: str
+
+
+@dataclasses.dataclass(frozen=True)
+class GripperRequest:
+    """Screw a gripper in (``'screw_in'``) or out (``'unscrew'``)."""
+
+    gripper: str
+    action: str
+
+
+@dataclasses.dataclass(frozen=True)
+class TrajectoryRequest:
+    """Plan and stream a trajectory.
+
+    Attributes
+    ----------
+    purpose : str
+        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'.
+    start, goal : ndarray, shape (5,)
+        Joint angles J1..J5 [rad] (role order of ``base_gripper``).
+    start_point, goal_point : ndarray, shape (3,)
+        The same tip positions [m] in the base frame, for Cartesian trajectory types.
+    sweep : float
+        Signed base yaw sweep [rad] (coarse motion only, else 0).
+    base_gripper : str
+        The base during the motion.
+    """
+
+    purpose: str
+    start: np.ndarray
+    goal: np.ndarray
+    start_point: np.ndarray
+    goal_point: np.ndarray
+    sweep: float
+    base_gripper: str
+
+
+@dataclasses.dataclass(frozen=True)
+class CancelTrajectory:
+    """Stop any trajectory being streamed (the controllers hold the last setpoint)."""
+
+
+@dataclasses.dataclass
+class StepOutcome:
+    """How a step ended, with the figures the walk summary reports.
+
+    Attributes
+    ----------
+    success : bool
+    message : str
+        Why it failed ('' on success).
+    phase_durations : dict of str to float
+        Time spent in each phase [s].
+    duration : float
+        Step time [s] from start to the end of the screw-in.
+    insertion_error : float
+        Tip distance [m] from the point above the hole when insertion started (forward
+        kinematics of the measured joints), NaN if insertion never started.
+    insertion_attempts : int
+    """
+
+    success: bool
+    message: str
+    phase_durations: dict[str, float]
+    duration: float
+    insertion_error: float
+    insertion_attempts: int
+
+
+class StepSequencer:
+    """Runs one step at a time through its phases.
+
+    Parameters
+    ----------
+    parameters : SupervisorParameters
+        Switching regions and fault limits.
+    kinematics : WalkerKinematics
+        For the tip position from the measured joints.
+    base_gripper : str
+        The base before the first step; after each completed step, the gripper that moved.
+    """
+
+    def __init__(self, parameters: SupervisorParameters, kinematics: WalkerKinematics,
+                 base_gripper: str = 'a') -> None:
+        self.parameters = parameters
+        self.kinematics = kinematics
+        self.base_gripper = base_gripper
+        self.phase = Phase.IDLE
+        self.stage = ''
+        self.reason = ''
+        self.outcome: StepOutcome | None = None
+        self._step: PlannedStep | None = None
+        self._targets: StepTargets | None = None
+        self._theta = np.zeros(5)
+        self._grippers: dict[str, str] = {}
+        self._phase_started = 0.0
+        self._step_started = 0.0
+        self._deadline = math.inf
+        self._settled_since: float | None = None
+        self._attempts = 0
+        self._durations: dict[str, float] = {}
+        self._insertion_error = math.nan
+        self._trajectory_running = False
+
+    # ------------------------------------------------------------------ queries
+    @property
+    def busy(self) -> bool:
+        """True while a step is under way."""
+        return self.phase not in (Phase.IDLE, Phase.SAFE_HOLD)
+
+    @property
+    def step(self) -> PlannedStep | None:
+        """The step under way (or the last one)."""
+        return self._step
+
+    def tip_error(self) -> float:
+        """Distance [m] of the tip (forward kinematics) from the current phase's target point."""
+        if self._targets is None:
+            return math.nan
+        target = {Phase.EXTRACTION: self._targets.point_above_from,
+                  Phase.INSERTION: self._targets.point_to}.get(self.phase,
+                                                               self._targets.point_above_to)
+        return float(np.linalg.norm(self.kinematics.forward(self._theta)[:3] - target))
+
+    # ------------------------------------------------------------------ events
+    def start(self, step: PlannedStep, targets: StepTargets, now: float,
+              grippers: dict[str, str]) -> list:
+        """Begin a step: both grippers must be attached, and no step under way.
+
+        Raises
+        ------
+        SequencerError
+            A step is already under way, or a gripper is not attached.
+        """
+        if self.busy:
+            raise SequencerError(f'a step is already under way (phase {self.phase.name})')
+        if self.phase == Phase.SAFE_HOLD:
+            raise SequencerError(f'the walker is in SAFE_HOLD ({self.reason}): resume first')
+        if step.base_gripper != self.base_gripper:
+            raise SequencerError(f'the step pivots on gripper {step.base_gripper} but the base '
+                                 f'is gripper {self.base_gripper}')
+        detached = sorted(g for g in ('a', 'b') if grippers.get(g) != 'attached')
+        if detached:
+            raise SequencerError(f'a step starts only with both grippers attached; gripper '
+                                 f'{", ".join(detached)} is not')
+        self._step, self._targets, self._grippers = step, targets, dict(grippers)
+        self._theta = targets.start.copy()
+        self._step_started = now
+        self._durations = {}
+        self._attempts = 0
+        self._insertion_error = math.nan
+        self.outcome = None
+        self.reason = ''
+        self._enter(Phase.EXTRACTION, now, 'unscrewing')
+        return [SetControlMode('fine', step.base_gripper),
+                GripperRequest(step.moving_gripper, 'unscrew')]
+
+    def gripper_done(self, success: bool, message: str, now: float) -> list:
+        """Take the result of a gripper command (``success`` False: refused, jammed, failed)."""
+        if self.stage == 'unscrewing':
+            if not success:
+                return self._abort(f'unscrewing gripper {self._step.moving_gripper} failed: '
+                                   f'{message}', now)
+            self._grippers[self._step.moving_gripper] = 'free'
+            self.stage = 'lifting'
+            return [self._trajectory('extraction', self._targets.start, self._targets.above_from,
+                                     self._start_point(), self._targets.point_above_from)]
+        if self.stage == 'screwing':
+            if success:
+                return self._finish(now)
+            self._attempts += 1
+            if self._attempts >= self.parameters.max_insertion_attempts:
+                return self._abort(f'insertion jammed {self._attempts} times: {message}', now)
+            self.stage = 'retry_lift'
+            return [self._trajectory('retry_lift', self._theta, self._targets.above_to,
+                                     self._targets.point_to, self._targets.point_above_to)]
+        raise SequencerError(f'unexpected gripper result in phase {self.phase.name} '
+                             f'({self.stage or "no stage"})')
+
+    def trajectory_started(self, planned_duration: float, now: float) -> None:
+        """Note that the requested trajectory is streaming and should take this long [s]."""
+        self._trajectory_running = True
+        self._deadline = now + planned_duration + self.parameters.phase_timeout
+
+    def trajectory_done(self, success: bool, message: str, now: float) -> list:
+        """Take the end of the streamed trajectory (``success`` False: refused or aborted)."""
+        self._trajectory_running = False
+        if self.phase in (Phase.IDLE, Phase.SAFE_HOLD):
+            return []
+        if not success:
+            return self._abort(f'{self.stage or self.phase.name.lower()} trajectory failed: '
+                               f'{message}', now)
+        if self.stage == 'lifting':
+            return self._enter_coarse(now)
+        if self.stage == 'moving' and self.phase == Phase.COARSE:
+            self.stage = 'arriving'
+            self._deadline = now + self.parameters.phase_timeout
+            return []
+        if self.stage == 'moving' and self.phase == Phase.FINE:
+            self.stage = 'settling'
+            self._settled_since = None
+            self._deadline = now + self.parameters.phase_timeout
+            return []
+        if self.stage == 'retry_lift':
+            return self._enter_fine(now)
+        if self.stage == 'descending':
+            self.stage = 'settling'
+            self._settled_since = None
+            self._deadline = now + self.parameters.phase_timeout
+            return []
+        return []
+
+    def tick(self, now: float, theta_roles: np.ndarray, velocities: np.ndarray,
+             grippers: dict[str, str]) -> list:
+        """Periodic update with the measured joints (role order) and the gripper states."""
+        self._theta = np.asarray(theta_roles, dtype=float)
+        self._grippers = dict(grippers)
+        if not self.busy:
+            return []
+        if grippers.get(self._step.base_gripper) != 'attached':
+            return self._abort(f'the base gripper {self._step.base_gripper} reports '
+                               f'{grippers.get(self._step.base_gripper, "nothing")}', now)
+        if now > self._deadline:
+            return self._abort(f'{self.phase.name.lower()} overran its planned time '
+                               f'({self.stage})', now)
+        if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
+            return self._enter_fine(now)
+        if self.stage == 'settling' and self._settled(now, velocities):
+            if self.phase == Phase.FINE:
+                if self.tip_error() <= self.parameters.insertion_alignment:
+                    return self._enter_insertion(now)
+                return self._enter_fine(now)  # settled but not aligned: another fine line
+            if self.phase == Phase.INSERTION:
+                self.stage = 'screwing'
+                self._deadline = math.inf
+                return [GripperRequest(self._step.moving_gripper, 'screw_in')]
+        return []
+
+    def hold(self, reason: str, now: float) -> list:
+        """Abort to SAFE_HOLD at once (an operator's hold, or a fault reported elsewhere)."""
+        return self._abort(reason, now)
+
+    def clear_hold(self) -> None:
+        """Leave SAFE_HOLD for IDLE once the cause is dealt with (both grippers attached)."""
+        if self.phase != Phase.SAFE_HOLD:
+            raise SequencerError(f'not in SAFE_HOLD (phase {self.phase.name})')
+        detached = sorted(g for g in ('a', 'b') if self._grippers.get(g) != 'attached')
+        if detached:
+            raise SequencerError(f'gripper {", ".join(detached)} is not attached: finish or '
+                                 f'redo the step instead')
+        self.phase, self.stage, self.reason = Phase.IDLE, '', ''
+
+    # ------------------------------------------------------------------ internals
+    def _start_point(self) -> np.ndarray:
+        return self.kinematics.forward(self._targets.start)[:3]
+
+    def _trajectory(self, purpose: str, start: np.ndarray, goal: np.ndarray,
+                    start_point: np.ndarray, goal_point: np.ndarray, sweep: float = 0.0
+                    ) -> TrajectoryRequest:
+        self._deadline = math.inf  # set by trajectory_started
+        return TrajectoryRequest(purpose, np.array(start, dtype=float),
+                                 np.array(goal, dtype=float), np.array(start_point, dtype=float),
+                                 np.array(goal_point, dtype=float), sweep,
+                                 self._step.base_gripper)
+
+    def _enter(self, phase: Phase, now: float, stage: str) -> None:
+        if self.phase not in (Phase.IDLE, Phase.SAFE_HOLD):
+            name = self.phase.name.lower()
+            self._durations[name] = self._durations.get(name, 0.0) + now - self._phase_started
+        self.phase, self.stage, self._phase_started = phase, stage, now
+        self._settled_since = None
+
+    def _enter_coarse(self, now: float) -> list:
+        self._enter(Phase.COARSE, now, 'moving')
+        t = self._targets
+        return [SetControlMode('coarse', self._step.base_gripper),
+                self._trajectory('coarse', t.above_from, t.above_to, t.point_above_from,
+                                 t.point_above_to, t.sweep)]
+
+    def _enter_fine(self, now: float) -> list:
+        commands = [CancelTrajectory()] if self._trajectory_running else []
+        self._trajectory_running = False
+        if self.phase != Phase.FINE:
+            self._enter(Phase.FINE, now, 'moving')
+        self.stage = 'moving'
+        tip = self.kinematics.forward(self._theta)[:3]
+        return commands + [SetControlMode('fine', self._step.base_gripper),
+                           self._trajectory('fine', self._theta, self._targets.above_to, tip,
+                                            self._targets.point_above_to)]
+
+    def _enter_insertion(self, now: float) -> list:
+        self._insertion_error = self.tip_error()
+        self._enter(Phase.INSERTION, now, 'descending')
+        return [self._trajectory('insertion', self._theta, self._targets.at_to,
+                                 self._targets.point_above_to, self._targets.point_to)]
+
+    def _settled(self, now: float, velocities: np.ndarray) -> bool:
+        still = bool(np.all(np.abs(velocities) < self.parameters.settle_velocity))
+        if not still:
+            self._settled_since = None
+            return False
+        if self._settled_since is None:
+            self._settled_since = now
+        return now - self._settled_since >= self.parameters.settle_time
+
+    def _finish(self, now: float) -> list:
+        self._enter(Phase.IDLE, now, '')
+        self._grippers[self._step.moving_gripper] = 'attached'
+        self.base_gripper = self._step.moving_gripper
+        self.outcome = StepOutcome(True, '', dict(self._durations), now - self._step_started,
+                                   self._insertion_error, self._attempts + 1)
+        return [SetControlMode('hold', self._step.moving_gripper)]
+
+    def _abort(self, reason: str, now: float) -> list:
+        if self.busy:
+            self._enter(Phase.SAFE_HOLD, now, '')
+            self.outcome = StepOutcome(False, reason, dict(self._durations),
+                                       now - self._step_started, self._insertion_error,
+                                       self._attempts)
+        self.phase, self.reason = Phase.SAFE_HOLD, reason
+        commands = [CancelTrajectory()] if self._trajectory_running else []
+        self._trajectory_running = False
+        return commands + [SetControlMode('hold', self.base_gripper)]

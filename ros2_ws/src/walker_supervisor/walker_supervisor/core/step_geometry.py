@@ -1,0 +1,154 @@
+"""Where a step goes: the base frame in the truss, and the joint targets of each phase.
+
+The walker has no tip position sensing (paper section 2): the supervisor knows where the tip is
+only through the joint angles and the forward kinematics. The base frame's position is the base
+node's; its heading follows from the other gripper's node when both are screwed in, so no error
+accumulates from step to step.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from walker_core.kinematics import KinematicsError, WalkerKinematics
+from walker_supervisor.core.route import PlannedStep
+
+__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'choose_sweep_direction']
+
+
+@dataclasses.dataclass(frozen=True)
+class BaseFrame:
+    """Pose of the base gripper's frame in the truss frame: a position and a heading.
+
+    Attributes
+    ----------
+    origin : ndarray, shape (3,)
+        Base node position [m] in the truss frame.
+    heading : float
+        Rotation of the base frame about z relative to the truss frame [rad].
+    """
+
+    origin: np.ndarray
+    heading: float
+
+    @classmethod
+    def from_stance(cls, kinematics: WalkerKinematics, theta_roles: np.ndarray,
+                    base_position: np.ndarray, other_position: np.ndarray) -> 'BaseFrame':
+        """Recover the frame from the joint angles with both grippers attached.
+
+        Parameters
+        ----------
+        theta_roles : ndarray, shape (5,)
+            Measured joint angles J1..J5 [rad] for the current base.
+        base_position, other_position : ndarray, shape (3,)
+            Positions [m] of the nodes of the base and of the other gripper.
+        """
+        tip = kinematics.forward(theta_roles)[:2]
+        world = np.asarray(other_position, dtype=float)[:2] - np.asarray(base_position)[:2]
+        if np.linalg.norm(tip) < 1e-6 or np.linalg.norm(world) < 1e-6:
+            raise KinematicsError('the base heading is undefined: the other gripper is on the '
+                                  'base axis')
+        heading = math.atan2(world[1], world[0]) - math.atan2(tip[1], tip[0])
+        return cls(np.asarray(base_position, dtype=float), math.remainder(heading, 2 * math.pi))
+
+    def to_base(self, point_truss: np.ndarray) -> np.ndarray:
+        """Express a truss-frame point [m] in the base frame."""
+        c, s = math.cos(self.heading), math.sin(self.heading)
+        d = np.asarray(point_truss, dtype=float) - self.origin
+        return np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]])
+
+    def to_truss(self, point_base: np.ndarray) -> np.ndarray:
+        """Express a base-frame point [m] in the truss frame."""
+        c, s = math.cos(self.heading), math.sin(self.heading)
+        p = np.asarray(point_base, dtype=float)
+        return self.origin + np.array([c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]])
+
+
+@dataclasses.dataclass(frozen=True)
+class StepTargets:
+    """Joint-space (role order) and base-frame targets of one step's phases.
+
+    Attributes
+    ----------
+    frame : BaseFrame
+        The base frame during the step.
+    sweep : float
+        Signed base yaw rotation [rad] of the coarse motion (direction of a half turn chosen).
+    start : ndarray
+        Joint angles at the start (moving gripper in its hole) [rad].
+    above_from, above_to : ndarray
+        Joint angles with the tip at the approach height above the old and the new node [rad].
+    at_to : ndarray
+        Joint angles with the tip in the new node's hole mouth [rad].
+    point_above_from, point_above_to, point_to : ndarray
+        The same tip positions [m] in the base frame.
+    """
+
+    frame: BaseFrame
+    sweep: float
+    start: np.ndarray
+    above_from: np.ndarray
+    above_to: np.ndarray
+    at_to: np.ndarray
+    point_above_from: np.ndarray
+    point_above_to: np.ndarray
+    point_to: np.ndarray
+
+
+def choose_sweep_direction(step: PlannedStep, theta1: float, lower: float, upper: float
+                           ) -> float:
+    """Signed sweep [rad] for a step: a half turn goes the way that leaves joint 1 more margin.
+
+    Raises
+    ------
+    KinematicsError
+        When the sweep, either way for a half turn, would take joint 1 past its limits.
+    """
+    candidates = [step.sweep] if not step.is_half_turn else [math.pi, -math.pi]
+    feasible = [(min(theta1 + s - lower, upper - theta1 - s), s) for s in candidates
+                if lower <= theta1 + s <= upper]
+    if not feasible:
+        raise KinematicsError(
+            f'joint 1 at {theta1:.3f} rad cannot sweep {math.degrees(step.sweep):.0f} deg '
+            f'within its limits [{lower:.3f}, {upper:.3f}] rad')
+    return max(feasible)[1]
+
+
+def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: PlannedStep,
+                      from_position: np.ndarray, to_position: np.ndarray,
+                      theta_roles: np.ndarray, approach_height: float) -> StepTargets:
+    """Joint targets of every phase of a step.
+
+    The tip stays vertical (alpha = 0). During the step the tip yaw J5 returns to 0 so that,
+    when this gripper becomes the base, joint 1 starts centred and can sweep either way.
+
+    Parameters
+    ----------
+    from_position, to_position : ndarray, shape (3,)
+        Truss-frame positions [m] of the node the moving gripper leaves and of its target.
+    theta_roles : ndarray, shape (5,)
+        Joint angles J1..J5 now [rad].
+    approach_height : float
+        Height [m] above a hole where insertion starts and extraction ends.
+
+    Raises
+    ------
+    KinematicsError
+        When a target is out of reach or outside the joint limits.
+    """
+    theta = np.asarray(theta_roles, dtype=float)
+    sweep = choose_sweep_direction(step, theta[0], kinematics.lower[0], kinematics.upper[0])
+    lift = np.array([0.0, 0.0, approach_height])
+    point_from = frame.to_base(from_position)
+    point_to = frame.to_base(to_position)
+    above_from = kinematics.inverse([*(point_from + lift), 0.0, theta[4]], reference=theta)
+    reference = theta.copy()
+    reference[0] += sweep
+    reference[4] = 0.0
+    above_to = kinematics.inverse([*(point_to + lift), 0.0, 0.0], reference=reference)
+    at_to = kinematics.inverse([*point_to, 0.0, 0.0], reference=above_to)
+    return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
+                       point_from + lift, point_to + lift, point_to)

@@ -1,0 +1,538 @@
+"""The step-phase supervisor node: walks the robot across the truss, step by step.
+
+It owns the step's phases (:mod:`walker_supervisor.core.sequencer`) and the walk's route
+(:mod:`walker_supervisor.core.route`), and carries out their commands over ROS: the controllers'
+mode on ``control_mode``, trajectories through the planner (``plan_trajectory`` then
+``follow_trajectory``), screw-in and release through the plant (``gripper_command``).
+
+Interfaces (relative to the node's namespace):
+
+* actions ``step`` (walker_msgs/action/Step), ``walk_to`` (walker_msgs/action/WalkTo); a goal sent
+  while a walk runs is refused (aborted at once with the reason); cancelling a walk lets the step
+  under way finish, so the walker ends with both grippers attached;
+* services ``hold`` and ``resume`` (std_srvs/srv/Trigger);
+* publishes ``phase`` (walker_msgs/StepPhase, latched), ``control_mode`` (latched) and
+  ``step_reports`` (walker_msgs/StepReport, one per step, latched history).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import PoseStamped
+from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from walker_msgs.action import FollowTrajectory, Step, WalkTo
+from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase, StepReport
+from walker_msgs.srv import GripperCommand, PlanTrajectory
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
+from walker_core.kinematics import KinematicsError, WalkerKinematics
+from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_core.parameter_schema import ParameterError
+from walker_core.robot_parameters import WalkerParameters
+from walker_core.truss import Truss, UnknownNodeError
+from walker_supervisor.core.route import (
+    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps)
+from walker_supervisor.core.sequencer import (
+    CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode, StepOutcome,
+    StepSequencer, SupervisorParameters, TrajectoryRequest)
+from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
+from walker_supervisor.core.walk import VibrationMeter, Walk
+from walker_supervisor.trajectory_requests import plan_request
+
+__all__ = ['SupervisorNode', 'main']
+
+_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                      history=HistoryPolicy.KEEP_LAST)
+_REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                      history=HistoryPolicy.KEEP_LAST)
+_SENSOR = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
+                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+_GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
+                   GripperState.ATTACHED: 'attached', GripperState.UNSCREWING: 'unscrewing',
+                   GripperState.JAMMED: 'jammed'}
+_MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMode.COARSE,
+          'fine': ControlMode.FINE}
+TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
+FEEDBACK_PERIOD = 0.1  # [s]
+
+
+class SupervisorNode(Node):
+    """ROS front of the step sequencer and the walk."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__('supervisor', **kwargs)
+        self.params = declare_section(self, WalkerParameters)
+        self.settings = declare_section(self, SupervisorParameters, 'supervisor.')
+        self._check_alignment(self.settings)
+        guard_section_updates(self, SupervisorParameters, 'supervisor.', lambda: self.settings,
+                              self._apply_settings)
+        self.kinematics = WalkerKinematics.from_parameters(self.params)
+        self.truss = Truss.from_parameters(self.params)
+        self.sequencer = StepSequencer(self.settings, self.kinematics, 'a')
+        self.vibration = VibrationMeter(window=max(self.settings.settle_time, 0.2))
+        self.walk: Walk | None = None
+        self._walk_stance: Stance | None = None
+        self._goal_handle = None
+        self._goal_done = None
+        self._positions: np.ndarray | None = None
+        self._velocities = np.zeros(5)
+        self._grippers: dict[str, str] = {}
+        self._gripper_nodes: dict[str, str] = {}
+        self._gripper_errors: dict[str, float] = {}
+        self._base_known = False
+        self._trajectory_generation = 0
+        self._follow_handle = None
+        self._step_bound = 0.0
+        self._true_insertion_error = math.nan
+        self._last_feedback = -math.inf
+        self._last_phase: tuple | None = None
+        self._step_in_progress = False
+        self._frame: BaseFrame | None = None
+        self._residual_vibration = math.nan
+
+        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
+        self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
+        self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
+        self.create_subscription(JointState, 'joint_states', self._on_joint_states, _SENSOR)
+        self.create_subscription(GripperStates, 'gripper_states', self._on_gripper_states,
+                                 _LATCHED)
+        self.create_subscription(PoseStamped, 'tip_pose', self._on_tip_pose, _SENSOR)
+        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, _LATCHED)
+        self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
+        self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
+        self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
+        self.step_server = ActionServer(
+            self, Step, 'step', execute_callback=self._execute_step,
+            goal_callback=lambda _: GoalResponse.ACCEPT, cancel_callback=self._on_cancel)
+        self.walk_server = ActionServer(
+            self, WalkTo, 'walk_to', execute_callback=self._execute_walk,
+            goal_callback=lambda _: GoalResponse.ACCEPT, cancel_callback=self._on_cancel)
+        self.create_service(Trigger, 'hold', self._on_hold)
+        self.create_service(Trigger, 'resume', self._on_resume)
+        self.create_timer(TICK_PERIOD, self._tick)
+        self._publish_phase()
+
+    # ------------------------------------------------------------------ parameters
+    def _check_alignment(self, settings: SupervisorParameters) -> None:
+        tolerance = self.params.gripper.insertion_position_tolerance
+        if settings.insertion_alignment >= tolerance:
+            raise ParameterError(
+                f'supervisor.insertion_alignment ({settings.insertion_alignment} m) must be '
+                f'smaller than gripper.insertion_position_tolerance ({tolerance} m)')
+
+    def _apply_settings(self, settings: SupervisorParameters) -> None:
+        self.settings = settings
+        self.sequencer.parameters = settings
+
+    # ------------------------------------------------------------------ measurements
+    def _now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def _on_joint_states(self, msg: JointState) -> None:
+        index = {name: i for i, name in enumerate(msg.name)}
+        if not all(name in index for name in PHYSICAL_JOINT_NAMES):
+            return
+        order = [index[name] for name in PHYSICAL_JOINT_NAMES]
+        positions = np.array([msg.position[i] for i in order])
+        if not np.all(np.isfinite(positions)):
+            return
+        self._positions = positions
+        if len(msg.velocity) == len(msg.name):
+            self._velocities = np.array([msg.velocity[i] for i in order])
+
+    def _on_gripper_states(self, msg: GripperStates) -> None:
+        for state in msg.grippers:
+            self._grippers[state.name] = _GRIPPER_STATES.get(state.state, 'unknown')
+            self._gripper_nodes[state.name] = state.node
+            self._gripper_errors[state.name] = state.position_error
+
+    def _on_tip_pose(self, msg: PoseStamped) -> None:
+        p = msg.pose.position
+        self.vibration.add(self._now(), np.array([p.x, p.y, p.z]))
+
+    def _on_control_mode(self, msg: ControlMode) -> None:
+        # A restarted supervisor takes the base back from the latched mode.
+        if not self._base_known and not self.sequencer.busy and msg.base_gripper in ('a', 'b'):
+            self.sequencer.base_gripper = msg.base_gripper
+            self._base_known = True
+
+    def _theta_roles(self) -> np.ndarray:
+        return physical_to_roles(self._positions, self.sequencer.base_gripper)
+
+    def _current_stance(self) -> Stance:
+        base = self.sequencer.base_gripper
+        other = 'b' if base == 'a' else 'a'
+        if self._grippers.get(base) != 'attached' or self._grippers.get(other) != 'attached':
+            raise SequencerError('a walk starts only with both grippers attached (now: '
+                                 + ', '.join(f'{g}: {self._grippers.get(g, "unknown")}'
+                                             for g in ('a', 'b')) + ')')
+        return Stance(base, self._gripper_nodes[base], self._gripper_nodes[other])
+
+    # ------------------------------------------------------------------ actions
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        return CancelResponse.ACCEPT
+
+    async def _execute_walk(self, goal_handle):
+        target = goal_handle.request.target_node
+        result = WalkTo.Result()
+        try:
+            stance = self._start_checks()
+            route = plan_route(self.truss, stance, target)
+        except (SequencerError, UnknownNodeError, UnreachableTargetError) as error:
+            self.get_logger().warning(f'walk to {target!r} refused: {error}')
+            result.message = str(error)
+            goal_handle.abort()
+            return result
+        self.get_logger().info(f'walking to {target}: {len(route)} steps '
+                               + ' -> '.join(s.to_node for s in route))
+        walk = await self._run_walk(goal_handle, target, route, stance)
+        result.success = walk.reached
+        result.steps_taken = sum(1 for o in walk.outcomes if o.success)
+        result.duration = float(sum(o.duration for o in walk.outcomes))
+        result.path = walk.path
+        result.message = self._walk_message(walk)
+        self._finish_goal(goal_handle, walk)
+        return result
+
+    async def _execute_step(self, goal_handle):
+        target = goal_handle.request.target_node
+        result = Step.Result()
+        try:
+            stance = self._start_checks()
+            self.truss.index(target)
+            steps = [s for s in possible_steps(self.truss, stance) if s.to_node == target]
+            if not steps:
+                raise UnreachableTargetError(
+                    f'{target!r} is not one step away: from the base in {stance.base_node} a '
+                    f'step reaches ' + ', '.join(s.to_node for s in
+                                                 possible_steps(self.truss, stance)))
+        except (SequencerError, UnknownNodeError, UnreachableTargetError) as error:
+            self.get_logger().warning(f'step to {target!r} refused: {error}')
+            result.message = str(error)
+            goal_handle.abort()
+            return result
+        walk = await self._run_walk(goal_handle, target, steps, stance)
+        outcome = walk.outcomes[-1] if walk.outcomes else None
+        result.success = walk.reached
+        result.message = self._walk_message(walk)
+        result.base_gripper = self.sequencer.base_gripper
+        result.base_node = self._gripper_nodes.get(self.sequencer.base_gripper, '')
+        if outcome is not None:
+            result.duration = outcome.duration
+            result.insertion_error = self._true_insertion_error
+            result.time_optimal_bound = self._step_bound
+        self._finish_goal(goal_handle, walk)
+        return result
+
+    def _start_checks(self) -> Stance:
+        if self.walk is not None:
+            raise SequencerError(f'a walk to {self.walk.target} is running: cancel it first')
+        if self.sequencer.phase == Phase.SAFE_HOLD:
+            raise SequencerError(f'the walker is in safe hold ({self.sequencer.reason}): call '
+                                 f'resume first')
+        if self._positions is None:
+            raise SequencerError('no joint states received from the plant yet')
+        return self._current_stance()
+
+    async def _run_walk(self, goal_handle, target: str, route: list[PlannedStep],
+                        stance: Stance) -> Walk:
+        self.walk = Walk(target, route)
+        self._walk_stance = stance
+        self._goal_handle = goal_handle
+        self._goal_done = rclpy.task.Future()
+        await self._goal_done
+        walk, self.walk, self._goal_handle = self.walk, None, None
+        return walk
+
+    def _finish_goal(self, goal_handle, walk: Walk) -> None:
+        if walk.reached:
+            goal_handle.succeed()
+        elif walk.cancel_requested and not walk.failed:
+            goal_handle.canceled()
+        else:
+            goal_handle.abort()
+
+    @staticmethod
+    def _walk_message(walk: Walk) -> str:
+        if walk.reached:
+            return ''
+        if walk.failed:
+            return walk.outcomes[-1].message
+        if walk.cancel_requested:
+            return f'cancelled after {walk.step_index} of {len(walk.route)} steps'
+        return 'the walk did not finish'
+
+    # ------------------------------------------------------------------ the decision loop
+    def _tick(self) -> None:
+        now = self._now()
+        if self._positions is not None:
+            self._execute(self.sequencer.tick(now, self._theta_roles(),
+                                              physical_to_roles(self._velocities,
+                                                                self.sequencer.base_gripper),
+                                              dict(self._grippers)))
+        walk = self.walk
+        if walk is not None:
+            if self._goal_handle is not None and self._goal_handle.is_cancel_requested:
+                walk.cancel_requested = True
+            if not self.sequencer.busy:
+                self._advance_walk(walk, now)
+            if now - self._last_feedback >= FEEDBACK_PERIOD:
+                self._publish_feedback(walk)
+                self._last_feedback = now
+        self._publish_phase()
+
+    def _advance_walk(self, walk: Walk, now: float) -> None:
+        """Between steps: record the step that ended, then start the next or end the walk."""
+        if self._step_in_progress:
+            self._record_outcome(walk, self.sequencer.outcome)
+        if self.sequencer.phase == Phase.SAFE_HOLD and not walk.failed:
+            walk.outcomes.append(StepOutcome(False, self.sequencer.reason, {}, 0.0,
+                                             math.nan, 0))
+        if walk.finished:
+            if not self._goal_done.done():
+                self._goal_done.set_result(True)
+            return
+        step = walk.next_step()
+        try:
+            frame = BaseFrame.from_stance(self.kinematics, self._theta_roles(),
+                                          self.truss.position(step.base_node),
+                                          self.truss.position(step.from_node))
+            targets = plan_step_targets(self.kinematics, frame, step,
+                                        self.truss.position(step.from_node),
+                                        self.truss.position(step.to_node), self._theta_roles(),
+                                        self.params.gripper.approach_height)
+            commands = self.sequencer.start(step, targets, now, dict(self._grippers))
+        except (KinematicsError, SequencerError) as error:
+            walk.outcomes.append(StepOutcome(False, f'step to {step.to_node} refused: {error}',
+                                             {}, 0.0, math.nan, 0))
+            self.get_logger().error(walk.outcomes[-1].message)
+            return
+        self._step_in_progress = True
+        self._frame = frame
+        self._step_bound = 0.0
+        self._true_insertion_error = math.nan
+        self.get_logger().info(f'step {walk.step_index + 1}/{len(walk.route)}: gripper '
+                               f'{step.moving_gripper} {step.from_node} -> {step.to_node} '
+                               f'({math.degrees(targets.sweep):+.0f} deg about {step.base_node})')
+        self._execute(commands)
+
+    def _record_outcome(self, walk: Walk, outcome: StepOutcome) -> None:
+        self._step_in_progress = False
+        walk.outcomes.append(outcome)
+        step = walk.route[len(walk.outcomes) - 1]
+        report = StepReport()
+        report.header.stamp = self.get_clock().now().to_msg()
+        report.step_index = len(walk.outcomes) - 1
+        report.step_count = len(walk.route)
+        report.base_gripper = step.base_gripper
+        report.moving_gripper = step.moving_gripper
+        report.base_node, report.from_node, report.to_node = (step.base_node, step.from_node,
+                                                              step.to_node)
+        report.sweep = float(step.sweep)
+        report.success = outcome.success
+        report.message = outcome.message
+        report.phase_names = list(outcome.phase_durations)
+        report.phase_durations = [float(v) for v in outcome.phase_durations.values()]
+        report.duration = float(outcome.duration)
+        report.time_optimal_bound = float(self._step_bound)
+        report.bound_ratio = (float(outcome.duration / self._step_bound)
+                              if self._step_bound > 0 else 0.0)
+        report.insertion_error = float(self._true_insertion_error)
+        report.insertion_error_estimated = float(outcome.insertion_error)
+        report.residual_vibration = float(self._residual_vibration)
+        report.insertion_attempts = outcome.insertion_attempts
+        self.report_pub.publish(report)
+        level = self.get_logger().info if outcome.success else self.get_logger().error
+        level(f'step {report.step_index + 1} {"done" if outcome.success else "failed"} in '
+              f'{outcome.duration:.2f} s' + (f': {outcome.message}' if outcome.message else ''))
+
+    # ------------------------------------------------------------------ commands
+    def _execute(self, commands: list) -> None:
+        for command in commands:
+            if isinstance(command, SetControlMode):
+                self._publish_mode(command.mode, command.base_gripper)
+            elif isinstance(command, GripperRequest):
+                self._request_gripper(command)
+            elif isinstance(command, TrajectoryRequest):
+                self._request_trajectory(command)
+            elif isinstance(command, CancelTrajectory):
+                self._cancel_trajectory()
+
+    def _publish_mode(self, mode: str, base: str) -> None:
+        msg = ControlMode(mode=_MODES[mode], base_gripper=base)
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self.mode_pub.publish(msg)
+
+    def _request_gripper(self, request: GripperRequest) -> None:
+        if request.action == 'screw_in' and self.sequencer.phase == Phase.INSERTION:
+            self._residual_vibration = self.vibration.amplitude()
+            tip = self.vibration.mean()
+            hole = self.truss.position(self.sequencer.step.to_node)
+            self._true_insertion_error = float(np.linalg.norm(tip[:2] - hole[:2]))
+        if not self.gripper_client.service_is_ready():
+            self._execute(self.sequencer.gripper_done(
+                False, 'the plant gripper_command service is not available', self._now()))
+            return
+        call = GripperCommand.Request(
+            gripper=request.gripper,
+            command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
+            else GripperCommand.Request.UNSCREW)
+        future = self.gripper_client.call_async(call)
+        future.add_done_callback(self._on_gripper_response)
+
+    def _on_gripper_response(self, future) -> None:
+        response = future.result()
+        if response is None:
+            commands = self.sequencer.gripper_done(False, 'no response from the plant',
+                                                   self._now())
+        else:
+            commands = self.sequencer.gripper_done(response.success, response.message,
+                                                   self._now())
+        self._execute(commands)
+
+    def _request_trajectory(self, request: TrajectoryRequest) -> None:
+        self._trajectory_generation += 1
+        generation = self._trajectory_generation
+        if request.purpose in ('fine', 'insertion'):
+            self.vibration.clear()
+        if not self.plan_client.service_is_ready() or not self.follow_client.server_is_ready():
+            self._execute(self.sequencer.trajectory_done(
+                False, 'the planner is not available', self._now()))
+            return
+        call = plan_request(request, self.kinematics, self._frame)
+        future = self.plan_client.call_async(call)
+        future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+
+    def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
+        if generation != self._trajectory_generation:
+            return
+        response = future.result()
+        if response is None or not response.success:
+            reason = 'no response' if response is None else response.message
+            self._execute(self.sequencer.trajectory_done(
+                False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
+            return
+        if request.purpose == 'coarse':
+            self._step_bound = response.time_optimal_bound
+        goal = FollowTrajectory.Goal(trajectory=response.trajectory)
+        send = self.follow_client.send_goal_async(goal)
+        send.add_done_callback(
+            lambda f: self._on_follow_accepted(f, generation, response.duration))
+
+    def _on_follow_accepted(self, future, generation: int, duration: float) -> None:
+        handle = future.result()
+        if generation != self._trajectory_generation:
+            if handle is not None and handle.accepted:
+                handle.cancel_goal_async()
+            return
+        if handle is None or not handle.accepted:
+            self._execute(self.sequencer.trajectory_done(
+                False, 'the planner refused to stream the trajectory', self._now()))
+            return
+        self._follow_handle = handle
+        self.sequencer.trajectory_started(duration, self._now())
+        handle.get_result_async().add_done_callback(
+            lambda f: self._on_follow_done(f, generation))
+
+    def _on_follow_done(self, future, generation: int) -> None:
+        if generation != self._trajectory_generation:
+            return
+        self._follow_handle = None
+        wrapped = future.result()
+        result = None if wrapped is None else wrapped.result
+        success = result is not None and result.success
+        message = 'no result' if result is None else result.message
+        self._execute(self.sequencer.trajectory_done(success, message, self._now()))
+
+    def _cancel_trajectory(self) -> None:
+        self._trajectory_generation += 1
+        if self._follow_handle is not None:
+            self._follow_handle.cancel_goal_async()
+            self._follow_handle = None
+
+    # ------------------------------------------------------------------ hold / resume
+    def _on_hold(self, request: Trigger.Request, response: Trigger.Response):
+        self._execute(self.sequencer.hold('hold requested by an operator', self._now()))
+        response.success = True
+        response.message = 'holding: trajectories stopped, controllers hold, grippers unchanged'
+        return response
+
+    def _on_resume(self, request: Trigger.Request, response: Trigger.Response):
+        try:
+            self.sequencer.clear_hold()
+        except SequencerError as error:
+            response.success = False
+            response.message = str(error)
+            return response
+        response.success = True
+        response.message = 'resumed: ready for a step or a walk'
+        return response
+
+    # ------------------------------------------------------------------ publishing
+    def _publish_phase(self) -> None:
+        walk = self.walk
+        step = self.sequencer.step if self.sequencer.busy else None
+        key = (self.sequencer.phase, self.sequencer.reason, self.sequencer.base_gripper,
+               walk.step_index if walk else 0, walk is not None)
+        if key == self._last_phase:
+            return
+        self._last_phase = key
+        msg = StepPhase(phase=int(self.sequencer.phase),
+                        base_gripper=self.sequencer.base_gripper,
+                        reason=self.sequencer.reason)
+        msg.header.stamp = self.get_clock().now().to_msg()
+        if walk is not None:
+            msg.step_index, msg.step_count = walk.step_index, len(walk.route)
+        if step is not None:
+            msg.from_node, msg.to_node = step.from_node, step.to_node
+        self.phase_pub.publish(msg)
+
+    def _publish_feedback(self, walk: Walk) -> None:
+        handle = self._goal_handle
+        if handle is None:
+            return
+        step = self.sequencer.step if self.sequencer.busy else None
+        error = self.sequencer.tip_error() if self.sequencer.busy else 0.0
+        if isinstance(handle.request, WalkTo.Goal):
+            feedback = WalkTo.Feedback(step_index=walk.step_index, step_count=len(walk.route),
+                                       phase=int(self.sequencer.phase),
+                                       tip_position_error=float(error))
+            if step is not None:
+                feedback.from_node, feedback.to_node = step.from_node, step.to_node
+        else:
+            feedback = Step.Feedback(phase=int(self.sequencer.phase),
+                                     tip_position_error=float(error))
+        handle.publish_feedback(feedback)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the supervisor node."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SupervisorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterError as error:
+        rclpy.logging.get_logger('supervisor').fatal(f'invalid parameters: {error}')
+        raise SystemExit(2) from None
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()
+
