@@ -1,4 +1,4 @@
-"""The figures command writes Figures 8 and 9 (and the duration curve) as PNG images."""
+"""The figures command writes Figures 8 and 9 (and the duration curve); the report prints."""
 
 from ros_test_support import REPO_ROOT
 from walker_planner.figures import FIGURE9_CASES, main
@@ -28,3 +28,13 @@ def test_figure9_shows_several_parameter_sets():
 def test_the_console_script_is_installed():
     script = REPO_ROOT / 'ros2_ws' / 'install' / 'walker_planner' / 'lib' / 'walker_planner'
     assert (script / 'planner_figures').exists() and (script / 'planner_node').exists()
+
+
+def test_the_report_prints_the_solutions_and_the_simplification_errors(capsys):
+    from walker_planner.report import main as report
+
+    assert report([]) == 0
+    out = capsys.readouterr().out
+    for step in ('90 deg nominal', '90 deg bound', '180 deg nominal', '180 deg bound'):
+        assert f'| {step} | simplified |' in out and f'| {step} | full |' in out
+        assert f'| {step} | lumped |' in out
