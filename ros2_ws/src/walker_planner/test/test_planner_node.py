@@ -279,6 +279,37 @@ def test_follow_trajectory_streams_with_feedback_and_cancel_holds(graph, context
     probe.clear()
 
 
+def test_stop_trajectory_ends_a_stream_started_by_the_service(graph, context, stance):
+    from std_srvs.srv import Trigger
+
+    probe, _ = graph
+    period = int(round(1e9 / context.robot.timing.control_rate))
+    stop = probe.node.create_client(Trigger, '/walker/stop_trajectory')
+    assert stop.wait_for_service(timeout_sec=WAIT)
+    settle(probe, stance)
+    probe.clear()
+    started = probe.call(trajectory_type='joint_parabolic_time', base_gripper='a',
+                         start=stance.tolist(), goal=(stance + 0.05).tolist(), duration=1.0,
+                         execute=True)
+    assert started.success, started.message
+    assert probe.spin_until(lambda: probe.count() >= 1)
+    for _ in range(3):
+        probe.step(stance, period)
+    answer = stop.call_async(Trigger.Request())
+    assert probe.spin_until(answer.done) and answer.result().success
+    probe.step(stance, period)  # the hold setpoint
+    holds = [probe.setpoints[name][-1] for name in probe.names]
+    assert all(h.velocity == 0.0 and h.acceleration == 0.0 for h in holds)
+    count = probe.count()
+    probe.now += period
+    probe.publish_clock()
+    probe.spin_until(lambda: probe.count() > count, timeout=0.5)
+    assert probe.count() == count
+    answer = stop.call_async(Trigger.Request())
+    assert probe.spin_until(answer.done) and not answer.result().success
+    probe.clear()
+
+
 def test_goals_that_cannot_be_streamed_are_aborted_with_the_reason(graph, stance):
     probe, _ = graph
     settle(probe, stance)

@@ -18,7 +18,7 @@ import numpy as np
 from walker_core.joint_roles import GRIPPERS, joint_of_role, physical_to_roles, roles_to_physical
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_planner.core.bounds import MIN_SWEEP, NODE_RADIUS_TOLERANCE, tip_move_bound
-from walker_planner.core.cartesian import Branch, CartesianInJointSpace, branch_of
+from walker_planner.core.cartesian import CartesianInJointSpace, branch_of
 from walker_planner.core.errors import InvalidRequestError, LimitError, WorkspaceError
 from walker_planner.core.registry import TRAJECTORY_TYPES, ValidRequest
 from walker_planner.core.trajectory import CARTESIAN, Samples, Trajectory, finite_vector
@@ -221,19 +221,14 @@ def _check_rates(plan_times: np.ndarray, samples: Samples, context: PlanningCont
         raise WorkspaceError(f'{type_name}: the joint trajectory is not finite')
 
 
-def _bound(kind, valid: ValidRequest, built, context: PlanningContext) -> float | None:
-    if built.solution is not None:
-        solution = built.solution
-        l2 = solution.model.link_length
-        return tip_move_bound(context.robot, valid.start, valid.goal,
-                              2.0 * l2 * solution.profile.rho_mid if valid.min_radius
-                              else context.planner.bang_bang.min_radius)
+def _bound(kind, valid: ValidRequest, context: PlanningContext) -> float | None:
+    min_radius = valid.min_radius or context.planner.bang_bang.min_radius
     if kind.space == CARTESIAN:
         start, goal = valid.start, valid.goal
     else:
         start, goal = (context.kinematics.forward(valid.start)[:3],
                        context.kinematics.forward(valid.goal)[:3])
-    return tip_move_bound(context.robot, start, goal, context.planner.bang_bang.min_radius)
+    return tip_move_bound(context.robot, start, goal, min_radius)
 
 
 def plan(request: PlanRequest, context: PlanningContext) -> Plan:
@@ -280,8 +275,4 @@ def plan(request: PlanRequest, context: PlanningContext) -> Plan:
     base = request.base_gripper
     physical = Samples(*(roles_to_physical(array, base) for array in samples))
     return Plan(kind.name, base, trajectory, path, built.solution, times, physical,
-                _bound(kind, valid, built, context))
-
-
-# Branch is re-exported for callers that build CartesianInJointSpace themselves.
-Branch = Branch
+                _bound(kind, valid, context))
