@@ -18,5 +18,8 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='Trajectory planner of the walker (paper section 5).',
     license='Apache-2.0',
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': [
+        'planner_node = walker_planner.planner_node:main',
+        'planner_figures = walker_planner.figures:main',
+    ]},
 )

@@ -1,0 +1,132 @@
+"""Streaming: interpolation of a JointTrajectory, its validation, and the setpoints' timing."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_planner.core.errors import InvalidRequestError, LimitError
+from walker_planner.core.planning import PlanRequest, plan
+from walker_planner.core.streaming import SampledTrajectory, SetpointStream, check_start
+
+NAMES = list(PHYSICAL_JOINT_NAMES)
+MS = 1_000_000
+
+
+def quintic(t, coefficients):
+    """Evaluate a degree-5 polynomial per joint and its first two derivatives."""
+    c = np.asarray(coefficients)
+    powers = np.arange(6)
+    p = np.sum(c * t ** powers, axis=-1)
+    v = np.sum(c[..., 1:] * powers[1:] * t ** (powers[1:] - 1), axis=-1)
+    a = np.sum(c[..., 2:] * powers[2:] * (powers[2:] - 1) * t ** (powers[2:] - 2), axis=-1)
+    return p, v, a
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-0.3, 0.3), min_size=30, max_size=30),
+       st.lists(st.floats(0.05, 0.5), min_size=2, max_size=6))
+def test_quintic_hermite_interpolation_is_exact_for_quintics(values, gaps):
+    coefficients = np.array(values).reshape(5, 6)
+    times = np.concatenate([[0.0], np.cumsum(gaps)])
+    knots = np.array([quintic(t, coefficients) for t in times])  # (N, 3, 5)
+    trajectory = SampledTrajectory.from_points(NAMES, times, knots[:, 0], knots[:, 1],
+                                               knots[:, 2])
+    t = np.linspace(times[0] + 1e-3, times[-1] - 1e-3, 57)
+    sampled = trajectory.sample(t)
+    exact = np.array([quintic(x, coefficients) for x in t])
+    np.testing.assert_allclose(sampled.position, exact[:, 0], atol=1e-9)
+    np.testing.assert_allclose(sampled.velocity, exact[:, 1], atol=1e-8)
+    np.testing.assert_allclose(sampled.acceleration, exact[:, 2], atol=1e-6)
+
+
+def test_cubic_and_linear_interpolation_when_the_points_carry_less():
+    times = [0.0, 1.0, 2.0]
+    positions = [[0.0] * 5, [1.0] * 5, [0.0] * 5]
+    linear = SampledTrajectory.from_points(NAMES, times, positions)
+    np.testing.assert_allclose(linear.sample(0.5).position, 0.5)
+    cubic = SampledTrajectory.from_points(NAMES, times, positions,
+                                          [[0.0] * 5, [0.0] * 5, [0.0] * 5])
+    np.testing.assert_allclose(cubic.sample(0.5).position, 0.5)
+    np.testing.assert_allclose(cubic.sample(1.0).velocity, 0.0)
+    assert cubic.sample(0.25).position[0] < 0.25  # eases out of rest
+
+
+def test_points_are_reordered_to_the_physical_joints():
+    names = NAMES[::-1]
+    trajectory = SampledTrajectory.from_points(names, [0.0, 1.0], [[1, 2, 3, 4, 5]] * 2)
+    np.testing.assert_allclose(trajectory.sample(0.5).position, [5, 4, 3, 2, 1])
+
+
+def test_before_and_after_the_points_the_trajectory_rests():
+    trajectory = SampledTrajectory.from_points(NAMES, [0.5, 1.0], [[0.0] * 5, [1.0] * 5],
+                                               [[0.2] * 5, [0.2] * 5])
+    for t, expected in ((0.0, 0.0), (2.0, 1.0)):
+        sample = trajectory.sample(t)
+        np.testing.assert_allclose(sample.position, expected)
+        np.testing.assert_allclose(sample.velocity, 0.0)
+
+
+@pytest.mark.parametrize('names, times, positions, velocities, error, words', [
+    (NAMES[:4], [0.0], [[0.0] * 4], [], InvalidRequestError, 'must be the five joints'),
+    (NAMES[:4] + ['elbow'], [0.0], [[0.0] * 5], [], InvalidRequestError, 'five joints'),
+    (NAMES, [], [], [], InvalidRequestError, 'no points'),
+    (NAMES, [0.0, 0.0], [[0.0] * 5] * 2, [], InvalidRequestError, 'strictly increasing'),
+    (NAMES, [-1.0], [[0.0] * 5], [], InvalidRequestError, 'non-negative'),
+    (NAMES, [0.0], [[0.0] * 4], [], InvalidRequestError, 'needs 5 positions'),
+    (NAMES, [0.0, 1.0], [[0.0] * 5] * 2, [[0.0] * 5, []], InvalidRequestError,
+     '5 velocities .* or none'),
+    (NAMES, [0.0], [[0.0, math.nan, 0.0, 0.0, 0.0]], [], InvalidRequestError, 'finite'),
+    (NAMES, [0.0], [[0.0, 2.5, 0.0, 0.0, 0.0]], [], LimitError,
+     'a_pitch_joint goes to .* outside its limits'),
+    (NAMES, [0.0, 1.0], [[0.0] * 5] * 2, [[0.0] * 5, [0, 0, 0, 0, 3.0]], LimitError,
+     'b_yaw_joint moves at 3 rad/s, above its velocity limit'),
+])
+def test_malformed_trajectories_are_refused(robot, names, times, positions, velocities, error,
+                                            words):
+    with pytest.raises(error, match=words):
+        SampledTrajectory.from_points(names, times, positions, velocities or
+                                      [[] for _ in times], [[] for _ in times], robot)
+
+
+def test_each_setpoint_applies_one_period_ahead_and_carries_the_planned_sample(context):
+    stance = context.kinematics.inverse([0.0, 0.9, 0.03, 0.0, 0.0])
+    goal = stance + np.array([0.3, 0, 0, 0, 0.3])
+    planned = plan(PlanRequest('joint_min_jerk', 'a', tuple(stance), tuple(goal)), context)
+    trajectory = SampledTrajectory(planned.times, *planned.samples)
+    period = 2 * MS
+    stream = SetpointStream(trajectory, start=10_000 * MS, period=period)
+    for k in range(0, len(planned.times) - 1, 37):
+        now = 10_000 * MS + k * period
+        setpoint = stream.setpoint(now)
+        assert setpoint.stamp == now + period
+        assert setpoint.time_from_start == pytest.approx(k * period / 1e9, abs=1e-12)
+        np.testing.assert_allclose(setpoint.position, planned.samples.position[k], atol=1e-12)
+        np.testing.assert_allclose(setpoint.velocity, planned.samples.velocity[k], atol=1e-12)
+        assert not setpoint.final
+    last = stream.setpoint(10_000 * MS + int(planned.duration * 1e9) + period)
+    assert last.final
+    np.testing.assert_allclose(last.position, goal, atol=1e-12)
+    np.testing.assert_allclose(last.velocity, 0.0)
+    hold = stream.hold(10_000 * MS, stream.setpoint(10_000 * MS + 300 * period))
+    np.testing.assert_allclose(hold.velocity, 0.0)
+    assert hold.final
+
+
+def test_a_stream_starts_only_where_the_robot_is():
+    trajectory = SampledTrajectory.from_points(NAMES, [0.0, 1.0], [[0.0] * 5, [1.0] * 5])
+    check_start(trajectory, np.full(5, 0.01), tolerance=0.05)
+    with pytest.raises(LimitError, match='0.1000 rad away from the measured vertex_joint'):
+        check_start(trajectory, np.array([0, 0, 0.1, 0, 0]), tolerance=0.05)
+    with pytest.raises(LimitError, match='no joint_states received'):
+        check_start(trajectory, None, tolerance=0.05)
+
+
+def test_the_tracking_error_compares_a_state_with_the_setpoint_for_its_stamp():
+    trajectory = SampledTrajectory.from_points(NAMES, [0.0, 1.0], [[0.0] * 5, [1.0] * 5])
+    stream = SetpointStream(trajectory, start=0, period=2 * MS)
+    # trajectory time 0.5 s applies at 0.5 s + one period
+    assert stream.tracking_error(502 * MS, np.full(5, 0.45)) == pytest.approx(0.05)

@@ -1,0 +1,318 @@
+"""The planner node: plans trajectories on request and streams them to the five controllers.
+
+Interfaces (relative to the node's namespace, ``/walker`` by default; docs/architecture.md):
+
+* service ``plan_trajectory`` (``walker_msgs/srv/PlanTrajectory``): plan one of the nine types;
+  with ``execute`` true, also start streaming it;
+* action ``follow_trajectory`` (``walker_msgs/action/FollowTrajectory``): stream a
+  ``trajectory_msgs/JointTrajectory`` at the control rate, with feedback; cancelling stops
+  the stream with a hold setpoint at the last position; a goal is rejected while a stream runs;
+* service ``stop_trajectory`` (``std_srvs/srv/Trigger``): stop whatever stream runs;
+* ``controllers/<joint>/setpoint`` (``walker_msgs/msg/JointCommand``), published;
+* ``planned_trajectory`` (``trajectory_msgs/msg/JointTrajectory``), latched;
+* ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors.
+
+All planning is in :mod:`walker_planner.core`; this node converts messages, parameters and
+clocks. Timers follow the ROS clock, so ``use_sim_time`` drives the stream from ``/clock``.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import rclpy
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+from walker_msgs.action import FollowTrajectory
+from walker_msgs.msg import JointCommand
+from walker_msgs.srv import PlanTrajectory
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_core.parameter_schema import ParameterError
+from walker_core.robot_parameters import WalkerParameters
+from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
+from walker_planner.core.errors import PlanningError
+from walker_planner.core.parameters import PREFIX, PlannerParameters
+from walker_planner.core.planning import PlanningContext, PlanRequest, plan
+from walker_planner.core.streaming import SampledTrajectory, SetpointStream, check_start
+
+__all__ = ['PlannerNode', 'main']
+
+SETPOINT_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                          history=HistoryPolicy.KEEP_LAST)
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                         history=HistoryPolicy.KEEP_LAST)
+STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
+                       history=HistoryPolicy.KEEP_LAST)
+_WAIT_SLICE = 0.1  # [s] how often a waiting action thread checks for shutdown
+# Executor threads: the stream's timer, the services and joint_states, an action goal waiting
+# for its stream, and the action server's own goal, cancel and result requests.
+_THREADS = 4
+
+
+class _ActiveStream:
+    """A running stream and how it ends (shared by the timer and the action thread)."""
+
+    def __init__(self, stream: SetpointStream, goal_handle) -> None:
+        self.stream = stream
+        self.goal_handle = goal_handle
+        self.done = threading.Event()
+        self.last = None
+        self.ticks = 0
+        self.cancelled = False
+        self.message = ''
+
+
+class PlannerNode(Node):
+    """Plan trajectories (service), stream them (action, timer), publish the current plan."""
+
+    def __init__(self) -> None:
+        super().__init__('planner')
+        self._robot = declare_section(self, WalkerParameters)
+        self._planner = declare_section(self, PlannerParameters, PREFIX)
+        guard_section_updates(self, PlannerParameters, PREFIX, lambda: self._planner,
+                              self._apply_planner_parameters)
+        self._planning = PlanningContext.from_parameters(self._robot, self._planner)
+        self._period_ns = int(round(1e9 / self._robot.timing.control_rate))
+        self._lock = threading.Lock()
+        self._active: _ActiveStream | None = None
+        self._reserved = False
+        self._measured: tuple[int, np.ndarray] | None = None
+        self._setpoint_publishers = {
+            name: self.create_publisher(JointCommand, f'controllers/{name}/setpoint',
+                                        SETPOINT_QOS) for name in PHYSICAL_JOINT_NAMES}
+        self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
+                                                     LATCHED_QOS)
+        self.create_subscription(JointState, 'joint_states', self._on_joint_state, STATE_QOS)
+        stream_group = MutuallyExclusiveCallbackGroup()
+        self._timer = self.create_timer(self._period_ns / 1e9, self._on_tick,
+                                        callback_group=stream_group, autostart=False)
+        # planning takes milliseconds: it runs beside the stream's timer, never blocking it
+        self.create_service(PlanTrajectory, 'plan_trajectory', self._on_plan)
+        self.create_service(Trigger, 'stop_trajectory', self._on_stop)
+        self._action_server = ActionServer(
+            self, FollowTrajectory, 'follow_trajectory', execute_callback=self._on_execute,
+            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+            callback_group=ReentrantCallbackGroup())
+        self.get_logger().info(
+            f'planner ready: {len(PHYSICAL_JOINT_NAMES)} controllers at '
+            f'{self._robot.timing.control_rate:g} Hz')
+
+    # ------------------------------------------------------------------ parameters
+    def _apply_planner_parameters(self, section: PlannerParameters) -> None:
+        self._planner = section
+        self._planning = PlanningContext.from_parameters(self._robot, section)
+
+    # ------------------------------------------------------------------ subscriptions
+    def _on_joint_state(self, message: JointState) -> None:
+        try:
+            index = [list(message.name).index(name) for name in PHYSICAL_JOINT_NAMES]
+            positions = np.asarray(message.position, dtype=float)[index]
+        except (ValueError, IndexError):
+            return
+        if np.all(np.isfinite(positions)):
+            stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+            self._measured = (stamp, positions)
+
+    # ------------------------------------------------------------------ planning service
+    def _on_plan(self, request, response):
+        try:
+            result = plan(_plan_request(request), self._planning)
+        except PlanningError as error:
+            response.success, response.message = False, str(error)
+            self.get_logger().warning(f'plan_trajectory refused: {error}')
+            return response
+        samples = result.samples
+        response.trajectory = trajectory_message(result.times, *samples)
+        response.duration = result.duration
+        response.time_optimal_bound = result.time_optimal_bound or 0.0
+        response.success = True
+        if request.execute:
+            trajectory = SampledTrajectory(result.times, *samples)
+            error = self._start_stream(trajectory, response.trajectory, None)
+            if error:
+                response.success = False
+                response.message = f'planned but not executed: {error}'
+                return response
+        else:
+            self._plan_publisher.publish(response.trajectory)
+        return response
+
+    def _on_stop(self, request, response):
+        with self._lock:
+            active = self._active
+            if active is not None:
+                active.cancelled, active.message = True, 'stopped by stop_trajectory'
+        response.success = active is not None
+        response.message = 'stopping the stream' if active else 'no stream is running'
+        return response
+
+    # ------------------------------------------------------------------ action
+    def _on_goal(self, goal) -> GoalResponse:
+        with self._lock:
+            if self._active is not None or self._reserved:
+                self.get_logger().warning('follow_trajectory goal rejected: a stream is '
+                                          'already running (cancel it first)')
+                return GoalResponse.REJECT
+            self._reserved = True
+        return GoalResponse.ACCEPT
+
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        return CancelResponse.ACCEPT
+
+    def _on_execute(self, goal_handle):
+        result = FollowTrajectory.Result()
+        try:
+            trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
+            error = self._start_stream(trajectory, goal_handle.request.trajectory, goal_handle)
+        except PlanningError as refusal:
+            error = str(refusal)
+        finally:
+            with self._lock:
+                self._reserved = False
+        if error:
+            result.message = error
+            goal_handle.abort()
+            return result
+        return self._wait_for_stream(goal_handle, result)
+
+    def _wait_for_stream(self, goal_handle, result):
+        with self._lock:
+            active = self._active
+        while active is not None and not active.done.wait(_WAIT_SLICE):
+            if not rclpy.ok(context=self.context):
+                break
+        if active is None or not active.done.is_set():
+            result.message = 'the planner is shutting down'
+            goal_handle.abort()
+            return result
+        result.duration = active.last.time_from_start if active.last else 0.0
+        result.final_position_error = self._tracking_error(active.stream)
+        result.message = active.message
+        result.success = not active.cancelled
+        if active.cancelled and goal_handle.is_cancel_requested:
+            goal_handle.canceled()
+        elif active.cancelled:
+            goal_handle.abort()
+        else:
+            goal_handle.succeed()
+        return result
+
+    # ------------------------------------------------------------------ streaming
+    def _start_stream(self, trajectory: SampledTrajectory, message: JointTrajectory,
+                      goal_handle) -> str:
+        """Start streaming; return '' or the reason it was refused."""
+        measured = None if self._measured is None else self._measured[1]
+        try:
+            check_start(trajectory, measured, self._planner.stream.start_tolerance)
+        except PlanningError as error:
+            return str(error)
+        with self._lock:
+            if self._active is not None:
+                return 'a stream is already running (cancel it or call stop_trajectory)'
+            now = self.get_clock().now().nanoseconds
+            stream = SetpointStream(trajectory, now, self._period_ns)
+            self._active = _ActiveStream(stream, goal_handle)
+            message.header.stamp = to_time(stream.origin)
+            self._plan_publisher.publish(message)
+            self._publish(self._active, stream.setpoint(now))
+            self._timer.reset()
+        return ''
+
+    def _on_tick(self) -> None:
+        with self._lock:
+            active = self._active
+            if active is None:
+                self._timer.cancel()
+                return
+            now = self.get_clock().now().nanoseconds
+            handle = active.goal_handle
+            if handle is not None and handle.is_cancel_requested and not active.cancelled:
+                active.cancelled, active.message = True, 'cancelled'
+            if active.cancelled:
+                self._finish(active, active.stream.hold(now, active.last))
+                return
+            setpoint = active.stream.setpoint(now)
+            self._publish(active, setpoint)
+            if setpoint.final:
+                self._finish(active, None)
+
+    def _publish(self, active: _ActiveStream, setpoint) -> None:
+        stamp = to_time(setpoint.stamp)
+        for j, name in enumerate(PHYSICAL_JOINT_NAMES):
+            command = JointCommand(joint_name=name, position=float(setpoint.position[j]),
+                                   velocity=float(setpoint.velocity[j]),
+                                   acceleration=float(setpoint.acceleration[j]))
+            command.header.stamp = stamp
+            self._setpoint_publishers[name].publish(command)
+        active.last = setpoint
+        active.ticks += 1
+        every = max(1, round(self._robot.timing.control_rate
+                             / self._planner.stream.feedback_rate))
+        if active.goal_handle is not None and active.ticks % every == 0:
+            self._publish_feedback(active, setpoint)
+
+    def _publish_feedback(self, active: _ActiveStream, setpoint) -> None:
+        duration = active.stream.trajectory.duration
+        feedback = FollowTrajectory.Feedback(
+            time_from_start=setpoint.time_from_start,
+            fraction=min(1.0, setpoint.time_from_start / duration) if duration else 1.0,
+            max_position_error=self._tracking_error(active.stream))
+        active.goal_handle.publish_feedback(feedback)
+
+    def _finish(self, active: _ActiveStream, hold) -> None:
+        """End the stream (lock held): send the hold setpoint if any, wake the waiter."""
+        if hold is not None:
+            self._publish(active, hold)
+        self._timer.cancel()
+        self._active = None
+        active.done.set()
+
+    def _tracking_error(self, stream: SetpointStream) -> float:
+        """Largest joint error [rad] of the newest state against the stream; -1 without one."""
+        if self._measured is None:
+            return -1.0
+        stamp, positions = self._measured
+        return stream.tracking_error(stamp, positions)
+
+
+def _plan_request(request) -> PlanRequest:
+    return PlanRequest(
+        trajectory_type=request.trajectory_type, base_gripper=request.base_gripper,
+        start=tuple(request.start), goal=tuple(request.goal), duration=request.duration,
+        max_velocity=request.max_velocity, max_acceleration=request.max_acceleration,
+        start_joints=tuple(request.start_joints), min_radius=request.min_radius)
+
+
+def main(args=None) -> int:
+    """Run the planner node until interrupted."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = PlannerNode()
+        executor = MultiThreadedExecutor(num_threads=_THREADS)
+        executor.add_node(node)
+        executor.spin()
+    except ParameterError as error:
+        print(f'planner: invalid parameters, not starting: {error}', flush=True)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
