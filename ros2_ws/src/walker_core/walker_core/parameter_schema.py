@@ -41,7 +41,8 @@ class ParameterSpec:
     name : str
         Dotted ROS parameter name.
     type : type
-        ``float``, ``int``, ``bool``, ``str``, ``tuple[float, ...]`` or ``tuple[str, ...]``.
+        ``float``, ``int``, ``bool``, ``str``, ``tuple[float, ...]``, ``tuple[int, ...]`` or
+        ``tuple[str, ...]``.
     description : str
         What the parameter means, for ``ros2 param describe``.
     unit : str
@@ -141,6 +142,12 @@ def _coerce(spec: ParameterSpec, value: Any) -> Any:
         if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
             fail('expected a list of numbers')
         return tuple(check_number(x) for x in value)
+    if spec.type == tuple[int, ...]:
+        if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+            fail('expected a list of integers')
+        if any(isinstance(x, bool) or not isinstance(x, int) for x in value):
+            fail('expected a list of integers')
+        return tuple(int(check_number(x)) for x in value)
     if spec.type == tuple[str, ...]:
         if not isinstance(value, (list, tuple)) or not all(isinstance(x, str) for x in value):
             fail('expected a list of strings')
