@@ -13,6 +13,7 @@ The YAML layout is the standard ``ros__parameters`` form (``ros2 run ... --ros-a
 
 from __future__ import annotations
 
+import array
 import dataclasses
 import math
 import typing
@@ -107,6 +108,9 @@ def leaf_specs(section_type: type, prefix: str = '') -> list[ParameterSpec]:
 
 def _coerce(spec: ParameterSpec, value: Any) -> Any:
     """Check one value against its spec and return it in canonical form."""
+    if isinstance(value, array.array):
+        value = value.tolist()  # rclpy hands runtime updates of number lists over as arrays
+
     def fail(reason: str) -> typing.NoReturn:
         raise ParameterError(f'parameter {spec.name!r} = {value!r}: {reason}')
 
