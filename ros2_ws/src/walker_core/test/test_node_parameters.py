@@ -88,10 +88,15 @@ def test_runtime_updates_of_number_lists_are_accepted(make_node):
                                         {'gains.bandwidth': [1.0, 2.0], 'gains.order': [4, 2]})}
     guard_section_updates(node, Gains, 'gains.', lambda: current['gains'],
                           lambda section: current.update(gains=section))
-    assert node.set_parameters([Parameter('gains.bandwidth', value=[3.0, 4.0])])[0].successful
-    assert node.set_parameters([Parameter('gains.order', value=[2, 2])])[0].successful
+
+    def as_over_the_wire(name, value):
+        # The set_parameters service hands number lists over as array.array.
+        return Parameter.from_parameter_msg(Parameter(name, value=value).to_parameter_msg())
+
+    assert node.set_parameters([as_over_the_wire('gains.bandwidth', [3.0, 4.0])])[0].successful
+    assert node.set_parameters([as_over_the_wire('gains.order', [2, 2])])[0].successful
     assert current['gains'] == Gains((3.0, 4.0), (2, 2))
-    refused = node.set_parameters([Parameter('gains.bandwidth', value=[30.0, 4.0])])[0]
+    refused = node.set_parameters([as_over_the_wire('gains.bandwidth', [30.0, 4.0])])[0]
     assert not refused.successful and 'above the maximum' in refused.reason
     assert current['gains'].bandwidth == (3.0, 4.0)
 
