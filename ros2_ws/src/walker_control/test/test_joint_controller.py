@@ -292,13 +292,28 @@ def test_role_swap_while_holding_is_bumpless_and_changes_the_filter():
     assert SETTINGS.control.filter.order[0] != SETTINGS.control.filter.order[4]
 
 
-def test_role_swap_refused_while_moving_and_nothing_changes():
+@pytest.mark.parametrize('first, second', [(Mode.COARSE, Mode.COARSE),
+                                           (Mode.COARSE, Mode.FINE), (Mode.FINE, Mode.FINE)])
+def test_role_swap_refused_while_moving_and_nothing_changes(first, second):
     controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
-    controller.command(Mode.COARSE, 'a')
+    controller.command(first, 'a')
     with pytest.raises(RoleChangeError, match='only while holding'):
-        controller.command(Mode.COARSE, 'b')
+        controller.command(second, 'b')
     assert controller.role == 1 and controller.base_gripper == 'a'
-    assert controller.mode == Mode.COARSE
+    assert controller.mode == first
+
+
+@pytest.mark.parametrize('first, second', [(Mode.COARSE, Mode.HOLD), (Mode.HOLD, Mode.FINE),
+                                           (Mode.OFF, Mode.COARSE), (Mode.FINE, Mode.OFF)])
+def test_role_swap_accepted_into_or_out_of_hold_and_off(first, second):
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
+    controller.command(first, 'a')
+    controller.command(second, 'b')
+    assert controller.role == 5 and controller.mode == second
+
+
+def test_unknown_gripper_is_refused():
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
     with pytest.raises(ValueError, match='gripper'):
         controller.command(Mode.HOLD, 'c')
 

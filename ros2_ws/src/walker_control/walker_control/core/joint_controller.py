@@ -51,7 +51,7 @@ from walker_control.core.modes import Mode
 from walker_control.core.pid import Pid, PidGains
 
 __all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
-           'JointController']
+           'MissingAccelerationError', 'JointController']
 
 
 class RoleChangeError(ValueError):
@@ -60,6 +60,10 @@ class RoleChangeError(ValueError):
 
 class MeasurementError(ValueError):
     """A measurement the controller cannot use (non-finite, or missing an acceleration)."""
+
+
+class MissingAccelerationError(MeasurementError):
+    """Acceleration feedback is on but no measured acceleration was given."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -206,17 +210,19 @@ class JointController:
         Raises
         ------
         RoleChangeError
-            If the base gripper changes while the controller is neither holding nor off;
-            nothing changes.
+            If the base gripper changes while the controller tracks setpoints (COARSE or FINE)
+            and is commanded to go on tracking: the role may change only on the way into, or
+            out of, HOLD or OFF. Nothing changes.
         ValueError
             For an unknown mode or gripper; nothing changes.
         """
         mode = Mode(mode)
         base = self._base if base_gripper is None else validate_gripper(base_gripper)
-        if base != self._base and self.mode not in (Mode.HOLD, Mode.OFF):
+        if base != self._base and self.mode.tracks_setpoints and mode.tracks_setpoints:
             raise RoleChangeError(
-                f'{self._joint_name}: base gripper change {self._base!r} -> {base!r} refused in '
-                f'mode {self.mode.name}: the role may change only while holding or off')
+                f'{self._joint_name}: base gripper change {self._base!r} -> {base!r} refused '
+                f'from {self.mode.name} to {mode.name}: the role may change only while holding '
+                f'or off')
         self._base = base
         self._commanded = mode
         self._hold_reason = ''
@@ -268,7 +274,7 @@ class JointController:
         role = self.role
         design = settings.loop_design(role, mode)
         if design.acceleration_feedback > 0.0 and measurement.acceleration is None:
-            raise MeasurementError(
+            raise MissingAccelerationError(
                 f'{self._joint_name}: acceleration feedback is on (role J{role}, mode '
                 f'{mode.key}) but no joint acceleration was measured')
         transition = (role, mode) != self._key
