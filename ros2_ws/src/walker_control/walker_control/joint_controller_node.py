@@ -26,13 +26,14 @@ import sys
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from walker_msgs.msg import ControlMode, ControllerState, JointAccelerations, JointCommand
 
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_control.core.config import ControllerSettings
@@ -110,18 +111,26 @@ class JointControllerNode(Node):
         self._last_stamp: float | None = None
         self._last_effort: JointState | None = None
         self._setpoint_lagging = False
+        self._effort_msg = JointState(name=[joint])
+        self._state_msg = ControllerState(joint_name=joint)
 
-        self._effort_pub = self.create_publisher(JointState, 'effort_commands', COMMAND_QOS)
+        # QoS event handlers (incompatible QoS or type warnings) stay on the low-rate topics;
+        # on the control-rate ones each handler would cost the executor on every wake-up.
+        quiet_pub = PublisherEventCallbacks(use_default_callbacks=False)
+        quiet_sub = SubscriptionEventCallbacks(use_default_callbacks=False)
+        self._effort_pub = self.create_publisher(JointState, 'effort_commands', COMMAND_QOS,
+                                                 event_callbacks=quiet_pub)
         self._state_pub = self.create_publisher(ControllerState, f'controllers/{joint}/state',
-                                                COMMAND_QOS)
+                                                COMMAND_QOS, event_callbacks=quiet_pub)
         # The executor serves ready subscriptions in creation order: the mode, the setpoint and
         # the acceleration that arrived with a state are taken before the state itself.
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, MODE_QOS)
         self.create_subscription(JointCommand, f'controllers/{joint}/setpoint',
                                  self._on_setpoint, COMMAND_QOS)
-        self.create_subscription(JointAccelerations, 'joint_accelerations',
-                                 self._on_accelerations, STATE_QOS)
-        self.create_subscription(JointState, 'joint_states', self._on_joint_state, STATE_QOS)
+        self._acceleration_sub = None
+        self._update_acceleration_subscription()
+        self.create_subscription(JointState, 'joint_states', self._on_joint_state, STATE_QOS,
+                                 event_callbacks=quiet_sub)
         self._watchdog_timer = self._create_watchdog_timer()
         self.get_logger().info(
             f'controlling {joint} (role J{self._controller.role} with base gripper a) at '
@@ -134,9 +143,24 @@ class JointControllerNode(Node):
             / _WATCHDOG_CHECKS_PER_TIMEOUT
         return self.create_timer(period, self._on_watchdog, clock=self._steady)
 
+    def _update_acceleration_subscription(self) -> None:
+        """Subscribe to joint_accelerations only while a role of this joint feeds it back."""
+        roles = {role_of_joint(self._joint, base) for base in GRIPPERS}
+        needed = any(self._settings.control.coarse.acceleration_feedback[role - 1] > 0.0
+                     for role in roles)
+        if needed and self._acceleration_sub is None:
+            self._acceleration_sub = self.create_subscription(
+                JointAccelerations, 'joint_accelerations', self._on_accelerations, STATE_QOS,
+                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+        elif not needed and self._acceleration_sub is not None:
+            self.destroy_subscription(self._acceleration_sub)
+            self._acceleration_sub = None
+            self._acceleration = None
+
     def _apply_settings(self, settings: ControllerSettings) -> None:
         self._settings = settings
         self._controller.apply_settings(settings)
+        self._update_acceleration_subscription()
         self._watchdog.state_timeout = settings.control.state_timeout
         self._watchdog.setpoint_timeout = settings.control.setpoint_timeout
         self.destroy_timer(self._watchdog_timer)
@@ -280,16 +304,16 @@ class JointControllerNode(Node):
         return selected[1]
 
     def _publish(self, msg: JointState, measurement: Measurement, out: ControlOutput) -> None:
-        effort = JointState()
+        # One message object of each kind is reused: constructing them costs more than the
+        # control law.
+        effort = self._effort_msg
         effort.header.stamp = msg.header.stamp
         effort.header.frame_id = msg.header.frame_id
-        effort.name = [self._joint]
         effort.effort = [out.effort]
         self._effort_pub.publish(effort)
         self._last_effort = effort
-        state = ControllerState()
+        state = self._state_msg
         state.header.stamp = msg.header.stamp
-        state.joint_name = self._joint
         state.role = out.role
         state.mode = int(out.mode)
         state.position_setpoint = float(out.reference.position)
