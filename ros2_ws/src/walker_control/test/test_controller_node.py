@@ -28,7 +28,7 @@ def controller_executable():
 
 # Timeouts long enough that a loaded machine never trips them, unless a test wants it to.
 RELAXED = ('-p', 'control.setpoint_timeout:=30.0', '-p', 'control.state_timeout:=30.0')
-STRICT = ('-p', 'control.setpoint_timeout:=0.2', '-p', 'control.state_timeout:=0.2')
+STRICT = ('-p', 'control.setpoint_timeout:=1.0', '-p', 'control.state_timeout:=1.0')
 
 
 def start_controller(ros_env, *extra, timeouts=RELAXED):
