@@ -18,5 +18,8 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='Per-joint controllers of the walker (paper sections 2-4).',
     license='Apache-2.0',
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': [
+        'joint_controller_node = walker_control.joint_controller_node:main',
+        'control_analysis = walker_control.analysis:main',
+    ]},
 )

@@ -73,6 +73,34 @@ def test_runtime_updates_are_validated_as_a_whole(make_node):
     assert current['band'] == Band(3.0, 4.0)
 
 
+@dataclasses.dataclass(frozen=True)
+class Gains:
+    """A writable section of number lists, as the controllers' per-role gains."""
+
+    bandwidth: tuple[float, ...] = parameter('per-role bandwidth', 'rad/s', 0.0, 10.0,
+                                             read_only=False)
+    order: tuple[int, ...] = parameter('per-role order', '', 0, 8, read_only=False)
+
+
+def test_runtime_updates_of_number_lists_are_accepted(make_node):
+    node = make_node('parameter_probe_lists')
+    current = {'gains': declare_section(node, Gains, 'gains.',
+                                        {'gains.bandwidth': [1.0, 2.0], 'gains.order': [4, 2]})}
+    guard_section_updates(node, Gains, 'gains.', lambda: current['gains'],
+                          lambda section: current.update(gains=section))
+
+    def as_over_the_wire(name, value):
+        # The set_parameters service hands number lists over as array.array.
+        return Parameter.from_parameter_msg(Parameter(name, value=value).to_parameter_msg())
+
+    assert node.set_parameters([as_over_the_wire('gains.bandwidth', [3.0, 4.0])])[0].successful
+    assert node.set_parameters([as_over_the_wire('gains.order', [2, 2])])[0].successful
+    assert current['gains'] == Gains((3.0, 4.0), (2, 2))
+    refused = node.set_parameters([as_over_the_wire('gains.bandwidth', [30.0, 4.0])])[0]
+    assert not refused.successful and 'above the maximum' in refused.reason
+    assert current['gains'].bandwidth == (3.0, 4.0)
+
+
 def test_out_of_range_override_refuses_to_start(make_node):
     from rclpy.exceptions import InvalidParameterValueException
 

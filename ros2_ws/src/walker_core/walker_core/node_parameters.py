@@ -36,7 +36,7 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
         elif spec.type is int:
             descriptor.integer_range = [IntegerRange(
                 from_value=int(spec.minimum), to_value=int(spec.maximum), step=1)]
-    if spec.type == tuple[float, ...] and spec.minimum is not None:
+    if spec.type in (tuple[float, ...], tuple[int, ...]) and spec.minimum is not None:
         descriptor.additional_constraints = (
             f'each element in [{spec.minimum:g}, {spec.maximum:g}] {spec.unit}'.strip())
     return descriptor
@@ -45,6 +45,8 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
 def _ros_value(spec: ParameterSpec, value: Any) -> Any:
     if spec.type == tuple[float, ...]:
         return [float(v) for v in value]
+    if spec.type == tuple[int, ...]:
+        return [int(v) for v in value]
     if spec.type == tuple[str, ...]:
         return [str(v) for v in value]
     if spec.type is float:

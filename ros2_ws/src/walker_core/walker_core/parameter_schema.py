@@ -13,6 +13,7 @@ The YAML layout is the standard ``ros__parameters`` form (``ros2 run ... --ros-a
 
 from __future__ import annotations
 
+import array
 import dataclasses
 import math
 import typing
@@ -41,7 +42,8 @@ class ParameterSpec:
     name : str
         Dotted ROS parameter name.
     type : type
-        ``float``, ``int``, ``bool``, ``str``, ``tuple[float, ...]`` or ``tuple[str, ...]``.
+        ``float``, ``int``, ``bool``, ``str``, ``tuple[float, ...]``, ``tuple[int, ...]`` or
+        ``tuple[str, ...]``.
     description : str
         What the parameter means, for ``ros2 param describe``.
     unit : str
@@ -106,6 +108,9 @@ def leaf_specs(section_type: type, prefix: str = '') -> list[ParameterSpec]:
 
 def _coerce(spec: ParameterSpec, value: Any) -> Any:
     """Check one value against its spec and return it in canonical form."""
+    if isinstance(value, array.array):
+        value = value.tolist()  # rclpy hands runtime updates of number lists over as arrays
+
     def fail(reason: str) -> typing.NoReturn:
         raise ParameterError(f'parameter {spec.name!r} = {value!r}: {reason}')
 
@@ -141,6 +146,12 @@ def _coerce(spec: ParameterSpec, value: Any) -> Any:
         if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
             fail('expected a list of numbers')
         return tuple(check_number(x) for x in value)
+    if spec.type == tuple[int, ...]:
+        if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+            fail('expected a list of integers')
+        if any(isinstance(x, bool) or not isinstance(x, int) for x in value):
+            fail('expected a list of integers')
+        return tuple(int(check_number(x)) for x in value)
     if spec.type == tuple[str, ...]:
         if not isinstance(value, (list, tuple)) or not all(isinstance(x, str) for x in value):
             fail('expected a list of strings')

@@ -1,0 +1,90 @@
+"""The analysis tool: eq (15) over a grid, Figure 5's figures of merit, the Figure 6 harness."""
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from walker_control import analysis
+from walker_control.core.config import load_controller_settings
+from walker_control.core.stability import eq14_transfer_function, eq15_margin
+
+SETTINGS = load_controller_settings()
+
+
+def test_eq15_routh_and_poles_agree_over_a_grid():
+    result = analysis.routh_grid(np.linspace(0.0, 3.0, 7), np.linspace(0.1, 2.0, 12),
+                                 (0.5, 1.0, 2.0))
+    assert result.points == 7 * 12 * 3
+    assert 0 < result.stable < result.points - result.marginal
+    assert result.eq15_disagreements == [] and result.routh_disagreements == []
+
+
+def test_the_sampled_loop_departs_from_eq15_only_near_the_boundary_when_wc_t_is_small():
+    # wf = 3 rad/s at T = 2 ms: wc T <= 0.012, sampling costs little phase.
+    result = analysis.routh_grid(np.linspace(0.0, 3.0, 7), np.linspace(0.1, 2.0, 12),
+                                 (0.5, 1.0, 2.0), wf=3.0)
+    assert all(abs(margin) < 0.05 for *_, margin, _wct in result.sampled_disagreements)
+
+
+@pytest.mark.parametrize('feedforward', [True, False])
+def test_figure5_curves_have_unit_dc_gain_and_a_consistent_bandwidth(feedforward):
+    for curve in analysis.figure5_curves(feedforward=feedforward):
+        assert abs(curve.magnitude_db[0]) < 0.01
+        index = np.searchsorted(curve.frequency, curve.bandwidth)
+        assert curve.magnitude_db[index] < -3.0 <= curve.magnitude_db[index - 1]
+        assert np.all(curve.magnitude_db[:index] >= -3.0)
+        assert curve.peak_db == pytest.approx(max(0.0, curve.magnitude_db.max()))
+
+
+@pytest.mark.parametrize('ka', [0.0, 0.5, 1.0])
+def test_achievable_ratio_respects_eq15_and_the_peak_limit(ka):
+    ratio, bandwidth = analysis.achievable_ratio(ka)
+    assert ratio > 0.0 and eq15_margin(ratio, 1.0, 1.0, ka) > 0.0
+    numerator, denominator = eq14_transfer_function(ratio, 1.0, 1.0, ka)
+    w = np.logspace(-3, 2, 4000)
+    from scipy import signal
+    _, response = signal.freqs(numerator, denominator, worN=w)
+    assert 20 * np.log10(np.abs(response)).max() <= analysis.PEAK_LIMIT_DB + 1e-9
+    assert bandwidth > 0.0
+
+
+def test_figure6_harness_runs_on_any_plant_core():
+    """The experiment's mechanics on the two-mass model; the claim itself needs the plant."""
+    run = analysis.figure6_experiment(lambda: analysis.TwoMassJoint1Model(SETTINGS), SETTINGS,
+                                      0.5, distance=0.3, move_time=2.0, settle_time=2.0)
+    assert len(run.time) == len(run.joint1) == len(run.tip_deviation) == 2000
+    assert run.ka == 0.5 and math.isfinite(run.residual_amplitude)
+    assert abs(run.joint1[-1] - 0.3) < 0.05 * 0.3
+
+
+def test_figure6_with_an_unstable_ka_is_refused():
+    from walker_core.parameter_schema import ParameterError
+
+    with pytest.raises(ParameterError, match='J1'):
+        analysis.figure6_experiment(lambda: analysis.TwoMassJoint1Model(SETTINGS), SETTINGS,
+                                    15.0)
+
+
+def test_figure6_says_it_needs_the_plant_when_there_is_none(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, 'walker_sim.core', None)
+    assert analysis.main(['figure6', '--out', str(tmp_path)]) == 2
+    assert 'pybullet plant' in capsys.readouterr().out
+
+
+def test_bode_command_writes_the_figure_and_the_table(tmp_path, capsys):
+    assert analysis.main(['bode', '--out', str(tmp_path)]) == 0
+    assert (tmp_path / 'figure5_bode.png').stat().st_size > 10_000
+    out = capsys.readouterr().out
+    assert '-3 dB bandwidth' in out and 'Ka' in out
+
+
+def test_design_command_refuses_an_unstable_file(tmp_path, capsys):
+    path = tmp_path / 'unstable.yaml'
+    from walker_core.robot_parameters import default_parameter_file
+    path.write_text(default_parameter_file().read_text().replace(
+        'bandwidth: [0.7, 5.0, 5.0, 8.0, 8.0]  # [rad/s] chosen: the highest',
+        'bandwidth: [5.0, 5.0, 5.0, 8.0, 8.0]  # [rad/s] chosen: the highest'))
+    assert analysis.main(['design', '--params-file', str(path)]) == 2
+    assert 'eq (15)' in capsys.readouterr().out

@@ -1,0 +1,304 @@
+"""A real joint controller process over Fast DDS, driven by a stand-in plant in the test.
+
+The stand-in publishes joint accelerations and joint states, as the plant does, and waits for
+the effort that answers each state (the sim-time lock-step). Each test runs in a ROS domain of
+its own with discovery on loopback. No timing is asserted: waits are generous and only bound a
+hang.
+"""
+
+import math
+import time
+
+import pytest
+
+pytestmark = pytest.mark.integration
+
+JOINT = 'a_yaw_joint'
+NODE = 'controller_a_yaw'
+STANCE = [0.0, 0.85, 1.45, 0.85, 0.0]
+PERIOD_NS = 2_000_000
+WAIT = 20.0
+
+
+def controller_executable():
+    from ament_index_python.packages import get_package_prefix
+
+    return f'{get_package_prefix("walker_control")}/lib/walker_control/joint_controller_node'
+
+
+# Timeouts long enough that a loaded machine never trips them, unless a test wants it to.
+RELAXED = ('-p', 'control.setpoint_timeout:=30.0', '-p', 'control.state_timeout:=30.0')
+STRICT = ('-p', 'control.setpoint_timeout:=1.0', '-p', 'control.state_timeout:=1.0')
+
+
+def start_controller(ros_env, *extra, timeouts=RELAXED):
+    from ros_test_support import NodeProcess
+
+    return NodeProcess([controller_executable(), '--ros-args', '-r', '__ns:=/walker',
+                        '-p', f'joint_name:={JOINT}', *timeouts, *extra], ros_env, NODE)
+
+
+class StandInPlant:
+    """Publishes states, collects efforts and controller states, in the test process."""
+
+    def __init__(self, context):
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        from sensor_msgs.msg import JointState
+        from walker_msgs.msg import (
+            ControlMode, ControllerState, JointAccelerations, JointCommand)
+
+        from walker_control.joint_controller_node import COMMAND_QOS, MODE_QOS, STATE_QOS
+
+        self.node = Node('stand_in_plant', namespace='/walker', context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.state_pub = self.node.create_publisher(JointState, 'joint_states', STATE_QOS)
+        self.accel_pub = self.node.create_publisher(JointAccelerations, 'joint_accelerations',
+                                                    STATE_QOS)
+        self.mode_pub = self.node.create_publisher(ControlMode, 'control_mode', MODE_QOS)
+        self.setpoint_pub = self.node.create_publisher(
+            JointCommand, f'controllers/{JOINT}/setpoint', COMMAND_QOS)
+        self.efforts = []
+        self.states = []
+        self.node.create_subscription(JointState, 'effort_commands', self.efforts.append,
+                                      COMMAND_QOS)
+        self.node.create_subscription(ControllerState, f'controllers/{JOINT}/state',
+                                      self.states.append, COMMAND_QOS)
+        self.stamp_ns = 1_000_000_000
+        self.position = list(STANCE)
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+    def spin_until(self, predicate, timeout=WAIT):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            self.executor.spin_once(timeout_sec=0.01)
+        return predicate()
+
+    def _stamp(self, msg, stamp_ns):
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+
+    def publish_state(self, acceleration=0.0):
+        from sensor_msgs.msg import JointState
+        from walker_msgs.msg import JointAccelerations
+
+        from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+
+        accel = JointAccelerations(name=list(PHYSICAL_JOINT_NAMES),
+                                   acceleration=[acceleration] * 5)
+        self._stamp(accel, self.stamp_ns)
+        self.accel_pub.publish(accel)
+        state = JointState(name=list(PHYSICAL_JOINT_NAMES), position=list(self.position),
+                           velocity=[0.0] * 5, effort=[0.0] * 5)
+        self._stamp(state, self.stamp_ns)
+        self.state_pub.publish(state)
+
+    def answered(self, stamp_ns):
+        return any(e.header.stamp.sec * 1_000_000_000 + e.header.stamp.nanosec == stamp_ns
+                   for e in self.efforts[-5:])
+
+    def step(self, acceleration=0.0):
+        """Advance one period; publish the state until its effort comes back."""
+        self.stamp_ns += PERIOD_NS
+        for _ in range(int(WAIT / 0.05)):
+            self.publish_state(acceleration)  # again if lost: best effort, as the plant does
+            if self.spin_until(lambda: self.answered(self.stamp_ns), timeout=0.05):
+                self.spin_until(lambda: self.state_for(self.stamp_ns) is not None, 1.0)
+                return self.efforts[-1]
+        raise AssertionError(f'no effort for the state stamped {self.stamp_ns} ns')
+
+    def state_for(self, stamp_ns):
+        for state in reversed(self.states):
+            if state.header.stamp.sec * 1_000_000_000 + state.header.stamp.nanosec == stamp_ns:
+                return state
+        return None
+
+    def command(self, mode, base='a'):
+        from walker_msgs.msg import ControlMode
+
+        self.mode_pub.publish(ControlMode(mode=mode, base_gripper=base))
+
+    def setpoint(self, stamp_ns, position, velocity=0.0):
+        from walker_msgs.msg import JointCommand
+
+        msg = JointCommand(joint_name=JOINT, position=position, velocity=velocity)
+        self._stamp(msg, stamp_ns)
+        self.setpoint_pub.publish(msg)
+
+    def step_until(self, predicate, steps=2000, setpoints=None):
+        """Step until ``predicate(controller_state)`` holds for the state just answered.
+
+        ``setpoints(stamp_ns)`` gives the setpoint position for a stamp; each is published a
+        period ahead of its state, as the planner streams them.
+        """
+        if setpoints is not None:
+            self.setpoint(self.stamp_ns + PERIOD_NS, setpoints(self.stamp_ns + PERIOD_NS))
+        for _ in range(steps):
+            if setpoints is not None:
+                ahead = self.stamp_ns + 2 * PERIOD_NS
+                self.setpoint(ahead, setpoints(ahead))
+            self.step()
+            state = self.state_for(self.stamp_ns)
+            if state is not None and predicate(state):
+                return state
+        raise AssertionError(f'condition not reached; last state: {self.states[-1:]}')
+
+
+@pytest.fixture
+def plant(rclpy_context):
+    stand_in = StandInPlant(rclpy_context)
+    yield stand_in
+    stand_in.close()
+
+
+def test_an_effort_answers_every_state_with_its_stamp_and_name(ros_env, plant):
+    from walker_msgs.msg import ControllerState
+
+    with start_controller(ros_env) as controller:
+        plant.step()  # waits for discovery
+        first = len(plant.efforts)
+        for _ in range(100):
+            effort = plant.step()
+            stamp = effort.header.stamp.sec * 1_000_000_000 + effort.header.stamp.nanosec
+            assert stamp == plant.stamp_ns
+            assert list(effort.name) == [JOINT] and len(effort.effort) == 1
+            assert math.isfinite(effort.effort[0])
+        stamps = {e.header.stamp.sec * 1_000_000_000 + e.header.stamp.nanosec
+                  for e in plant.efforts[first:]}
+        assert len(stamps) == 100
+        state = plant.state_for(plant.stamp_ns)
+        assert state.mode == ControllerState.HOLD and state.role == 1 and not state.stale
+        assert state.position_setpoint == STANCE[0]  # holds the measured position
+        assert controller.process.poll() is None, controller.output
+
+
+def test_modes_setpoints_and_the_role_follow_control_mode(ros_env, plant):
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env) as controller:
+        plant.step()
+        plant.command(ControlMode.COARSE, 'a')
+
+        def ramp(stamp_ns):
+            return 0.1 + 1e-4 * (stamp_ns // PERIOD_NS % 1000)
+        state = plant.step_until(lambda s: s.mode == ControlMode.COARSE, setpoints=ramp)
+        # The setpoint in force is the one stamped for this state (streamed a period ahead).
+        state = plant.step_until(lambda s: s.position_setpoint != STANCE[0], setpoints=ramp)
+        assert state.position_setpoint == pytest.approx(ramp(plant.stamp_ns), abs=1e-12)
+        assert state.acceleration_feedback_effort == 0.0  # measured acceleration is zero
+        plant.command(ControlMode.HOLD, 'b')  # base swap while holding: a_yaw plays J5
+        state = plant.step_until(lambda s: s.role == 5)
+        assert state.mode == ControlMode.HOLD
+        plant.command(ControlMode.COARSE, 'b')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        plant.command(ControlMode.COARSE, 'a')  # base swap while moving: refused, holds
+        state = plant.step_until(lambda s: s.mode == ControlMode.HOLD)
+        assert state.role == 5
+        assert controller.wait_for_output('only while holding', WAIT), controller.output
+
+
+@pytest.mark.parametrize('position, velocity, words', [
+    (math.nan, 0.0, 'finite'),
+    (10.0, 0.0, 'joint limits'),
+    (0.1, math.inf, 'finite'),
+])
+def test_bad_setpoints_are_refused_and_the_joint_holds(ros_env, plant, position, velocity,
+                                                      words):
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env) as controller:
+        plant.step()
+        plant.command(ControlMode.FINE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.FINE)
+        plant.setpoint(plant.stamp_ns + PERIOD_NS, position, velocity)
+        state = plant.step_until(lambda s: s.mode == ControlMode.HOLD)
+        assert math.isfinite(state.effort) and math.isfinite(state.position_setpoint)
+        assert state.position_setpoint == pytest.approx(STANCE[0])
+        assert controller.wait_for_output('refused', WAIT), controller.output
+        assert words in controller.output
+
+
+def test_a_stopped_setpoint_stream_makes_the_joint_hold_and_report_it(ros_env, plant):
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env, timeouts=STRICT) as controller:
+        plant.step()
+        plant.command(ControlMode.COARSE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        for _ in range(20):
+            plant.setpoint(plant.stamp_ns + PERIOD_NS, 0.01)
+            plant.step()
+        state = plant.step_until(lambda s: s.mode == ControlMode.HOLD)  # no more setpoints
+        assert state.stale
+        assert state.position_setpoint == pytest.approx(STANCE[0])  # where the joint was
+        assert controller.wait_for_output('stale', WAIT), controller.output
+
+
+def test_a_stopped_state_stream_is_reported_stale(ros_env, plant):
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env, timeouts=STRICT):
+        plant.step()
+        plant.command(ControlMode.COARSE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        count = len(plant.states)
+        # No more states: the controller's steady-clock watchdog reports on its own.
+        assert plant.spin_until(lambda: any(s.stale and s.mode == ControlMode.HOLD
+                                            for s in plant.states[count:]))
+
+
+def _parameter_call(plant, service_type, name, request):
+    client = plant.node.create_client(service_type, f'/walker/{NODE}/{name}')
+    assert plant.spin_until(lambda: client.service_is_ready())
+    future = client.call_async(request)
+    assert plant.spin_until(future.done)
+    plant.node.destroy_client(client)
+    return future.result()
+
+
+def test_an_unstable_parameter_update_is_refused_and_changes_nothing(ros_env, plant):
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    from rclpy.parameter import Parameter
+
+    name = 'control.fine.bandwidth'
+    with start_controller(ros_env):
+        plant.step()
+
+        def get():
+            response = _parameter_call(plant, GetParameters, 'get_parameters',
+                                       GetParameters.Request(names=[name]))
+            return list(response.values[0].double_array_value)
+
+        before = get()
+        unstable = Parameter(name, value=[5.0, 5.0, 5.0, 8.0, 8.0]).to_parameter_msg()
+        result = _parameter_call(plant, SetParameters, 'set_parameters',
+                                 SetParameters.Request(parameters=[unstable])).results[0]
+        assert not result.successful
+        assert 'J1' in result.reason and 'eq (15)' in result.reason
+        assert get() == before
+        stable = Parameter(name, value=[0.6, 5.0, 5.0, 8.0, 8.0]).to_parameter_msg()
+        result = _parameter_call(plant, SetParameters, 'set_parameters',
+                                 SetParameters.Request(parameters=[stable])).results[0]
+        assert result.successful, result.reason
+        assert get() == [0.6, 5.0, 5.0, 8.0, 8.0]
+        plant.step()  # still controlling
+
+
+def test_refuses_to_start_on_a_bad_joint_or_unstable_gains(ros_env, tmp_path):
+    from ros_test_support import NodeProcess
+
+    with NodeProcess([controller_executable(), '--ros-args', '-p', 'joint_name:=elbow'],
+                     ros_env) as bad_joint:
+        assert bad_joint.process.wait(timeout=WAIT) == 2
+        assert 'elbow' in bad_joint.output and 'refusing to start' in bad_joint.output
+    params = tmp_path / 'unstable.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    control:\n      coarse:\n'
+                      '        acceleration_feedback: [0.5, 0.0, 0.0, 1.5, 0.0]\n')
+    with start_controller(ros_env, '--params-file', str(params)) as unstable:
+        assert unstable.process.wait(timeout=WAIT) == 2
+        assert 'J4' in unstable.output and 'unstable' in unstable.output

@@ -1,0 +1,92 @@
+"""Setpoint validation and selection by stamp, and the input watchdog."""
+
+import math
+
+import pytest
+
+from walker_control.core.config import load_controller_settings
+from walker_control.core.inputs import (
+    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, validate_setpoint)
+
+DRIVE = load_controller_settings().drive(1)
+
+
+def test_a_valid_setpoint_passes():
+    setpoint = Setpoint(position=0.5, velocity=-0.2, acceleration=3.0, effort=0.1)
+    assert validate_setpoint(setpoint, DRIVE) is setpoint
+
+
+@pytest.mark.parametrize('field', ['position', 'velocity', 'acceleration', 'effort'])
+@pytest.mark.parametrize('value', [math.nan, math.inf, -math.inf])
+def test_non_finite_setpoints_are_refused_by_field(field, value):
+    with pytest.raises(SetpointError, match=f'{field} = {value!r}.*finite'):
+        validate_setpoint(Setpoint(**{'position': 0.0, field: value}), DRIVE, 'a_yaw_joint')
+
+
+@pytest.mark.parametrize('kwargs, words', [
+    ({'position': DRIVE.position_max + 0.01}, 'joint limits'),
+    ({'position': DRIVE.position_min - 0.01}, 'joint limits'),
+    ({'position': 0.0, 'velocity': DRIVE.velocity_limit * 1.01}, 'velocity limit'),
+    ({'position': 0.0, 'effort': -DRIVE.torque_limit * 1.01}, 'torque limit'),
+])
+def test_out_of_range_setpoints_are_refused(kwargs, words):
+    with pytest.raises(SetpointError, match=words):
+        validate_setpoint(Setpoint(**kwargs), DRIVE)
+
+
+def test_the_newest_setpoint_not_later_than_the_state_is_selected():
+    buffer = SetpointBuffer()
+    for stamp in (1.000, 1.002, 1.004, 1.006):
+        buffer.add(stamp, Setpoint(position=stamp))
+    assert buffer.select(0.999) is None
+    assert buffer.select(1.004) == (1.004, Setpoint(position=1.004))
+    assert buffer.select(1.005) == (1.004, Setpoint(position=1.004))
+    assert buffer.select(2.0) == (1.006, Setpoint(position=1.006))
+
+
+def test_setpoints_arriving_out_of_order_are_sorted_and_duplicates_replaced():
+    buffer = SetpointBuffer()
+    buffer.add(1.004, Setpoint(position=4.0))
+    buffer.add(1.002, Setpoint(position=2.0))
+    buffer.add(1.004, Setpoint(position=5.0))
+    assert len(buffer) == 2
+    assert buffer.select(1.003) == (1.002, Setpoint(position=2.0))
+    assert buffer.select(1.004) == (1.004, Setpoint(position=5.0))
+
+
+def test_the_buffer_is_bounded_and_can_be_cleared():
+    buffer = SetpointBuffer(capacity=3)
+    for k in range(10):
+        buffer.add(float(k), Setpoint(position=float(k)))
+    assert len(buffer) == 3 and buffer.select(6.5) is None
+    buffer.clear()
+    assert buffer.select(100.0) is None
+
+
+def test_watchdog_state_stream():
+    watchdog = InputWatchdog(state_timeout=0.2, setpoint_timeout=0.1)
+    assert not watchdog.check(100.0).any  # nothing received yet: not stale
+    watchdog.state_received(10.0)
+    assert not watchdog.check(10.2).any
+    stale = watchdog.check(10.25)
+    assert stale.state and not stale.setpoint and 'no joint state' in stale.reason
+
+
+def test_watchdog_watches_setpoints_only_when_expected_and_after_the_first():
+    watchdog = InputWatchdog(state_timeout=0.2, setpoint_timeout=0.1)
+    watchdog.setpoint_received(1.0)
+    assert not watchdog.check(5.0).setpoint  # not expected (hold)
+    watchdog.expect_setpoints(True)
+    assert not watchdog.check(5.0).setpoint  # expected, none received since
+    watchdog.setpoint_received(5.0)
+    assert not watchdog.check(5.1).setpoint
+    stale = watchdog.check(5.15)
+    assert stale.setpoint and 'no setpoint' in stale.reason
+    watchdog.expect_setpoints(False)
+    assert not watchdog.check(6.0).any
+
+
+def test_a_setpoint_too_old_for_the_state_is_stale_by_stamps():
+    watchdog = InputWatchdog(state_timeout=0.2, setpoint_timeout=0.1)
+    assert watchdog.setpoint_lag(10.05, 10.0) == ''
+    assert 'older than the joint state' in watchdog.setpoint_lag(10.2, 10.0)

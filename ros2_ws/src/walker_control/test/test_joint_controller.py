@@ -1,0 +1,375 @@
+"""The composed joint controller: terms, modes, bumpless transfer, role swap, refusals.
+
+The closed-loop checks run the controller against a rigid single joint (the joint's own
+diagonal inertia, the other joints still): the model the controller is designed on. The same
+checks on the flexible pybullet plant belong with the plant.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from walker_core.dynamics import RigidModel, diagonal_inertia
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
+from walker_control.core.config import load_controller_settings
+from walker_control.core.inputs import Setpoint
+from walker_control.core.joint_controller import (
+    JointController, Measurement, MeasurementError, RoleChangeError)
+from walker_control.core.modes import Mode
+
+SETTINGS = load_controller_settings()
+T = SETTINGS.sample_time
+STANCE = np.array([0.0, 0.85, 1.45, 0.85, 0.0])  # physical joint angles [rad]
+
+
+def inertia_of(joint, base, q=STANCE):
+    role_q = physical_to_roles(q, base)
+    role = (PHYSICAL_JOINT_NAMES.index(joint) + 1 if base == 'a'
+            else 5 - PHYSICAL_JOINT_NAMES.index(joint))
+    return diagonal_inertia(role_q, RigidModel.from_parameters(SETTINGS))[role - 1]
+
+
+class RigidJoint:
+    """One joint of the rigid model, the others still, with Coulomb friction and stiction.
+
+    Exact zero-order-hold integration; a joint whose velocity would change sign within a
+    period stops (sticks) instead. The friction is the drive's, as the controller knows it.
+    """
+
+    def __init__(self, joint, base='a', position=None, disturbance=0.0, friction=True):
+        self.index = PHYSICAL_JOINT_NAMES.index(joint)
+        self.q = STANCE.copy()
+        if position is not None:
+            self.q[self.index] = position
+        self.velocity = 0.0
+        self.acceleration = 0.0
+        self.inertia = inertia_of(joint, base, self.q)
+        self.disturbance = disturbance
+        drive = SETTINGS.robot.drive.for_role(1 if self.index in (0, 4) else
+                                              3 if self.index == 2 else 2)
+        self.coulomb = drive.friction_torque if friction else 0.0
+        self.stiction = drive.stiction_torque if friction else 0.0
+
+    @property
+    def position(self):
+        return self.q[self.index]
+
+    def measurement(self):
+        return Measurement(self.position, self.velocity, self.acceleration, tuple(self.q))
+
+    def step(self, torque):
+        applied = torque + self.disturbance
+        v = self.velocity
+        if v == 0.0 and abs(applied) <= self.stiction:
+            self.acceleration = 0.0
+            return
+        direction = math.copysign(1.0, v if v != 0.0 else applied)
+        a = (applied - direction * self.coulomb) / self.inertia
+        if v != 0.0 and (v + a * T) * v < 0.0:  # friction stops the joint within the period
+            stop = -v / a
+            self.q[self.index] += v * stop + 0.5 * a * stop ** 2
+            self.velocity = 0.0
+            self.acceleration = -v / T
+            return
+        self.q[self.index] += v * T + 0.5 * a * T ** 2
+        self.velocity = v + a * T
+        self.acceleration = a
+
+
+def run(controller, plant, samples, setpoint=None):
+    """Run closed loop; ``setpoint`` is a Setpoint, a function of the sample index, or None."""
+    efforts, outputs = [], []
+    for k in range(samples):
+        sp = setpoint(k) if callable(setpoint) else setpoint
+        out = controller.update(plant.measurement(), sp, T)
+        plant.step(out.effort)
+        efforts.append(out.effort)
+        outputs.append(out)
+    return np.array(efforts), outputs
+
+
+def ramp(start, rate, start_index=0):
+    def setpoint(k):
+        t = max(0, k - start_index) * T
+        return Setpoint(position=start + rate * t, velocity=rate if k >= start_index else 0.0)
+    return setpoint
+
+
+# ------------------------------------------------------------------------------------ basics
+def test_starts_in_hold_at_the_measured_position_from_zero_torque():
+    controller = JointController(SETTINGS, 'vertex_joint')
+    plant = RigidJoint('vertex_joint', position=0.3)
+    efforts, outputs = run(controller, plant, 200)
+    assert controller.mode == Mode.HOLD
+    assert efforts[0] == 0.0
+    assert all(out.reference.position == 0.3 for out in outputs)
+    assert np.max(np.abs(efforts)) < 1e-9
+
+
+def test_terms_follow_the_rigid_model_design():
+    controller = JointController(SETTINGS, 'b_pitch_joint', 'a')  # role J4, unfiltered
+    controller.command(Mode.FINE)
+    q = STANCE.copy()
+    measured = Measurement(q[3], 0.05, 0.0, tuple(q))
+    setpoint = Setpoint(position=q[3] + 0.02, velocity=0.15, acceleration=0.5, effort=0.1)
+    out = controller.update(measured, setpoint, T)
+    inertia = inertia_of('b_pitch_joint', 'a')
+    fine = SETTINGS.control.fine
+    wc, zc, ti = fine.bandwidth[3], fine.damping[3], fine.integral_time[3]
+    assert out.role == 4 and out.mode == Mode.FINE
+    assert out.inertia == pytest.approx(inertia)
+    assert out.feedforward == pytest.approx(inertia * 0.5 + 0.1)
+    assert out.proportional == pytest.approx(inertia * wc ** 2 * 0.02)
+    assert out.derivative == pytest.approx(inertia * 2 * zc * wc * 0.1)
+    assert out.integral == pytest.approx(inertia * wc ** 2 / ti * 0.02 * T)
+    assert out.acceleration_feedback == 0.0
+
+
+def test_acceleration_feedback_only_on_joint_1_in_coarse():
+    q = STANCE.copy()
+    inertia = inertia_of('a_yaw_joint', 'a')
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
+    controller.command(Mode.COARSE)
+    out = controller.update(Measurement(q[0], 0.0, 2.0, tuple(q)), None, T)
+    ka = SETTINGS.control.coarse.acceleration_feedback[0]
+    assert out.acceleration_feedback == pytest.approx(-ka * inertia * 2.0)
+    controller.command(Mode.FINE)
+    assert controller.update(Measurement(q[0], 0.0, 2.0, tuple(q)), None,
+                             T).acceleration_feedback == 0.0
+    other = JointController(SETTINGS, 'vertex_joint', 'a')
+    other.command(Mode.COARSE)
+    assert other.update(Measurement(q[2], 0.0, 2.0, tuple(q)), None,
+                        T).acceleration_feedback == 0.0
+
+
+def test_a_missing_acceleration_is_refused_only_when_it_is_fed_back():
+    q = STANCE.copy()
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
+    controller.update(Measurement(q[0], 0.0, None, tuple(q)), None, T)  # HOLD: not needed
+    controller.command(Mode.COARSE)
+    with pytest.raises(MeasurementError, match='acceleration'):
+        controller.update(Measurement(q[0], 0.0, None, tuple(q)), None, T)
+
+
+# ----------------------------------------------------------------------- closed loop, rigid
+@pytest.mark.parametrize('joint', PHYSICAL_JOINT_NAMES)
+@pytest.mark.parametrize('base', ['a', 'b'])
+def test_fine_mode_reaches_a_step_within_its_tolerance_on_the_rigid_model(joint, base):
+    controller = JointController(SETTINGS, joint, base)
+    role = controller.role
+    plant = RigidJoint(joint, base)
+    controller.command(Mode.FINE, base)
+    target = plant.position + 0.02
+    # Settling time of the slowest fine loop (J1, wc = 0.7 rad/s) is several seconds.
+    seconds = 12.0 / SETTINGS.control.fine.bandwidth[role - 1] + 2.0
+    run(controller, plant, int(seconds / T), Setpoint(position=target))
+    assert abs(plant.position - target) < SETTINGS.control.in_position_tolerance[role - 1]
+    assert abs(plant.velocity) < 1e-3
+
+
+def test_feedforward_tracks_a_trajectory_on_the_rigid_model():
+    """With the exact rigid inertia, the feed-forward does the work: the error stays tiny."""
+    controller = JointController(SETTINGS, 'b_pitch_joint', 'a')  # unfiltered role J4
+    plant = RigidJoint('b_pitch_joint', 'a', friction=False)
+    controller.command(Mode.COARSE)
+    start = plant.position
+    w, amplitude = 2.0, 0.3
+    settle = int(3.0 / T)  # let the transfer offset of the mode change decay first
+
+    def setpoint(k):
+        if k < settle:
+            return Setpoint(position=start)
+        t = (k - settle) * T
+        return Setpoint(position=start + amplitude * (1 - math.cos(w * t)),
+                        velocity=amplitude * w * math.sin(w * t),
+                        acceleration=amplitude * w * w * math.cos(w * t))
+    _, outputs = run(controller, plant, settle + int(4.0 / T), setpoint)
+    errors = np.array([out.position_error for out in outputs[settle:]])
+    assert np.max(np.abs(errors)) < 0.01 * amplitude
+
+
+def test_effort_is_clamped_and_the_integral_does_not_wind_up():
+    controller = JointController(SETTINGS, 'b_pitch_joint', 'a')
+    limit = SETTINGS.drive(4).torque_limit
+    plant = RigidJoint('b_pitch_joint', 'a', disturbance=-3.0 * limit)  # a joint it cannot move
+    controller.command(Mode.FINE)
+    efforts, outputs = run(controller, plant, int(2.0 / T),
+                           Setpoint(position=plant.position + 0.5))
+    assert np.max(np.abs(efforts)) <= limit
+    assert efforts[-1] == limit and all(out.saturated for out in outputs[int(1.0 / T):])
+    # Saturated for the last second with a large error: the integral has not moved (without
+    # anti-windup it would have grown by Ki * 0.5 rad * 1 s, far beyond the limit).
+    integrals = [out.integral for out in outputs[int(1.0 / T):]]
+    assert max(integrals) == min(integrals)
+    assert abs(integrals[-1]) < 0.05 * limit
+    ki = outputs[-1].inertia * SETTINGS.control.fine.bandwidth[3] ** 2 \
+        / SETTINGS.control.fine.integral_time[3]
+    assert ki * 0.5 * 1.0 > limit
+
+
+def test_friction_compensation_signed_by_the_error_and_off_in_the_deadband():
+    controller = JointController(SETTINGS, 'vertex_joint', 'a')
+    q = STANCE.copy()
+    controller.update(Measurement(q[2], 0.0, 0.0, tuple(q)), None, T)
+    controller.command(Mode.FINE)
+    level = SETTINGS.friction_level(3)
+    for _ in range(int(12 * SETTINGS.control.bumpless_time_constant / T)):
+        out = controller.update(Measurement(q[2], 0.0, 0.0, tuple(q)),
+                                Setpoint(position=q[2] - 0.1), T)
+    assert out.friction_compensation == pytest.approx(-level, rel=1e-3)
+    out = controller.update(Measurement(q[2], 0.0, 0.0, tuple(q)),
+                            Setpoint(position=q[2] + 0.0001), T)
+    assert abs(out.friction_compensation) < 0.01 * level  # in the deadband: only the decay
+
+
+def test_off_gives_zero_torque_and_a_latched_hold_does_not_override_it():
+    controller = JointController(SETTINGS, 'vertex_joint')
+    plant = RigidJoint('vertex_joint')
+    controller.command(Mode.OFF)
+    controller.hold('stale state')
+    efforts, _ = run(controller, plant, 10, Setpoint(position=plant.position + 0.3))
+    assert controller.mode == Mode.OFF and np.all(efforts == 0.0)
+
+
+# ------------------------------------------------------------------------- bumpless transfer
+def _switch(joint, base, first, second, setpoint):
+    """Run in ``first`` along a ramp, switch to ``second``; return efforts and the switch k.
+
+    From OFF the joint coasts (no friction) so that the new mode has motion to take over.
+    """
+    controller = JointController(SETTINGS, joint, base)
+    plant = RigidJoint(joint, base, friction=first != Mode.OFF)
+    if first == Mode.OFF:
+        plant.velocity = 0.05
+    controller.command(first)
+    start = plant.position
+    sp = setpoint(start)
+    switch_at = int(3.0 / T)
+    efforts, outputs = run(controller, plant, switch_at, sp)
+    controller.command(second)
+    after, after_outputs = run(controller, plant, int(1.0 / T),
+                               lambda k: sp(k + switch_at))
+    return np.concatenate([efforts, after]), outputs + after_outputs, switch_at
+
+
+SWITCHES = [(Mode.COARSE, Mode.FINE), (Mode.FINE, Mode.HOLD), (Mode.HOLD, Mode.COARSE),
+            (Mode.COARSE, Mode.HOLD), (Mode.OFF, Mode.HOLD)]
+
+
+@pytest.mark.parametrize('first, second', SWITCHES)
+@pytest.mark.parametrize('joint', ['a_yaw_joint', 'vertex_joint', 'b_yaw_joint'])
+def test_mode_switch_is_bumpless(joint, first, second):
+    def setpoint(start):
+        return ramp(start, 0.05)
+    efforts, outputs, k = _switch(joint, 'a', first, second, setpoint)
+    limit = SETTINGS.drive(outputs[-1].role).torque_limit
+    jump = abs(efforts[k] - efforts[k - 1])
+    if first != Mode.OFF:
+        normal = np.max(np.abs(np.diff(efforts[k - 200:k])))  # ordinary change per sample
+        assert jump <= 2.0 * normal + 1e-4 * limit
+    else:
+        assert efforts[k - 1] == 0.0
+        assert jump <= 1e-3 * limit
+    # The scenario has a bump to remove: the new mode's command differs from the old one.
+    bump = abs(outputs[k].transfer) + abs(outputs[k].friction_compensation
+                                          - outputs[k - 1].friction_compensation)
+    assert bump > 10.0 * jump
+
+
+def test_role_swap_while_holding_is_bumpless_and_changes_the_filter():
+    joint = 'a_yaw_joint'
+    controller = JointController(SETTINGS, joint, 'a')
+    plant = RigidJoint(joint, 'a', disturbance=0.5, friction=False)  # against a steady torque
+    efforts, _ = run(controller, plant, int(15.0 / T))
+    assert controller.role == 1 and abs(efforts[-1]) > 0.3
+    controller.command(Mode.HOLD, 'b')
+    assert controller.role == 5
+    plant.inertia = inertia_of(joint, 'b', plant.q)
+    after, outputs = run(controller, plant, int(2.0 / T))
+    assert abs(after[0] - efforts[-1]) < 1e-3
+    assert outputs[-1].role == 5
+    assert SETTINGS.control.filter.order[0] != SETTINGS.control.filter.order[4]
+
+
+@pytest.mark.parametrize('first, second', [(Mode.COARSE, Mode.COARSE),
+                                           (Mode.COARSE, Mode.FINE), (Mode.FINE, Mode.FINE)])
+def test_role_swap_refused_while_moving_and_nothing_changes(first, second):
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
+    controller.command(first, 'a')
+    with pytest.raises(RoleChangeError, match='only while holding'):
+        controller.command(second, 'b')
+    assert controller.role == 1 and controller.base_gripper == 'a'
+    assert controller.mode == first
+
+
+@pytest.mark.parametrize('first, second', [(Mode.COARSE, Mode.HOLD), (Mode.HOLD, Mode.FINE),
+                                           (Mode.OFF, Mode.COARSE), (Mode.FINE, Mode.OFF)])
+def test_role_swap_accepted_into_or_out_of_hold_and_off(first, second):
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
+    controller.command(first, 'a')
+    controller.command(second, 'b')
+    assert controller.role == 5 and controller.mode == second
+
+
+def test_unknown_gripper_is_refused():
+    controller = JointController(SETTINGS, 'a_yaw_joint', 'a')
+    with pytest.raises(ValueError, match='gripper'):
+        controller.command(Mode.HOLD, 'c')
+
+
+# ---------------------------------------------------------------------------- latched hold
+def test_a_latched_hold_holds_where_the_joint_was_until_the_next_command():
+    controller = JointController(SETTINGS, 'vertex_joint')
+    plant = RigidJoint('vertex_joint')
+    controller.command(Mode.FINE)
+    sp = ramp(plant.position, 0.1)
+    run(controller, plant, int(2.0 / T), sp)
+    controller.hold('setpoint stream stale')
+    held_at = plant.position
+    _, outputs = run(controller, plant, int(4.0 / T), lambda k: sp(k + int(2.0 / T)))
+    assert controller.mode == Mode.HOLD and controller.hold_reason == 'setpoint stream stale'
+    assert outputs[0].reference.position == held_at
+    assert abs(plant.position - held_at) < 0.01
+    controller.command(Mode.FINE)
+    assert controller.mode == Mode.FINE and controller.hold_reason == ''
+
+
+def test_tracking_mode_without_setpoint_holds_where_it_entered():
+    controller = JointController(SETTINGS, 'vertex_joint')
+    plant = RigidJoint('vertex_joint', position=0.2)
+    controller.command(Mode.COARSE)
+    _, outputs = run(controller, plant, 50)
+    assert all(out.reference.position == 0.2 for out in outputs)
+
+
+# ------------------------------------------------------------------------------- refusals
+@pytest.mark.parametrize('measurement', [
+    Measurement(math.nan, 0.0, 0.0, tuple(STANCE)),
+    Measurement(0.1, math.inf, 0.0, tuple(STANCE)),
+    Measurement(0.1, 0.0, math.nan, tuple(STANCE)),
+    Measurement(0.1, 0.0, 0.0, (0.0, math.nan, 0.0, 0.0, 0.0)),
+    Measurement(0.1, 0.0, 0.0, (0.0, 0.0, 0.0)),
+])
+def test_bad_measurements_are_refused_and_change_nothing(measurement):
+    reference, probe = (JointController(SETTINGS, 'vertex_joint') for _ in range(2))
+    good = Measurement(STANCE[2], 0.01, 0.0, tuple(STANCE))
+    for controller in (reference, probe):
+        controller.command(Mode.FINE)
+        controller.update(good, Setpoint(position=STANCE[2] + 0.05), T)
+    with pytest.raises(MeasurementError):
+        probe.update(measurement, Setpoint(position=STANCE[2] + 0.05), T)
+    assert probe.update(good, Setpoint(position=STANCE[2] + 0.05), T) == \
+        reference.update(good, Setpoint(position=STANCE[2] + 0.05), T)
+
+
+@pytest.mark.parametrize('dt', [0.0, -T, math.nan, math.inf])
+def test_bad_sample_times_are_refused(dt):
+    controller = JointController(SETTINGS, 'vertex_joint')
+    with pytest.raises(ValueError, match='dt'):
+        controller.update(Measurement(0.0, 0.0, 0.0, tuple(STANCE)), None, dt)
+
+
+def test_unknown_joint_is_refused():
+    with pytest.raises(ValueError, match='unknown joint'):
+        JointController(SETTINGS, 'elbow_joint')

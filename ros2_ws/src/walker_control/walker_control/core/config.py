@@ -1,0 +1,272 @@
+"""The controllers' parameter sections, validated as a whole, stability check included.
+
+The ``control:`` group of ``walker_core/config/walker.yaml`` holds *design quantities*, per mode
+and per joint role J1..J5 (lists of five), not raw gains:
+
+* ``control.<mode>.bandwidth`` ``wc`` [rad/s], ``damping`` ``zc`` and ``integral_time`` ``Ti``
+  [s] (0: no integral action) for the modes ``coarse``, ``fine`` and ``hold``;
+  ``control.coarse.acceleration_feedback`` ``Ka`` (paper: joint 1 only);
+* ``control.filter``: ``kind`` (``critical`` or ``butterworth``), ``order`` and ``corner``
+  ``wf`` [rad/s] per role;
+* ``control.friction_compensation``: the fraction of the identified breakaway friction
+  (``robot.drive.*.stiction_torque``) to apply, and the deadband and ramp per role [rad];
+* ``control.stability``: the inertia mismatch the loops must tolerate and the minimum damping;
+* tolerances, the bumpless transfer time constant and the input timeouts.
+
+The gains follow from the rigid model at the current configuration: ``Kp = I wc^2``,
+``Kd = 2 zc wc I``, ``Ki = Kp / Ti``, with ``I = I_ii(q)`` of eqs (9)-(13). The design is thus
+the same at every configuration, and the file says what a control engineer designs with.
+
+:class:`ControllerSettings` joins the robot, timing and control sections. Building it runs the
+stability check (:func:`check_controller_settings`) on every role and mode, so an unstable set
+can never be constructed: the node refuses to start with it and refuses a runtime update to it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+from collections.abc import Mapping
+
+from walker_core.parameter_schema import (
+    ParameterError, load_parameter_file, parameter, section_from_flat)
+from walker_core.robot_parameters import (
+    Drive, RobotParameters, TimingParameters, default_parameter_file)
+from walker_control.core.lowpass import FILTER_KINDS
+from walker_control.core.modes import GAIN_MODES, Mode
+from walker_control.core.stability import (
+    LoopDesign, LoopReport, UnstableLoopError, check_loop, inertia_ratio_grid)
+
+__all__ = [
+    'ROLES', 'UnstableControllerError', 'ModeGains', 'CoarseGains', 'FilterSettings',
+    'FrictionCompensationSettings', 'StabilitySettings', 'ControlParameters',
+    'ControllerSettings', 'check_controller_settings', 'load_controller_settings',
+]
+
+ROLES = (1, 2, 3, 4, 5)
+_INERTIA_RATIO_POINTS = 9
+
+
+class UnstableControllerError(ParameterError):
+    """A controller parameter set fails the stability check; the message says where and why."""
+
+
+def _require_five(section: Any, *names: str) -> None:
+    for name in names:
+        values = getattr(section, name)
+        if len(values) != len(ROLES):
+            raise ValueError(f'{name} needs one value per joint role J1..J5 (5), '
+                             f'got {len(values)}: {list(values)}')
+
+
+@dataclasses.dataclass(frozen=True)
+class ModeGains:
+    """Design quantities of one mode, per joint role J1..J5."""
+
+    bandwidth: tuple[float, ...] = parameter(
+        'desired closed-loop frequency wc of roles J1..J5', 'rad/s', 0.01, 500.0,
+        read_only=False)
+    damping: tuple[float, ...] = parameter(
+        'desired closed-loop damping ratio zc of roles J1..J5', '', 0.05, 10.0, read_only=False)
+    integral_time: tuple[float, ...] = parameter(
+        'integral time Ti of roles J1..J5, Ki = Kp / Ti (0: no integral action)', 's',
+        0.0, 1000.0, read_only=False)
+
+    def __post_init__(self) -> None:
+        _require_five(self, 'bandwidth', 'damping', 'integral_time')
+
+
+@dataclasses.dataclass(frozen=True)
+class CoarseGains(ModeGains):
+    """Coarse-motion design: low gains and acceleration feedback (paper sections 2 and 4)."""
+
+    acceleration_feedback: tuple[float, ...] = parameter(
+        'acceleration feedback gain Ka of roles J1..J5 in coarse motion (paper: J1 only)', '',
+        0.0, 20.0, read_only=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _require_five(self, 'acceleration_feedback')
+
+
+@dataclasses.dataclass(frozen=True)
+class FilterSettings:
+    """The digital low-pass filter of each role (paper section 3)."""
+
+    kind: str = parameter('low-pass filter family of the filtered roles', choices=FILTER_KINDS,
+                          read_only=False)
+    order: tuple[int, ...] = parameter('filter order of roles J1..J5 (0: unfiltered)', '',
+                                       0, 8, read_only=False)
+    corner: tuple[float, ...] = parameter(
+        'filter corner frequency wf of roles J1..J5 (ignored when unfiltered)', 'rad/s',
+        0.0, 1000.0, read_only=False)
+
+    def __post_init__(self) -> None:
+        _require_five(self, 'order', 'corner')
+        for role, (order, corner) in enumerate(zip(self.order, self.corner, strict=True), 1):
+            if order > 0 and corner <= 0.0:
+                raise ValueError(f'corner of role J{role} must be > 0 rad/s with a filter of '
+                                 f'order {order}')
+
+
+@dataclasses.dataclass(frozen=True)
+class FrictionCompensationSettings:
+    """The friction compensator (paper section 3), per role."""
+
+    fraction: float = parameter(
+        'compensation torque as a fraction of the identified breakaway friction '
+        'robot.drive.*.stiction_torque', '', 0.0, 1.5, read_only=False)
+    deadband: tuple[float, ...] = parameter(
+        'position error of roles J1..J5 below which no compensation is applied', 'rad',
+        0.0, 1.0, read_only=False)
+    ramp: tuple[float, ...] = parameter(
+        'error range of roles J1..J5 over which the compensation rises to its full level',
+        'rad', 1e-6, 1.0, read_only=False)
+
+    def __post_init__(self) -> None:
+        _require_five(self, 'deadband', 'ramp')
+
+
+@dataclasses.dataclass(frozen=True)
+class StabilitySettings:
+    """What the stability check demands of every loop."""
+
+    inertia_ratio_min: float = parameter(
+        'smallest ratio of model to true inertia every loop must tolerate', '', 0.05, 1.0,
+        read_only=False)
+    inertia_ratio_max: float = parameter(
+        'largest ratio of model to true inertia every loop must tolerate', '', 1.0, 20.0,
+        read_only=False)
+    minimum_damping: float = parameter(
+        'smallest acceptable damping ratio of any closed-loop pole of the sampled loop', '',
+        0.0, 1.0, read_only=False)
+
+
+@dataclasses.dataclass(frozen=True)
+class ControlParameters:
+    """Everything under ``control.`` in the parameter file."""
+
+    filter: FilterSettings
+    coarse: CoarseGains
+    fine: ModeGains
+    hold: ModeGains
+    friction_compensation: FrictionCompensationSettings
+    stability: StabilitySettings
+    in_position_tolerance: tuple[float, ...] = parameter(
+        'fine-motion position tolerance of roles J1..J5: the joint has arrived within it',
+        'rad', 1e-6, 1.0, read_only=False)
+    bumpless_time_constant: float = parameter(
+        'time constant of the decay of the transfer offset after a mode or role change', 's',
+        0.001, 10.0, read_only=False)
+    setpoint_timeout: float = parameter(
+        'a tracking controller holds when no setpoint arrived for this long', 's', 0.005, 60.0,
+        read_only=False)
+    state_timeout: float = parameter(
+        'a controller holds when no joint state arrived for this long', 's', 0.005, 60.0,
+        read_only=False)
+
+    def __post_init__(self) -> None:
+        _require_five(self, 'in_position_tolerance')
+
+    def gains(self, mode: Mode) -> ModeGains:
+        """Return the gain section of ``mode`` (HOLD, COARSE or FINE)."""
+        if mode not in GAIN_MODES:
+            raise ValueError(f'mode {Mode(mode).name} has no gains')
+        return getattr(self, Mode(mode).key)
+
+
+@dataclasses.dataclass(frozen=True)
+class ControllerSettings:
+    """The sections a joint controller uses, validated together (stability check included)."""
+
+    robot: RobotParameters
+    timing: TimingParameters
+    control: ControlParameters
+
+    def __post_init__(self) -> None:
+        check_controller_settings(self)
+
+    @classmethod
+    def from_flat(cls, flat: Mapping[str, Any]) -> 'ControllerSettings':
+        """Build and validate from flat dotted names (``control.fine.bandwidth``, ...)."""
+        return section_from_flat(cls, flat)
+
+    @property
+    def sample_time(self) -> float:
+        """Control period [s]."""
+        return 1.0 / self.timing.control_rate
+
+    def drive(self, role: int) -> Drive:
+        """Drive (torque limit, friction, joint limits) of role ``role``."""
+        return self.robot.drive.for_role(role)
+
+    def loop_design(self, role: int, mode: Mode) -> LoopDesign:
+        """Normalised loop design of role ``role`` (1..5) in ``mode`` (HOLD, COARSE, FINE)."""
+        if role not in ROLES:
+            raise ValueError(f'joint role must be 1..5, got {role!r}')
+        gains = self.control.gains(mode)
+        i = role - 1
+        ka = gains.acceleration_feedback[i] if isinstance(gains, CoarseGains) else 0.0
+        return LoopDesign(
+            bandwidth=gains.bandwidth[i], damping=gains.damping[i],
+            integral_time=gains.integral_time[i], acceleration_feedback=ka,
+            filter_order=self.control.filter.order[i], filter_corner=self.control.filter.corner[i],
+            filter_kind=self.control.filter.kind)
+
+    def friction_level(self, role: int) -> float:
+        """Friction compensation torque of role ``role`` [N*m]."""
+        return self.control.friction_compensation.fraction * self.drive(role).stiction_torque
+
+
+def _parameter_names(mode: Mode, role: int) -> str:
+    key = mode.key
+    extra = f', control.{key}.acceleration_feedback' if mode == Mode.COARSE else ''
+    return (f'control.{key}.bandwidth/damping/integral_time{extra} and control.filter.* '
+            f'(element {role - 1}, role J{role})')
+
+
+def check_controller_settings(settings: ControllerSettings) -> dict[tuple[int, Mode], LoopReport]:
+    """Run the stability check on every role and mode; return the report of each loop.
+
+    For each role J1..J5 and each of hold, coarse and fine: the paper's condition eq (15) with
+    the filter corner as ``wf`` (filtered roles), and the closed-loop poles of the sampled loop
+    (:func:`walker_control.core.stability.check_loop`) at the control period, with and without
+    one period of delay, over the inertia ratios of ``control.stability``.
+
+    Raises
+    ------
+    UnstableControllerError
+        Naming the role, the mode, the parameters and the failing figure.
+    ParameterError
+        If a filter cannot be built at the control rate (corner above Nyquist).
+    """
+    stability = settings.control.stability
+    ratios = inertia_ratio_grid(stability.inertia_ratio_min, stability.inertia_ratio_max,
+                                _INERTIA_RATIO_POINTS)
+    reports = {}
+    for role in ROLES:
+        for mode in GAIN_MODES:
+            design = settings.loop_design(role, mode)
+            label = f'joint role J{role}, mode {mode.key}'
+            try:
+                reports[role, mode] = check_loop(
+                    design, settings.sample_time, label=label, inertia_ratios=ratios,
+                    minimum_damping=stability.minimum_damping)
+            except UnstableLoopError as error:
+                raise UnstableControllerError(
+                    f'{error} -- refused; check {_parameter_names(mode, role)}') from None
+            except ValueError as error:
+                raise ParameterError(f'{label}: {error}') from None
+    return reports
+
+
+def load_controller_settings(path: str | Path | None = None) -> ControllerSettings:
+    """Load and validate the controller settings from a ``ros__parameters`` YAML file.
+
+    Raises
+    ------
+    ParameterError
+        Naming the missing or invalid parameter, or the loop that fails the stability check.
+    """
+    return ControllerSettings.from_flat(load_parameter_file(path or default_parameter_file()))

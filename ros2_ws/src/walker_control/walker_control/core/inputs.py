@@ -1,0 +1,204 @@
+"""What enters a joint controller: setpoints (validated), their selection by stamp, staleness.
+
+* :class:`Setpoint` and :func:`validate_setpoint`: NaN, infinity and values outside the joint's
+  limits are refused with a :class:`SetpointError` naming the field.
+* :class:`SetpointBuffer`: setpoints arrive ahead of the state they apply to (the planner streams
+  one period ahead); for a state stamped ``t`` the controller uses the newest setpoint whose
+  stamp is not later than ``t``.
+* :class:`InputWatchdog`: decides, on a steady clock, whether the state or setpoint stream has
+  stopped for longer than its timeout.
+
+Times are float seconds: stamps in the ROS time of the messages, watchdog times on a steady
+clock. Nothing here knows about ROS.
+"""
+
+from __future__ import annotations
+
+import bisect
+import dataclasses
+import math
+
+from walker_core.robot_parameters import Drive
+
+__all__ = ['Setpoint', 'SetpointError', 'validate_setpoint', 'SetpointBuffer', 'InputWatchdog',
+           'StaleInputs']
+
+
+class SetpointError(ValueError):
+    """A setpoint that must not be followed (non-finite or outside the joint's limits)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Setpoint:
+    """Desired motion of one joint.
+
+    Attributes
+    ----------
+    position : float
+        [rad]
+    velocity : float
+        [rad/s], feed-forward and reference of the derivative term.
+    acceleration : float
+        [rad/s^2], feed-forward through the rigid-model inertia.
+    effort : float
+        Additional feed-forward torque [N*m].
+    """
+
+    position: float
+    velocity: float = 0.0
+    acceleration: float = 0.0
+    effort: float = 0.0
+
+
+def validate_setpoint(setpoint: Setpoint, drive: Drive, joint_name: str = 'joint') -> Setpoint:
+    """Return ``setpoint`` if it may be followed, else raise :class:`SetpointError`.
+
+    Refused: any non-finite field; a position outside ``[position_min, position_max]``; a speed
+    above ``velocity_limit``; an extra effort above ``torque_limit``.
+    """
+    for name in ('position', 'velocity', 'acceleration', 'effort'):
+        value = getattr(setpoint, name)
+        if not (isinstance(value, (int, float)) and math.isfinite(value)):
+            raise SetpointError(f'{joint_name} setpoint {name} = {value!r} refused: '
+                                f'must be a finite number')
+    if not drive.position_min <= setpoint.position <= drive.position_max:
+        raise SetpointError(
+            f'{joint_name} setpoint position {setpoint.position:.6g} rad refused: outside the '
+            f'joint limits [{drive.position_min:g}, {drive.position_max:g}] rad')
+    if abs(setpoint.velocity) > drive.velocity_limit:
+        raise SetpointError(
+            f'{joint_name} setpoint velocity {setpoint.velocity:.6g} rad/s refused: above the '
+            f'velocity limit {drive.velocity_limit:g} rad/s')
+    if abs(setpoint.effort) > drive.torque_limit:
+        raise SetpointError(
+            f'{joint_name} setpoint effort {setpoint.effort:.6g} N*m refused: above the torque '
+            f'limit {drive.torque_limit:g} N*m')
+    return setpoint
+
+
+class SetpointBuffer:
+    """Setpoints ordered by stamp; selects the newest one not later than a state's stamp.
+
+    Parameters
+    ----------
+    capacity : int
+        Setpoints kept (the oldest are dropped first).
+    """
+
+    def __init__(self, capacity: int = 64) -> None:
+        if capacity < 1:
+            raise ValueError(f'capacity must be >= 1, got {capacity!r}')
+        self._capacity = capacity
+        self._stamps: list[float] = []
+        self._setpoints: list[Setpoint] = []
+
+    def __len__(self) -> int:
+        return len(self._stamps)
+
+    def clear(self) -> None:
+        """Forget every setpoint."""
+        self._stamps.clear()
+        self._setpoints.clear()
+
+    def add(self, stamp: float, setpoint: Setpoint) -> None:
+        """Insert a setpoint for time ``stamp`` [s]; one with the same stamp is replaced."""
+        if not math.isfinite(stamp):
+            raise SetpointError(f'setpoint stamp must be finite, got {stamp!r}')
+        index = bisect.bisect_left(self._stamps, stamp)
+        if index < len(self._stamps) and self._stamps[index] == stamp:
+            self._setpoints[index] = setpoint
+            return
+        self._stamps.insert(index, stamp)
+        self._setpoints.insert(index, setpoint)
+        if len(self._stamps) > self._capacity:
+            del self._stamps[0]
+            del self._setpoints[0]
+
+    def select(self, stamp: float) -> tuple[float, Setpoint] | None:
+        """Newest ``(stamp, setpoint)`` with a stamp not later than ``stamp``, or None.
+
+        Older setpoints are dropped: they can never be selected again for a later state.
+        """
+        index = bisect.bisect_right(self._stamps, stamp) - 1
+        if index < 0:
+            return None
+        del self._stamps[:index]
+        del self._setpoints[:index]
+        return self._stamps[0], self._setpoints[0]
+
+
+@dataclasses.dataclass(frozen=True)
+class StaleInputs:
+    """Which input streams have stopped, and why (empty reason when none)."""
+
+    state: bool = False
+    setpoint: bool = False
+    reason: str = ''
+
+    @property
+    def any(self) -> bool:
+        """True when some stream is stale."""
+        return self.state or self.setpoint
+
+
+class InputWatchdog:
+    """Detects a state or setpoint stream that stopped for longer than its timeout.
+
+    Parameters
+    ----------
+    state_timeout, setpoint_timeout : float
+        [s] on the steady clock.
+
+    Notes
+    -----
+    The state stream is watched from the first state on. The setpoint stream is watched only
+    while a tracking mode expects it, from the first setpoint received in that mode on: before
+    any setpoint the controller holds the measured position, which is not a fault.
+    """
+
+    def __init__(self, state_timeout: float, setpoint_timeout: float) -> None:
+        self.state_timeout = float(state_timeout)
+        self.setpoint_timeout = float(setpoint_timeout)
+        self._last_state: float | None = None
+        self._last_setpoint: float | None = None
+        self._watch_setpoints = False
+
+    def state_received(self, now: float) -> None:
+        """Note a state received at steady time ``now`` [s]."""
+        self._last_state = now
+
+    def setpoint_received(self, now: float) -> None:
+        """Note a setpoint received at steady time ``now`` [s]."""
+        self._last_setpoint = now
+
+    def expect_setpoints(self, expected: bool) -> None:
+        """Start (tracking mode entered) or stop watching the setpoint stream."""
+        if expected != self._watch_setpoints:
+            self._last_setpoint = None
+        self._watch_setpoints = expected
+
+    def check(self, now: float) -> StaleInputs:
+        """Which streams are stale at steady time ``now`` [s]."""
+        reasons = []
+        state = self._last_state is not None and now - self._last_state > self.state_timeout
+        if state:
+            reasons.append(f'no joint state for {now - self._last_state:.3f} s '
+                           f'(timeout {self.state_timeout:g} s)')
+        setpoint = (self._watch_setpoints and self._last_setpoint is not None
+                    and now - self._last_setpoint > self.setpoint_timeout)
+        if setpoint:
+            reasons.append(f'no setpoint for {now - self._last_setpoint:.3f} s '
+                           f'(timeout {self.setpoint_timeout:g} s)')
+        return StaleInputs(state=state, setpoint=setpoint, reason='; '.join(reasons))
+
+    def setpoint_lag(self, state_stamp: float, setpoint_stamp: float) -> str:
+        """Why the setpoint in force is too old for a state, by stamps [s] ('' when it is not).
+
+        This catches a stopped setpoint stream in ROS time, which the steady-clock check misses
+        when simulated time runs faster than the wall clock.
+        """
+        lag = state_stamp - setpoint_stamp
+        if lag > self.setpoint_timeout:
+            return (f'the newest setpoint is {lag:.3f} s older than the joint state '
+                    f'(timeout {self.setpoint_timeout:g} s)')
+        return ''

@@ -1,0 +1,392 @@
+"""The joint controller of Figure 3: feed-forward, PID, acceleration feedback, filter, friction.
+
+Structure (one sample, ``I = I_ii(q)`` the rigid-model inertia of the joint's role at the
+current configuration, eqs (9)-(13))::
+
+    e   = theta_r - theta,  de = omega_r - omega
+    v   = I a_r + effort_r                    feed-forward (rigid model)
+        + I wc^2 e + integral + 2 zc wc I de  PID (integral only with Ti > 0)
+        - Ka I a_measured                     acceleration feedback (coarse, joint 1)
+        + transfer                            bumpless-transfer offset (decays)
+    y   = F(z) clamp(v, +-tau_max)            low-pass filter (joints 1-3)
+    tau = clamp(y + friction(e) + friction transfer, +-tau_max)
+
+The filter sits on the whole command, feed-forward and acceleration feedback included, exactly
+where the paper's eq (14) puts it: ``s^2 theta = F(s) [u - Ka s^2 theta]``; so the analysis of
+section 4 and the stability check describe the loop that runs, and no part of the command can
+excite the structural modes that the filter is there to keep out. The friction compensator is
+added after the filter: it cancels a plant nonlinearity, and the filter's delay (about 0.5 s for
+joint 1) would keep it pushing long after the error changed sign.
+
+Modes (:class:`~walker_control.core.modes.Mode`): OFF (zero torque), HOLD (hold the position at
+which HOLD was entered; no integral action), COARSE and FINE (follow the setpoint; before the
+first setpoint, hold the position at which the mode was entered). A latched hold (stale input,
+refused setpoint) forces HOLD until the next mode command.
+
+Bumpless transfer: on a change of mode, role or parameters, the integral is reset and an offset
+``transfer = v_before - v_new`` makes the filter's input continuous; it then decays with the
+time constant ``control.bumpless_time_constant``. When the change brings a different filter (a
+role swap), the new filter is initialised at the steady state of the old filter's output and
+the input is matched to that output. The friction term gets its own decaying offset. The torque
+therefore moves by no more than its normal change over one sample.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from walker_core.dynamics import RigidModel
+from walker_core.joint_roles import physical_to_roles, role_of_joint, validate_gripper
+from walker_control.core.accel_feedback import acceleration_feedback_torque
+from walker_control.core.config import ControllerSettings
+from walker_control.core.feedforward import RigidFeedForward
+from walker_control.core.friction_compensation import FrictionCompensator
+from walker_control.core.inputs import Setpoint
+from walker_control.core.lowpass import LowPassFilter
+from walker_control.core.modes import Mode
+from walker_control.core.pid import Pid, PidGains
+
+__all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
+           'MissingAccelerationError', 'JointController']
+
+
+class RoleChangeError(ValueError):
+    """The base gripper may change only while the controller holds or is off."""
+
+
+class MeasurementError(ValueError):
+    """A measurement the controller cannot use (non-finite, or missing an acceleration)."""
+
+
+class MissingAccelerationError(MeasurementError):
+    """Acceleration feedback is on but no measured acceleration was given."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Measurement:
+    """The joint's measured state, and the configuration of the whole robot.
+
+    Attributes
+    ----------
+    position : float
+        [rad]
+    velocity : float
+        [rad/s]
+    acceleration : float or None
+        [rad/s^2]; None when not available (only acceleration feedback needs it).
+    joint_positions : sequence of 5 float
+        Angles of the five physical joints [rad], in the order of
+        :data:`walker_core.joint_roles.PHYSICAL_JOINT_NAMES`, for the inertia.
+    """
+
+    position: float
+    velocity: float
+    acceleration: float | None
+    joint_positions: Sequence[float]
+
+
+@dataclasses.dataclass(frozen=True)
+class ControlOutput:
+    """One controller sample: the command and every term, for the state message and plots.
+
+    Torques in N*m, angles in rad, rates in rad/s. ``feedforward`` to ``acceleration_feedback``
+    and ``transfer`` are before the filter; ``friction_compensation`` (with its transfer offset)
+    and ``effort`` after it.
+    """
+
+    effort: float
+    mode: Mode
+    role: int
+    reference: Setpoint
+    position_error: float
+    inertia: float
+    feedforward: float
+    proportional: float
+    integral: float
+    derivative: float
+    acceleration_feedback: float
+    transfer: float
+    filtered: float
+    friction_compensation: float
+    saturated: bool
+
+
+def _clamp(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))
+
+
+class JointController:
+    """Controller of one physical joint (paper Figure 3), in whichever role it plays.
+
+    Parameters
+    ----------
+    settings : ControllerSettings
+        Validated robot, timing and control parameters.
+    joint_name : str
+        Physical joint, one of :data:`walker_core.joint_roles.PHYSICAL_JOINT_NAMES`.
+    base_gripper : {'a', 'b'}
+        Gripper that is the base: sets the joint's role J1..J5.
+
+    Raises
+    ------
+    ValueError
+        For an unknown joint or gripper.
+    """
+
+    def __init__(self, settings: ControllerSettings, joint_name: str,
+                 base_gripper: str = 'a') -> None:
+        role_of_joint(joint_name, validate_gripper(base_gripper))
+        self._joint_name = joint_name
+        self._base = base_gripper
+        self._settings = settings
+        self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
+        self._commanded = Mode.HOLD
+        self._hold_reason = ''
+        limit = settings.drive(self.role).torque_limit
+        self._pid = Pid(PidGains(0.0, 0.0, 0.0, limit, limit))
+        self._filter = self._new_filter(self.role)
+        self._filter.reset_to(0.0)
+        self._key: tuple[int, Mode] | None = None
+        self._design: object = None
+        self._hold_position = 0.0
+        self._last_input = 0.0
+        self._last_friction = 0.0
+        self._transfer = 0.0
+        self._friction_transfer = 0.0
+        self._saturation = 0.0
+        self._last_output: ControlOutput | None = None
+
+    # ---------------------------------------------------------------------------- properties
+    @property
+    def joint_name(self) -> str:
+        """Physical joint controlled."""
+        return self._joint_name
+
+    @property
+    def base_gripper(self) -> str:
+        """Gripper that is the base."""
+        return self._base
+
+    @property
+    def role(self) -> int:
+        """Role J1..J5 the joint plays for the current base."""
+        return role_of_joint(self._joint_name, self._base)
+
+    @property
+    def settings(self) -> ControllerSettings:
+        """Parameters in force."""
+        return self._settings
+
+    @property
+    def commanded_mode(self) -> Mode:
+        """Mode last commanded (ControlMode)."""
+        return self._commanded
+
+    @property
+    def hold_reason(self) -> str:
+        """Why a hold is latched ('' when none)."""
+        return self._hold_reason
+
+    @property
+    def mode(self) -> Mode:
+        """Mode in effect: OFF if commanded, else HOLD while a hold is latched, else commanded."""
+        if self._commanded == Mode.OFF:
+            return Mode.OFF
+        return Mode.HOLD if self._hold_reason else self._commanded
+
+    @property
+    def last_output(self) -> ControlOutput | None:
+        """The output of the last :meth:`update`, or None before the first."""
+        return self._last_output
+
+    # ------------------------------------------------------------------------------ commands
+    def command(self, mode: Mode, base_gripper: str | None = None) -> None:
+        """Apply a mode command; it also releases a latched hold.
+
+        Raises
+        ------
+        RoleChangeError
+            If the base gripper changes while the controller tracks setpoints (COARSE or FINE)
+            and is commanded to go on tracking: the role may change only on the way into, or
+            out of, HOLD or OFF. Nothing changes.
+        ValueError
+            For an unknown mode or gripper; nothing changes.
+        """
+        mode = Mode(mode)
+        base = self._base if base_gripper is None else validate_gripper(base_gripper)
+        if base != self._base and self.mode.tracks_setpoints and mode.tracks_setpoints:
+            raise RoleChangeError(
+                f'{self._joint_name}: base gripper change {self._base!r} -> {base!r} refused '
+                f'from {self.mode.name} to {mode.name}: the role may change only while holding '
+                f'or off')
+        self._base = base
+        self._commanded = mode
+        self._hold_reason = ''
+
+    def hold(self, reason: str) -> None:
+        """Latch HOLD (a stale input, a refused setpoint) until the next :meth:`command`."""
+        if not self._hold_reason:
+            self._hold_reason = reason or 'hold requested'
+
+    def apply_settings(self, settings: ControllerSettings) -> None:
+        """Use new (validated) parameters from the next sample on, with bumpless transfer."""
+        self._settings = settings
+        self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
+
+    # ------------------------------------------------------------------------------- update
+    def update(self, measurement: Measurement, setpoint: Setpoint | None,
+               dt: float) -> ControlOutput:
+        """Compute the effort for one sample.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            Measured state of the joint and the robot's configuration.
+        setpoint : Setpoint or None
+            The setpoint in force (already validated); None when there is none yet. Ignored in
+            HOLD and OFF.
+        dt : float
+            Time since the previous sample [s], > 0.
+
+        Returns
+        -------
+        ControlOutput
+
+        Raises
+        ------
+        MeasurementError
+            If the measurement is not finite, or acceleration feedback is on and the
+            acceleration is missing. Nothing changes.
+        ValueError
+            If ``dt`` is not a positive number of seconds. Nothing changes.
+        """
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f'dt must be a positive number of seconds, got {dt!r}')
+        configuration = self._check_measurement(measurement)
+        mode = self.mode
+        if mode == Mode.OFF:
+            return self._off(measurement)
+        settings = self._settings
+        role = self.role
+        design = settings.loop_design(role, mode)
+        if design.acceleration_feedback > 0.0 and measurement.acceleration is None:
+            raise MissingAccelerationError(
+                f'{self._joint_name}: acceleration feedback is on (role J{role}, mode '
+                f'{mode.key}) but no joint acceleration was measured')
+        transition = (role, mode) != self._key
+        friction_design = (settings.friction_level(role),
+                           settings.control.friction_compensation.deadband[role - 1],
+                           settings.control.friction_compensation.ramp[role - 1])
+        redesign = transition or (design, friction_design) != self._design
+        if transition:
+            self._hold_position = measurement.position
+        if setpoint is not None and mode.tracks_setpoints:
+            reference = setpoint
+        else:
+            reference = Setpoint(position=self._hold_position)
+
+        inertia = self._feedforward.inertia(role, configuration)
+        limit = settings.drive(role).torque_limit
+        self._pid.set_gains(PidGains(p=inertia * design.kp, i=inertia * design.ki,
+                                     d=inertia * design.kd, output_limit=limit,
+                                     integral_limit=limit))
+        error = reference.position - measurement.position
+        error_rate = reference.velocity - measurement.velocity
+        feedforward = self._feedforward.torque(inertia, reference.acceleration, reference.effort)
+        acceleration = measurement.acceleration if measurement.acceleration is not None else 0.0
+        accel_term = acceleration_feedback_torque(design.acceleration_feedback, inertia,
+                                                  acceleration)
+        compensator = FrictionCompensator(*friction_design)
+        friction = compensator.torque(error)
+
+        if redesign:
+            self._bumpless_transfer(role, transition, design.ki > 0.0,
+                                    feedforward + accel_term + self._pid.gains.p * error
+                                    + self._pid.gains.d * error_rate, friction)
+            self._key, self._design = (role, mode), (design, friction_design)
+
+        hold_integral = self._saturation != 0.0 and (error > 0.0) == (self._saturation > 0.0)
+        terms = self._pid.compute_command(error, error_rate, dt, hold_integral=hold_integral)
+        command = feedforward + terms.command + accel_term + self._transfer
+        filter_input = _clamp(command, limit)
+        filtered = self._filter.update(filter_input)
+        friction_total = friction + self._friction_transfer
+        total = filtered + friction_total
+        effort = _clamp(total, limit)
+        if not math.isfinite(effort):  # cannot happen with finite inputs; never publish NaN
+            raise FloatingPointError(f'{self._joint_name}: non-finite effort computed')
+        clamped_input = filter_input != command
+        clamped_output = effort != total
+        if clamped_output:
+            self._saturation = math.copysign(1.0, total)
+        elif clamped_input:
+            self._saturation = math.copysign(1.0, command)
+        else:
+            self._saturation = 0.0
+        output = ControlOutput(
+            effort=effort, mode=mode, role=role, reference=reference, position_error=error,
+            inertia=inertia, feedforward=feedforward, proportional=terms.proportional,
+            integral=terms.integral, derivative=terms.derivative,
+            acceleration_feedback=accel_term, transfer=self._transfer, filtered=filtered,
+            friction_compensation=friction_total,
+            saturated=clamped_input or clamped_output or terms.saturated)
+        decay = math.exp(-dt / settings.control.bumpless_time_constant)
+        self._transfer *= decay
+        self._friction_transfer *= decay
+        self._last_input = filter_input
+        self._last_friction = friction_total
+        self._last_output = output
+        return output
+
+    # ------------------------------------------------------------------------------ helpers
+    def _check_measurement(self, measurement: Measurement) -> np.ndarray:
+        values = (measurement.position, measurement.velocity)
+        if measurement.acceleration is not None:
+            values += (measurement.acceleration,)
+        positions = np.asarray(measurement.joint_positions, dtype=float)
+        if not all(math.isfinite(v) for v in values) or positions.shape != (5,) \
+                or not np.all(np.isfinite(positions)):
+            raise MeasurementError(f'{self._joint_name}: measurement refused, not finite or not '
+                                   f'5 joint positions: {measurement!r}')
+        return physical_to_roles(positions, self._base)
+
+    def _new_filter(self, role: int) -> LowPassFilter:
+        settings = self._settings
+        return LowPassFilter(settings.control.filter.order[role - 1],
+                             settings.control.filter.corner[role - 1], settings.sample_time,
+                             settings.control.filter.kind)
+
+    def _bumpless_transfer(self, role: int, transition: bool, integral_on: bool,
+                           raw_without_integral: float, friction: float) -> None:
+        """Match the new command to the old one (see the module notes)."""
+        new_filter = self._new_filter(role)
+        if new_filter.same_design(self._filter):
+            target = self._last_input
+        else:
+            target = self._filter.output
+            new_filter.reset_to(target)
+            self._filter = new_filter
+        if transition or not integral_on:
+            self._pid.reset(0.0)
+        self._transfer = target - (raw_without_integral + self._pid.integral_term)
+        self._friction_transfer = self._last_friction - friction
+
+    def _off(self, measurement: Measurement) -> ControlOutput:
+        self._filter.reset_to(0.0)
+        self._pid.reset(0.0)
+        self._transfer = self._friction_transfer = 0.0
+        self._last_input = self._last_friction = 0.0
+        self._saturation = 0.0
+        self._key, self._design = (self.role, Mode.OFF), None
+        output = ControlOutput(
+            effort=0.0, mode=Mode.OFF, role=self.role,
+            reference=Setpoint(position=measurement.position), position_error=0.0, inertia=0.0,
+            feedforward=0.0, proportional=0.0, integral=0.0, derivative=0.0,
+            acceleration_feedback=0.0, transfer=0.0, filtered=0.0, friction_compensation=0.0,
+            saturated=False)
+        self._last_output = output
+        return output
