@@ -143,6 +143,15 @@ def test_the_bang_bang_plan_ends_on_the_node_and_reports_its_solution(context, s
         np.testing.assert_allclose(tips[:, 2], H, atol=1e-9)
 
 
+@pytest.mark.parametrize('direction', [1, -1])
+def test_a_half_turn_goes_the_way_asked(context, stance, direction):
+    result = plan(PlanRequest('bang_bang_node', 'a', ABOVE, (0.0, -0.9, H),
+                              sweep_direction=direction), context)
+    turn = result.samples.position[-1, 0] - result.samples.position[0, 0]
+    assert turn == pytest.approx(direction * math.pi)
+    assert np.all(np.diff(result.samples.position[:, 0]) * direction >= -1e-12)
+
+
 @pytest.mark.parametrize('name', ['joint_parabolic_accel', 'bang_bang_node', 'insertion_line'])
 def test_gripper_b_as_base_mirrors_the_joint_order(name, context, stance):
     asked = requests(stance)[name]
@@ -221,10 +230,20 @@ def refused(stance):
           'start': (-0.9 * math.sin(3.0), 0.9 * math.cos(3.0), H),
           'goal': (-0.9 * math.sin(3.0 + math.pi / 2), 0.9 * math.cos(3.0 + math.pi / 2), H)},
          WorkspaceError, 'J1 = .* outside its limits .* J1 = a_yaw_joint'),
+        ({'sweep_direction': 1}, InvalidRequestError, 'does not take sweep_direction'),
+        ({'trajectory_type': 'bang_bang_node', 'start': ABOVE, 'goal': (0.0, -0.9, H),
+          'sweep_direction': 2}, InvalidRequestError, 'sweep_direction must be -1, 0 or \\+1'),
+        ({'trajectory_type': 'bang_bang_node', 'start': ABOVE, 'goal': (-0.9, 0.0, H),
+          'sweep_direction': -1}, NoSolutionError, 'goes one way only'),
+        ({'trajectory_type': 'bang_bang_node',
+          'start': (-0.9 * math.sin(2.0), 0.9 * math.cos(2.0), H),
+          'goal': (-0.9 * math.sin(2.0 + math.pi), 0.9 * math.cos(2.0 + math.pi), H),
+          'start_joints': (2.0, *stance[1:4], 2.0), 'sweep_direction': 1}, NoSolutionError,
+         'half turn counterclockwise takes J1'),
     ]
 
 
-@pytest.mark.parametrize('case', range(29))
+@pytest.mark.parametrize('case', range(33))
 def test_invalid_requests_are_refused_naming_what_is_wrong(case, context, stance):
     changes, error, words = refused(stance)[case]
     fields = {'trajectory_type': 'joint_parabolic_accel', 'base_gripper': 'a', 'start': stance,
@@ -235,5 +254,5 @@ def test_invalid_requests_are_refused_naming_what_is_wrong(case, context, stance
 
 
 def test_the_refusal_table_covers_every_case(stance):
-    assert len(refused(stance)) == 29
+    assert len(refused(stance)) == 33
     assert all(issubclass(error, PlanningError) for _, error, _ in refused(stance))

@@ -290,7 +290,8 @@ def _plan_request(request) -> PlanRequest:
         trajectory_type=request.trajectory_type, base_gripper=request.base_gripper,
         start=tuple(request.start), goal=tuple(request.goal), duration=request.duration,
         max_velocity=request.max_velocity, max_acceleration=request.max_acceleration,
-        start_joints=tuple(request.start_joints), min_radius=request.min_radius)
+        start_joints=tuple(request.start_joints), min_radius=request.min_radius,
+        sweep_direction=int(request.sweep_direction))
 
 
 def main(args=None) -> int:

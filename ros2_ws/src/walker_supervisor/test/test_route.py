@@ -20,7 +20,7 @@ def test_sweeps_are_quarter_and_half_turns():
 
 def test_possible_steps_go_to_the_other_neighbours_of_the_base():
     steps = possible_steps(TRUSS, START)
-    assert sorted(s.to_node for s in steps) == ['n0_1', 'n1_0', 'n1_2']
+    assert sorted(s.to_node for s in steps) == ['n0_1', 'n0_1', 'n1_0', 'n1_2']  # 2 half turns
     assert all(s.moving_gripper == 'b' and s.from_node == 'n2_1' for s in steps)
     after = steps[0].stance_after()
     assert after.base_gripper == 'b' and after.other_node == 'n1_1'
@@ -85,3 +85,36 @@ def test_stance_must_be_on_neighbouring_nodes():
 def test_half_turn_flag():
     assert PlannedStep('a', 'n1_1', 'n2_1', 'n0_1', math.pi).is_half_turn
     assert not PlannedStep('a', 'n1_1', 'n2_1', 'n1_2', math.pi / 2).is_half_turn
+
+
+YAW_LIMITS = (-3.5, 3.5)
+
+
+def test_half_turns_offer_both_directions_within_the_yaw_limits():
+    both = [s.sweep for s in possible_steps(TRUSS, START, (0.0, 0.0), YAW_LIMITS)
+            if s.to_node == 'n0_1']
+    assert sorted(both) == pytest.approx([-math.pi, math.pi])
+    wound = [s.sweep for s in possible_steps(TRUSS, START, (math.pi, math.pi), YAW_LIMITS)]
+    assert all(sweep < 0 for sweep in wound), 'from +pi only clockwise sweeps stay in limits'
+
+
+def test_routes_never_wind_the_yaw_joints_past_their_limits():
+    for target in TRUSS.node_names:
+        for yaws in ((0.0, 0.0), (math.pi, math.pi), (-math.pi / 2, -math.pi / 2)):
+            try:
+                route = plan_route(TRUSS, START, target, yaws=yaws, yaw_limits=YAW_LIMITS)
+            except UnreachableTargetError:
+                continue
+            total = yaws[0]
+            for step in route:
+                total += step.sweep
+                assert YAW_LIMITS[0] <= total <= YAW_LIMITS[1]
+
+
+def test_a_wound_walker_is_refused_a_target_it_cannot_turn_to():
+    # On a 2 x 2 truss the only way round is turning the same way: the winding stops it.
+    square = Truss(spacing=0.9, columns=2, rows=2)
+    start = Stance('a', 'n0_0', 'n1_0')
+    with pytest.raises(UnreachableTargetError, match='yaw joints'):
+        plan_route(square, start, 'n1_1', yaws=(3.0, 3.0), yaw_limits=YAW_LIMITS)
+    assert plan_route(square, start, 'n1_1', yaws=(0.0, 0.0), yaw_limits=YAW_LIMITS)

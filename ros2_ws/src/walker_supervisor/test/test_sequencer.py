@@ -228,8 +228,12 @@ def test_hold_then_clear_needs_both_grippers():
 def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
     world = World()
     stance = world.stance
-    route = plan_route(TRUSS, stance, 'n4_3')
-    route += plan_route(TRUSS, route[-1].stance_after(), 'n0_0')
+    limits = (KIN.lower[0], KIN.upper[0])
+    yaws = (world.theta[0], world.theta[4])  # base a: J1 is a_yaw_joint, J5 b_yaw_joint
+    route = plan_route(TRUSS, stance, 'n4_3', yaws=yaws, yaw_limits=limits)
+    turned = sum(step.sweep for step in route)
+    route += plan_route(TRUSS, route[-1].stance_after(), 'n0_0',
+                        yaws=(yaws[0] + turned, yaws[1] + turned), yaw_limits=limits)
     assert any(step.is_half_turn for step in route) and len(route) >= 6
     for step in route:
         world.frame = BaseFrame.from_stance(KIN, world.theta, TRUSS.position(stance.base_node),

@@ -97,7 +97,6 @@ class SupervisorNode(Node):
         self._last_feedback = -math.inf
         self._last_phase: tuple | None = None
         self._step_in_progress = False
-        self._frame: BaseFrame | None = None
         self._residual_vibration = math.nan
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
@@ -166,6 +165,13 @@ class SupervisorNode(Node):
             self.sequencer.base_gripper = msg.base_gripper
             self._base_known = True
 
+    def _yaws(self) -> tuple[float, float]:
+        return float(self._positions[0]), float(self._positions[4])
+
+    def _yaw_limits(self) -> tuple[float, float]:
+        drive = self.params.robot.drive.yaw
+        return drive.position_min, drive.position_max
+
     def _theta_roles(self) -> np.ndarray:
         return physical_to_roles(self._positions, self.sequencer.base_gripper)
 
@@ -187,7 +193,8 @@ class SupervisorNode(Node):
         result = WalkTo.Result()
         try:
             stance = self._start_checks()
-            route = plan_route(self.truss, stance, target)
+            route = plan_route(self.truss, stance, target, yaws=self._yaws(),
+                               yaw_limits=self._yaw_limits())
         except (SequencerError, UnknownNodeError, UnreachableTargetError) as error:
             self.get_logger().warning(f'walk to {target!r} refused: {error}')
             result.message = str(error)
@@ -210,12 +217,13 @@ class SupervisorNode(Node):
         try:
             stance = self._start_checks()
             self.truss.index(target)
-            steps = [s for s in possible_steps(self.truss, stance) if s.to_node == target]
+            reachable = possible_steps(self.truss, stance, self._yaws(), self._yaw_limits())
+            steps = [s for s in reachable if s.to_node == target][:1]
             if not steps:
                 raise UnreachableTargetError(
                     f'{target!r} is not one step away: from the base in {stance.base_node} a '
-                    f'step reaches ' + ', '.join(s.to_node for s in
-                                                 possible_steps(self.truss, stance)))
+                    f'step reaches ' + (', '.join(sorted({s.to_node for s in reachable}))
+                                        or "no node within the yaw joints' limits"))
         except (SequencerError, UnknownNodeError, UnreachableTargetError) as error:
             self.get_logger().warning(f'step to {target!r} refused: {error}')
             result.message = str(error)
@@ -318,7 +326,6 @@ class SupervisorNode(Node):
             self.get_logger().error(walk.outcomes[-1].message)
             return
         self._step_in_progress = True
-        self._frame = frame
         self._step_bound = 0.0
         self._true_insertion_error = math.nan
         self.get_logger().info(f'step {walk.step_index + 1}/{len(walk.route)}: gripper '
@@ -409,7 +416,7 @@ class SupervisorNode(Node):
             self._execute(self.sequencer.trajectory_done(
                 False, 'the planner is not available', self._now()))
             return
-        call = plan_request(request, self.kinematics, self._frame)
+        call = plan_request(request, self.kinematics)
         future = self.plan_client.call_async(call)
         future.add_done_callback(lambda f: self._on_planned(f, request, generation))
 

@@ -7,12 +7,14 @@ bang-bang node-to-node trajectory, the fine motion a constant-velocity Cartesian
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import roles_to_physical
-from walker_core.kinematics import WalkerKinematics
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.sequencer import TrajectoryRequest
-from walker_supervisor.core.step_geometry import BaseFrame
 
 __all__ = ['TRAJECTORY_TYPES', 'plan_request']
 
@@ -20,20 +22,51 @@ __all__ = ['TRAJECTORY_TYPES', 'plan_request']
 TRAJECTORY_TYPES = {
     'extraction': ('extraction_line', True),
     'retry_lift': ('extraction_line', True),
-    'coarse': ('bang_bang_node', False),
+    'coarse': ('bang_bang_node', True),
     'fine': ('cartesian_line', True),
     'insertion': ('insertion_line', True),
 }
+#: Motions that start where the joints are now (the others start at a planned point).
+_FROM_MEASURED = frozenset({'fine', 'insertion', 'retry_lift'})
 
 
-def plan_request(request: TrajectoryRequest, kinematics: WalkerKinematics,
-                 frame: BaseFrame | None) -> PlanTrajectory.Request:
-    """Build the ``plan_trajectory`` request for one motion of a step."""
+def _vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:
+    """Joint angles (role order) with the tip at ``point`` and the gripper vertical, near ``near``.
+
+    Falls back to ``near`` itself where no such configuration exists (the planner then refuses
+    the request with the reason).
+    """
+    near = np.asarray(near, dtype=float)
+    l1, l2 = kinematics.l1, kinematics.l2
+    t2, t3, t4 = near[1:4]
+    reach = l2 * math.sin(t2) + l2 * math.sin(t2 + t3) + l1 * math.sin(t2 + t3 + t4)
+    try:
+        return kinematics.inverse([*point, 0.0, near[4]], 'up' if t3 >= 0 else 'down',
+                                  'forward' if reach >= 0 else 'backward', reference=near,
+                                  check_limits=False)
+    except KinematicsError:
+        return near
+
+
+def plan_request(request: TrajectoryRequest, kinematics: WalkerKinematics
+                 ) -> PlanTrajectory.Request:
+    """Build the ``plan_trajectory`` request for one motion of a step.
+
+    A Cartesian motion starts from the measured joints made exact: the tip where their forward
+    kinematics puts it, the gripper vertical, on their IK branch and with their tip yaw, so the
+    planner's first setpoint is where the joints are and nothing jumps.
+    """
     type_name, cartesian = TRAJECTORY_TYPES[request.purpose]
     call = PlanTrajectory.Request(trajectory_type=type_name, base_gripper=request.base_gripper)
     if cartesian:
-        call.start = [float(v) for v in request.start_point]
+        start = kinematics.forward(request.start)[:3] if request.purpose in _FROM_MEASURED \
+            else request.start_point
+        joints = _vertical_configuration(kinematics, start, request.start)
+        call.start = [float(v) for v in start]
         call.goal = [float(v) for v in request.goal_point]
+        call.start_joints = [float(v) for v in roles_to_physical(joints, request.base_gripper)]
+        if type_name == 'bang_bang_node' and abs(abs(request.sweep) - math.pi) < 1e-6:
+            call.sweep_direction = 1 if request.sweep > 0 else -1
     else:
         call.start = [float(v) for v in roles_to_physical(request.start, request.base_gripper)]
         call.goal = [float(v) for v in roles_to_physical(request.goal, request.base_gripper)]

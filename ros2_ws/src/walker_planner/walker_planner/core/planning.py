@@ -50,6 +50,9 @@ class PlanRequest:
     start_joints : sequence of float
         Empty, or the 5 joint angles in physical order at the start [rad] (Cartesian types:
         they choose the IK branch and the gripper yaw).
+    sweep_direction : int
+        ``bang_bang_node`` half turns: +1 counterclockwise, -1 clockwise (seen from above),
+        0 for the planner's choice.
     """
 
     trajectory_type: str
@@ -61,6 +64,7 @@ class PlanRequest:
     max_acceleration: float = 0.0
     start_joints: tuple = ()
     min_radius: float = 0.0
+    sweep_direction: int = 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,6 +148,15 @@ def _option(request: PlanRequest, name: str, options: frozenset, type_name: str)
     return float(value)
 
 
+def _sweep_direction_option(request: PlanRequest, kind) -> int:
+    value = request.sweep_direction
+    if isinstance(value, bool) or value not in (-1, 0, 1):
+        raise InvalidRequestError(f'sweep_direction must be -1, 0 or +1, got {value!r}')
+    if value and 'sweep_direction' not in kind.options:
+        raise InvalidRequestError(f'{kind.name} does not take sweep_direction; leave it 0')
+    return int(value)
+
+
 def _validate(request: PlanRequest, context: PlanningContext):
     kind = TRAJECTORY_TYPES.get(request.trajectory_type)
     if kind is None:
@@ -154,6 +167,7 @@ def _validate(request: PlanRequest, context: PlanningContext):
         raise InvalidRequestError(
             f'unknown base gripper {request.base_gripper!r}: expected "a" or "b"')
     options = {name: _option(request, name, kind.options, kind.name) for name in _OPTION_UNITS}
+    options['sweep_direction'] = _sweep_direction_option(request, kind)
     size = 5 if kind.space != CARTESIAN else 3
     unit = 'joint angles in physical order [rad]' if size == 5 else 'tip X, Y, Z [m]'
     start = finite_vector(request.start, size, f'start ({unit})')

@@ -43,6 +43,7 @@ class ValidRequest:
     max_velocity: float
     max_acceleration: float
     min_radius: float
+    sweep_direction: int = 0
 
 
 class Built:
@@ -227,7 +228,7 @@ def _bang_bang_node(request, context):
                                         planning.velocity_fraction)
     solution = solve_node_to_node(model, rho_start, 0.5 * abs(sweep), rho_min,
                                   request.duration or None)
-    direction = _sweep_direction(sweep, request.start_joints, context)
+    direction = _sweep_direction(sweep, request.start_joints, context, request.sweep_direction)
     # Theta of the start, continuous with the start's J1 (forward reach: J1 = Theta)
     yaw = request.start_joints[0]
     theta_start = theta_start + 2.0 * math.pi * round((yaw - theta_start) / (2.0 * math.pi))
@@ -235,10 +236,26 @@ def _bang_bang_node(request, context):
                  solution)
 
 
-def _sweep_direction(sweep: float, start_joints: np.ndarray, context) -> int:
-    """Direction of the sweep; a half turn goes the way that keeps J1 and J5 within limits."""
+def _sweep_direction(sweep: float, start_joints: np.ndarray, context, wanted: int = 0) -> int:
+    """Direction of the sweep; a half turn goes ``wanted`` way, or the way within the limits."""
     if abs(abs(sweep) - math.pi) > context.min_sweep:
-        return 1 if sweep >= 0.0 else -1
+        direction = 1 if sweep >= 0.0 else -1
+        if wanted and wanted != direction:
+            raise NoSolutionError(
+                f'a {math.degrees(abs(sweep)):.0f} deg sweep goes one way only '
+                f'({"counterclockwise" if direction > 0 else "clockwise"}); sweep_direction '
+                f'{wanted:+d} asks for the other')
+        return direction
+    if wanted:
+        ends = start_joints[[0, 4]] + wanted * math.pi
+        kinematics = context.kinematics
+        for i, value in zip((0, 4), ends, strict=True):
+            if not kinematics.lower[i] <= value <= kinematics.upper[i]:
+                raise NoSolutionError(
+                    f'a half turn {"counterclockwise" if wanted > 0 else "clockwise"} takes '
+                    f'J{i + 1} to {value:.3f} rad, outside its limits [{kinematics.lower[i]:.3f}, '
+                    f'{kinematics.upper[i]:.3f}] rad')
+        return wanted
     preferred = 1  # a half turn: counter-clockwise unless a limit is in the way
     kinematics = context.kinematics
     for direction in (preferred, -preferred):
@@ -295,7 +312,9 @@ _TYPES = (
         'coarse node-to-node motion (paper section 5, eqs (17)-(27))',
         'start, goal (tip X, Y, Z at the same radius and height); duration (0 = fastest '
         'within the torque and rate limits); min_radius (0 = planner.bang_bang.min_radius); '
-        'start_joints', frozenset({'duration', 'min_radius', 'start_joints'}), _bang_bang_node),
+        "start_joints; sweep_direction (half turns: +1 / -1, 0 = the planner's choice)",
+        frozenset({'duration', 'min_radius', 'start_joints', 'sweep_direction'}),
+        _bang_bang_node),
 )
 
 #: The nine types by name, in the README's order.

@@ -16,7 +16,7 @@ import numpy as np
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
-__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'choose_sweep_direction']
+__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,7 +76,7 @@ class StepTargets:
     frame : BaseFrame
         The base frame during the step.
     sweep : float
-        Signed base yaw rotation [rad] of the coarse motion (direction of a half turn chosen).
+        Signed base yaw rotation [rad] of the coarse motion.
     start : ndarray
         Joint angles at the start (moving gripper in its hole) [rad].
     above_from, above_to : ndarray
@@ -98,32 +98,14 @@ class StepTargets:
     point_to: np.ndarray
 
 
-def choose_sweep_direction(step: PlannedStep, theta1: float, lower: float, upper: float
-                           ) -> float:
-    """Signed sweep [rad] for a step: a half turn goes the way that leaves joint 1 more margin.
-
-    Raises
-    ------
-    KinematicsError
-        When the sweep, either way for a half turn, would take joint 1 past its limits.
-    """
-    candidates = [step.sweep] if not step.is_half_turn else [math.pi, -math.pi]
-    feasible = [(min(theta1 + s - lower, upper - theta1 - s), s) for s in candidates
-                if lower <= theta1 + s <= upper]
-    if not feasible:
-        raise KinematicsError(
-            f'joint 1 at {theta1:.3f} rad cannot sweep {math.degrees(step.sweep):.0f} deg '
-            f'within its limits [{lower:.3f}, {upper:.3f}] rad')
-    return max(feasible)[1]
-
-
 def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: PlannedStep,
                       from_position: np.ndarray, to_position: np.ndarray,
                       theta_roles: np.ndarray, approach_height: float) -> StepTargets:
-    """Joint targets of every phase of a step.
+    """Compute the joint targets of every phase of a step.
 
-    The tip stays vertical (alpha = 0). During the step the tip yaw J5 returns to 0 so that,
-    when this gripper becomes the base, joint 1 starts centred and can sweep either way.
+    The tip stays vertical (alpha = 0) and keeps its heading in the truss frame: the tip yaw J5
+    turns with the base yaw J1 (as the planner's Cartesian motions do), so both turn by the
+    step's sweep.
 
     Parameters
     ----------
@@ -140,15 +122,15 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
         When a target is out of reach or outside the joint limits.
     """
     theta = np.asarray(theta_roles, dtype=float)
-    sweep = choose_sweep_direction(step, theta[0], kinematics.lower[0], kinematics.upper[0])
+    sweep = step.sweep
     lift = np.array([0.0, 0.0, approach_height])
     point_from = frame.to_base(from_position)
     point_to = frame.to_base(to_position)
     above_from = kinematics.inverse([*(point_from + lift), 0.0, theta[4]], reference=theta)
     reference = theta.copy()
     reference[0] += sweep
-    reference[4] = 0.0
-    above_to = kinematics.inverse([*(point_to + lift), 0.0, 0.0], reference=reference)
-    at_to = kinematics.inverse([*point_to, 0.0, 0.0], reference=above_to)
+    reference[4] += sweep
+    above_to = kinematics.inverse([*(point_to + lift), 0.0, reference[4]], reference=reference)
+    at_to = kinematics.inverse([*point_to, 0.0, reference[4]], reference=above_to)
     return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
                        point_from + lift, point_to + lift, point_to)
