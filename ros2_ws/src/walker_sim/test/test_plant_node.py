@@ -6,6 +6,7 @@ in a ROS domain of its own, and talks to it from this process.
 
 import time
 import xml.etree.ElementTree as ElementTree
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -126,10 +127,12 @@ def test_real_time_mode_publishes_the_five_joints_at_the_control_rate(ros_env, p
     for message in states:
         assert list(message.name) == JOINTS
         assert len(message.position) == len(message.velocity) == len(message.effort) == 5
+    # On a loaded machine the timer is sometimes late (the plant then catches up with the
+    # wall clock and skips publishing); the period it keeps whenever it runs is still the
+    # most common one: the control period, 2 ms.
     stamps = sorted({stamp_ns(m.header.stamp) for m in states})
-    periods = sorted(b - a for a, b in zip(stamps, stamps[1:], strict=False))
-    median = periods[len(periods) // 2] * 1e-9
-    assert 0.8 * 0.002 < median < 1.2 * 0.002, f'median period {median * 1e3:.3f} ms'
+    bins = Counter(round((b - a) / 250_000) for a, b in zip(stamps, stamps[1:], strict=False))
+    assert bins.most_common(1)[0][0] == 8, f'periods [0.25 ms]: {sorted(bins.items())}'
     assert accelerations and list(accelerations[-1].name) == JOINTS
     urdf = ElementTree.fromstring(descriptions[-1].data)
     moving = [j.get('name') for j in urdf.findall('joint') if j.get('type') != 'fixed']

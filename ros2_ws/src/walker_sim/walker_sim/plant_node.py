@@ -58,6 +58,8 @@ __all__ = ['PlantNode', 'main']
 _WATCH_PERIOD = 0.005
 # [s] period of /diagnostics and of the throttled warnings (wall clock)
 _REPORT_PERIOD = 1.0
+# Most control periods a late real-time tick steps at once to catch up with the wall clock
+_MAX_CATCH_UP = 10
 
 
 class PlantNode(Node):
@@ -130,11 +132,11 @@ class PlantNode(Node):
         self.lockstep.timeout = sim.lockstep_timeout
 
     # ------------------------------------------------------------------ stepping
-    def _advance(self) -> None:
-        """Step the plant one control period with the commands in force and publish."""
+    def _advance(self, periods: int = 1) -> None:
+        """Step the plant ``periods`` control periods with the commands in force; publish."""
         torques, expired = self.commands.torques(self._stamp)
         self._counts['expired'] += len(expired)
-        state = self.plant.step(torques, self.period)
+        state = self.plant.step(torques, periods * self.period)
         self._counts['refused'] += int(state.refused.sum())
         self._counts['saturated'] += int(state.saturated.sum())
         self._stamp = (self._stamp + self.period_ns if self.sim_time
@@ -142,13 +144,23 @@ class PlantNode(Node):
         self._publish(state)
 
     def _tick(self) -> None:
-        """Real time: one control period on the wall-clock timer."""
+        """Real time: advance the physics by the wall-clock time since the last tick.
+
+        Normally one control period. When the process was late (a loaded machine), the physics
+        still follows the wall clock, as hardware would: the missed periods are stepped at
+        once (up to :data:`_MAX_CATCH_UP`) with the commands in force, their states are never
+        published, and they are counted as overruns.
+        """
         now = self._steady_now()
-        if now - self._last_tick > 1.5 * self.period:
-            self._counts['overruns'] += 1
-        self._last_tick = now
+        periods = 1
+        if math.isfinite(self._last_tick):
+            periods = min(max(1, round((now - self._last_tick) / self.period)), _MAX_CATCH_UP)
+        self._counts['overruns'] += periods - 1
+        self._last_tick += periods * self.period
+        if not math.isfinite(self._last_tick) or now - self._last_tick > self.period:
+            self._last_tick = now  # too far behind to catch up: let time slip
         self.lockstep.count_misses(self.commands)
-        self._advance()
+        self._advance(periods)
 
     def _try_advance(self) -> None:
         """Sim time: step when every joint waited for has answered the current state."""
@@ -195,8 +207,7 @@ class PlantNode(Node):
         self.lockstep.begin(stamp, self._last_sent)
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
-        key = (state.base, *((r.status.mode, r.status.node, r.status.message)
-                             for r in state.grippers.values()))
+        key = (state.base, *((s.mode, s.node, s.message) for s in state.statuses.values()))
         due = state.time - self._gripper_sent >= 1.0 / self.sim.gripper_state_rate
         if force or due or key != self._gripper_key:
             self._grippers.publish(gripper_states_msg(state, self._stamp))
@@ -264,10 +275,8 @@ class PlantNode(Node):
             response.state = gripper_state_msg(state.grippers[gripper])
         if not response.success:
             self.get_logger().warning(f'gripper command refused: {response.message}')
-        elif state.grippers[gripper].status.mode in (GripperMode.SCREWING,
-                                                     GripperMode.UNSCREWING):
-            self.get_logger().info(f'gripper {gripper}: '
-                                   f'{state.grippers[gripper].status.mode.name}')
+        elif state.statuses[gripper].mode in (GripperMode.SCREWING, GripperMode.UNSCREWING):
+            self.get_logger().info(f'gripper {gripper}: {state.statuses[gripper].mode.name}')
         self._publish_grippers(state, force=True)
         return response
 

@@ -21,7 +21,9 @@ units. Time advances only by :meth:`WalkerPlant.step`; the physics is determinis
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pybullet
@@ -142,12 +144,14 @@ class PlantState:
         Friction torque [N*m] on each joint at the end of the last step.
     saturated, refused : ndarray of bool, shape (5,)
         The last command was clamped at the torque limit / was non-finite and replaced by 0.
-    grippers : dict
-        ``'a'``/``'b'`` -> :class:`GripperReport`.
+    statuses : dict
+        ``'a'``/``'b'`` -> :class:`~walker_sim.core.grippers.GripperStatus`.
     poses : dict
         ``'a'``/``'b'`` -> :class:`Pose` of the gripper's contact-point frame in the truss frame.
     base : str
         The gripper holding the walker (``'a'`` or ``'b'``); the other one is the tip.
+    measure : callable
+        Pose -> :class:`~walker_sim.core.grippers.HoleAlignment` against the nearest hole.
     """
 
     time: float
@@ -158,9 +162,19 @@ class PlantState:
     friction: np.ndarray
     saturated: np.ndarray
     refused: np.ndarray
-    grippers: dict[str, GripperReport]
+    statuses: dict[str, GripperStatus]
     poses: dict[str, Pose]
     base: str
+    measure: Callable[[Pose], HoleAlignment] = dataclasses.field(repr=False, compare=False)
+
+    @functools.cached_property
+    def grippers(self) -> dict[str, GripperReport]:
+        """``'a'``/``'b'`` -> :class:`GripperReport` (state and hole alignment).
+
+        Measured on first use: the node needs it at the gripper heartbeat, not every period.
+        """
+        return {g: GripperReport(self.statuses[g], self.measure(self.poses[g]))
+                for g in GRIPPERS}
 
     @property
     def tip(self) -> str:
@@ -404,15 +418,14 @@ class WalkerPlant:
     # ------------------------------------------------------------------ state
     def state(self) -> PlantState:
         """Return the plant's state now."""
-        poses = {g: self._gripper_pose(g) for g in GRIPPERS}
-        reports = {g: GripperReport(self._grippers.status(g), self._alignment(poses[g]))
-                   for g in GRIPPERS}
         return PlantState(
             time=self.time, position=np.array(self._position), velocity=np.array(self._velocity),
             acceleration=self._acceleration.copy(), effort=self._command.torque.copy(),
             friction=np.array(self._friction), saturated=self._command.saturated.copy(),
-            refused=self._command.refused.copy(), grippers=reports, poses=poses,
-            base=self._grippers.base)
+            refused=self._command.refused.copy(),
+            statuses={g: self._grippers.status(g) for g in GRIPPERS},
+            poses={g: self._gripper_pose(g) for g in GRIPPERS}, base=self._grippers.base,
+            measure=self._alignment)
 
     def _alignment(self, pose: Pose) -> HoleAlignment:
         return hole_alignment(pose.position, pose.z_axis, self.truss,
