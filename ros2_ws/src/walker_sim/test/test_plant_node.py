@@ -196,6 +196,7 @@ def test_sim_time_mode_is_lock_stepped_with_the_controllers(ros_env, probe):
     assert all(report[f'missed {joint}'] == '0' for joint in JOINTS), report
     stamps = sorted(states)
     assert stamps == [k * period for k in range(len(stamps))], 'a step was skipped'
+    assert all(list(m.name) == JOINTS and len(m.position) == 5 for m in states.values())
     for stamp in stamps[1:]:
         applied = list(states[stamp].effort)
         expected = [command(stamp // period - 1, joint) for joint in JOINTS]

@@ -116,6 +116,10 @@ class PlantNode(Node):
         self.get_logger().info(
             f'plant ready: {self.sim.clock_mode}, control {self.params.timing.control_rate:g} '
             f'Hz, physics {self.sim.physics_rate:g} Hz, base gripper {self.plant.state().base}')
+        if not self.sim_time and self.get_parameter('use_sim_time').value:
+            self.get_logger().warning(
+                'use_sim_time is true but sim.clock_mode is real_time: nobody publishes /clock '
+                'and the stamps are wall-clock time; set sim.clock_mode:=sim_time for sim time')
 
     def destroy_node(self) -> None:
         """Release the simulator with the node."""
