@@ -252,3 +252,22 @@ def test_the_node_refuses_to_start_on_invalid_parameters(ros_env, parameter, wor
         plant.process.wait(timeout=START_TIMEOUT)
         assert plant.process.returncode == 1
         assert 'refusing to start' in plant.output and words in plant.output
+
+
+def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_context):
+    from rclpy.parameter import Parameter
+
+    from walker_sim.plant_node import PlantNode
+
+    node = PlantNode(context=rclpy_context, namespace=NAMESPACE)
+    try:
+        applied = node.set_parameters([Parameter('sim.lockstep_timeout', value=2.5)])[0]
+        assert applied.successful and node.lockstep.timeout == 2.5
+        refused = node.set_parameters([Parameter('sim.command_timeout', value=-1.0)])[0]
+        assert not refused.successful and node.commands.command_timeout == 0.1
+        frozen = node.set_parameters([Parameter('sim.physics_rate', value=2000.0)])[0]
+        assert not frozen.successful and node.sim.physics_rate == 1000.0
+        described = node.describe_parameter('sim.physics_rate')
+        assert '[Hz]' in described.description and described.read_only
+    finally:
+        node.destroy_node()

@@ -92,7 +92,7 @@ class PlantNode(Node):
         self._grippers = self.create_publisher(GripperStates, 'gripper_states', LATCHED_QOS)
         self._description = self.create_publisher(String, 'robot_description', LATCHED_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._clock = (self.create_publisher(ClockMsg, '/clock', CLOCK_QOS)
+        self._clock_publisher = (self.create_publisher(ClockMsg, '/clock', CLOCK_QOS)
                        if self.sim_time else None)
         self.create_subscription(JointState, 'effort_commands', self._on_effort, COMMAND_QOS)
         self.create_service(GripperCommand, 'gripper_command', self._on_gripper_command)
@@ -199,8 +199,8 @@ class PlantNode(Node):
     # ------------------------------------------------------------------ publishing
     def _publish(self, state: PlantState) -> None:
         stamp = self._stamp
-        if self._clock is not None:
-            self._clock.publish(clock_msg(stamp))
+        if self._clock_publisher is not None:
+            self._clock_publisher.publish(clock_msg(stamp))
         self._accelerations.publish(accelerations_msg(state, stamp))
         self._joint_states.publish(joint_state_msg(state, stamp))
         self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
