@@ -58,8 +58,9 @@ class Camera:
         """Return a camera that shows the whole truss face."""
         width = (truss.columns - 1) * truss.spacing
         depth = (truss.rows - 1) * truss.spacing
-        centre = (truss.origin[0] + 0.5 * width, truss.origin[1] + 0.5 * depth, 0.2)
-        return cls(target=centre, distance=max(2.0, 1.3 * math.hypot(width, depth)))
+        centre = (truss.origin[0] + 0.5 * width, truss.origin[1] + 0.5 * depth, 0.0)
+        return cls(target=centre, distance=max(2.0, 1.25 * math.hypot(width, depth)),
+                   pitch=-45.0)
 
 
 class TrussScene:
