@@ -174,10 +174,10 @@ def main() -> int:
                         help='wall-clock seconds of the real-time jitter measurement')
     parser.add_argument('--output', type=Path, default=RESULTS)
     args = parser.parse_args()
-    import pybullet
+    from importlib.metadata import version
 
     machine = {'cpus': os.cpu_count(), 'load_average_1_5_15': list(os.getloadavg()),
-               'python': platform.python_version(), 'pybullet': pybullet.getAPIVersion(),
+               'python': platform.python_version(), 'pybullet': version('pybullet'),
                'date': time.strftime('%Y-%m-%d %H:%M:%S %Z')}
     physics = physics_benchmark(args.seconds)
     jitter = jitter_benchmark(args.jitter_seconds)
