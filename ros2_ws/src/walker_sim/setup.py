@@ -18,5 +18,9 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='The pybullet plant of the walker: the simulator that stands in for the hardware.',
     license='Apache-2.0',
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': [
+        'plant_node = walker_sim.plant_node:main',
+        'identify_modes = walker_sim.identify_modes:main',
+        'render_walker = walker_sim.render_walker:main',
+    ]},
 )

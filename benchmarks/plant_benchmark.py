@@ -1,0 +1,216 @@
+#!/usr/bin/env python3
+"""Benchmark of the plant: real-time factor and step cost, and real-time JointState jitter.
+
+Usage: ``python3 benchmarks/plant_benchmark.py [--seconds S] [--jitter-seconds S]``. Sets up the
+environment like the other scripts, runs in well under a minute, prints a table and writes
+``benchmarks/results/plant.json``.
+
+1. Sim-time physics, no ROS: the plant core (:class:`walker_sim.core.plant.WalkerPlant`) steps
+   the full model (flexible links, geared rotors, friction, the attachment) one control period
+   at a time, gripper a attached and gripper b swinging under torques that beat friction,
+   as in a step. Reports the real-time factor and the cost of a control step and of a physics
+   step (median and 99th percentile), and the same at rest.
+2. Real-time mode over DDS: the plant node runs in its own process (isolated ROS domain, loopback
+   discovery) and a subscriber here records the period between JointState messages: by their
+   stamps (the plant's timer) and by their arrival (what a controller sees).
+
+Timing depends on the machine and its load; the JSON records the CPU count and load average.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO_ROOT / 'scripts'))
+sys.path.insert(0, str(REPO_ROOT / 'tests'))
+
+import walker_env  # noqa: E402
+
+RESULTS = REPO_ROOT / 'benchmarks' / 'results' / 'plant.json'
+
+
+def percentiles(values, points=(50, 99)):
+    """Percentiles of a sequence (numpy), as a dict ``{'p50': ..., 'p99': ...}``."""
+    import numpy as np
+
+    array = np.asarray(values, dtype=float)
+    return {f'p{p}': float(np.percentile(array, p)) for p in points}
+
+
+def physics_benchmark(seconds: float) -> dict:
+    """Step the plant core in sim time; return real-time factors and step costs."""
+    import numpy as np
+
+    from walker_core.robot_parameters import load_walker_parameters
+    from walker_sim.core.config import StartConfiguration, load_sim_parameters
+    from walker_sim.core.plant import WalkerPlant
+
+    import pybullet
+
+    engine = []
+    step_simulation = pybullet.stepSimulation
+
+    def timed_step(*args, **kwargs):
+        tick = time.perf_counter()
+        step_simulation(*args, **kwargs)
+        engine.append(time.perf_counter() - tick)
+
+    params, sim = load_walker_parameters(), load_sim_parameters()
+    period = 1.0 / params.timing.control_rate
+    substeps = round(sim.physics_rate / params.timing.control_rate)
+    steps = round(seconds / period)
+    results = {'control_rate_hz': params.timing.control_rate,
+               'physics_rate_hz': sim.physics_rate, 'simulated_s': steps * period}
+    with WalkerPlant(params, sim) as plant:
+        start = StartConfiguration('a', sim.start.base_node, sim.start.other_node, False, 0.0)
+        limits = plant.drive.torque_limit
+        pybullet.stepSimulation = timed_step  # the plant calls it through the module
+        for case in ('moving', 'at_rest'):
+            plant.reset(start)
+            engine.clear()
+            costs = np.empty(steps)
+            began = time.perf_counter()
+            for k in range(steps):
+                t = k * period
+                torque = (0.6 * limits * np.sin(2 * np.pi * 0.5 * t + np.arange(5))
+                          if case == 'moving' else np.zeros(5))
+                tick = time.perf_counter()
+                plant.step(torque, period)
+                costs[k] = time.perf_counter() - tick
+            wall = time.perf_counter() - began
+            stepping = costs.sum()
+            results[case] = {
+                'real_time_factor': steps * period / stepping,
+                'real_time_factor_with_torque_generation': steps * period / wall,
+                'control_step_us': {k: v * 1e6 for k, v in percentiles(costs).items()},
+                'physics_step_us': {k: v * 1e6 / substeps
+                                    for k, v in percentiles(costs).items()},
+                'engine_step_us': {k: v * 1e6 for k, v in percentiles(engine).items()},
+                'engine_share': float(np.sum(engine) / stepping),
+                'engine_only_real_time_factor': steps * period / float(np.sum(engine)),
+            }
+        pybullet.stepSimulation = step_simulation
+    return results
+
+
+def jitter_benchmark(seconds: float) -> dict:
+    """Run the plant node in real time and measure the JointState period at a subscriber."""
+    import numpy as np
+    import rclpy
+    from ament_index_python.packages import get_package_prefix
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from sensor_msgs.msg import JointState
+
+    from ros_test_support import NodeProcess, isolated_domain, ros_environment
+    from walker_sim.messages import SENSOR_QOS
+
+    executable = str(Path(get_package_prefix('walker_sim')) / 'lib' / 'walker_sim' /
+                     'plant_node')
+    with isolated_domain() as domain:
+        env = ros_environment(domain)
+        context = Context()
+        rclpy.init(context=context, domain_id=domain)
+        arrivals, stamps = [], []
+        node = Node('jitter_probe', context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+
+        def on_state(message):
+            arrivals.append(time.monotonic_ns())
+            stamps.append(message.header.stamp.sec * 10**9 + message.header.stamp.nanosec)
+
+        node.create_subscription(JointState, '/walker/joint_states', on_state, SENSOR_QOS)
+        args = [executable, '--ros-args', '-r', '__ns:=/walker', '-p',
+                'sim.clock_mode:=real_time']
+        try:
+            with NodeProcess(args, env, 'plant'):
+                deadline = time.monotonic() + 60.0
+                while not arrivals and time.monotonic() < deadline:
+                    executor.spin_once(timeout_sec=0.05)
+                if not arrivals:
+                    raise RuntimeError('the plant node published nothing within 60 s')
+                time.sleep(1.0)  # let start-up settle
+                arrivals.clear()
+                stamps.clear()
+                deadline = time.monotonic() + seconds
+                while time.monotonic() < deadline:
+                    executor.spin_once(timeout_sec=0.01)
+        finally:
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown(context=context)
+    arrival_periods = np.diff(np.asarray(arrivals)) * 1e-6
+    stamp_periods = np.diff(np.unique(np.asarray(stamps))) * 1e-6
+    expected = len(np.unique(stamps))
+    span = (max(stamps) - min(stamps)) * 1e-9 if stamps else 0.0
+    return {
+        'measured_s': seconds,
+        'messages_received': len(arrivals),
+        'stamps_seen': expected,
+        'published_rate_hz': (expected - 1) / span if span else 0.0,
+        'stamp_period_ms': {**percentiles(stamp_periods, (1, 50, 99)),
+                            'max': float(stamp_periods.max())},
+        'arrival_period_ms': {**percentiles(arrival_periods, (1, 50, 99)),
+                              'max': float(arrival_periods.max())},
+    }
+
+
+def main() -> int:
+    """Run both benchmarks, print a table, write the JSON."""
+    walker_env.reexec_in_environment(os.path.abspath(__file__), sys.argv[1:])
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--seconds', type=float, default=10.0,
+                        help='simulated seconds of the physics benchmark')
+    parser.add_argument('--jitter-seconds', type=float, default=10.0,
+                        help='wall-clock seconds of the real-time jitter measurement')
+    parser.add_argument('--output', type=Path, default=RESULTS)
+    args = parser.parse_args()
+    from importlib.metadata import version
+
+    machine = {'cpus': os.cpu_count(), 'load_average_1_5_15': list(os.getloadavg()),
+               'python': platform.python_version(), 'pybullet': version('pybullet'),
+               'date': time.strftime('%Y-%m-%d %H:%M:%S %Z')}
+    physics = physics_benchmark(args.seconds)
+    jitter = jitter_benchmark(args.jitter_seconds)
+    machine['load_average_after'] = list(os.getloadavg())
+    document = {'machine': machine, 'physics': physics, 'real_time_jitter': jitter}
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(json.dumps(document, indent=2) + '\n')
+
+    print(f'plant benchmark ({machine["cpus"]} CPUs, load average '
+          f'{machine["load_average_1_5_15"][0]:.2f})')
+    print(f'physics, sim time: {physics["physics_rate_hz"]:g} Hz physics, '
+          f'{physics["control_rate_hz"]:g} Hz control, {physics["simulated_s"]:g} s simulated')
+    print(f'  {"case":<8} {"RTF":>6} {"control step p50/p99":>21} {"physics step p50/p99":>21} '
+          f'{"engine p50/p99":>15} {"engine RTF":>10}')
+    for case in ('moving', 'at_rest'):
+        row = physics[case]
+        control, step, engine = (row['control_step_us'], row['physics_step_us'],
+                                 row['engine_step_us'])
+        print(f'  {case:<8} {row["real_time_factor"]:>6.1f} '
+              f'{control["p50"]:>10.0f} / {control["p99"]:<5.0f} us '
+              f'{step["p50"]:>10.0f} / {step["p99"]:<5.0f} us '
+              f'{engine["p50"]:>5.0f} / {engine["p99"]:<5.0f} us '
+              f'{row["engine_only_real_time_factor"]:>7.1f}')
+    print(f'real time, JointState over DDS ({jitter["measured_s"]:g} s, '
+          f'{jitter["published_rate_hz"]:.1f} Hz published, '
+          f'{jitter["messages_received"]} received):')
+    for name in ('stamp_period_ms', 'arrival_period_ms'):
+        row = jitter[name]
+        print(f'  {name:<18} p1 {row["p1"]:.3f}  median {row["p50"]:.3f}  p99 {row["p99"]:.3f}'
+              f'  max {row["max"]:.3f} ms')
+    print(f'wrote {args.output.relative_to(REPO_ROOT)}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

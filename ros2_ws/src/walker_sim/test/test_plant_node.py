@@ -1,0 +1,273 @@
+"""The plant node over DDS: names, rates and QoS in both clock modes, the lock-step, the service.
+
+Each test starts the real node (``plant_node``, as ``ros2 run`` would) in a process of its own,
+in a ROS domain of its own, and talks to it from this process.
+"""
+
+import time
+import xml.etree.ElementTree as ElementTree
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from ros_test_support import NodeProcess
+
+pytestmark = pytest.mark.integration
+
+NAMESPACE = '/walker'
+JOINTS = ['a_yaw_joint', 'a_pitch_joint', 'vertex_joint', 'b_pitch_joint', 'b_yaw_joint']
+START_TIMEOUT = 60.0  # [s] start-up of a node on a loaded machine (not a measurement)
+
+
+def plant_executable():
+    from ament_index_python.packages import get_package_prefix
+
+    return str(Path(get_package_prefix('walker_sim')) / 'lib' / 'walker_sim' / 'plant_node')
+
+
+def start_plant(env, *parameters):
+    args = [plant_executable(), '--ros-args', '-r', f'__ns:={NAMESPACE}']
+    for parameter in parameters:
+        args += ['-p', parameter]
+    return NodeProcess(args, env, 'plant')
+
+
+class Probe:
+    """A test node in this process, with an executor of its own."""
+
+    def __init__(self, context, name='probe'):
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+
+        self.node = Node(name, context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, condition, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not condition():
+            self.executor.spin_once(timeout_sec=0.01)
+        return condition()
+
+    def spin_for(self, seconds):
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def close(self):
+        self.executor.remove_node(self.node)
+        self.node.destroy_node()
+        self.executor.shutdown()
+
+
+@pytest.fixture
+def probe(rclpy_context):
+    node = Probe(rclpy_context)
+    yield node
+    node.close()
+
+
+def stamp_ns(stamp):
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def qos_of(endpoints):
+    return [(e.qos_profile.reliability, e.qos_profile.durability) for e in endpoints]
+
+
+def wait_for_endpoints(probe, topic, publishers=True):
+    lookup = (probe.node.get_publishers_info_by_topic if publishers
+              else probe.node.get_subscriptions_info_by_topic)
+    probe.spin_until(lambda: lookup(topic), 10.0)
+    return lookup(topic)
+
+
+def test_real_time_mode_publishes_the_five_joints_at_the_control_rate(ros_env, probe):
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+
+    from walker_msgs.msg import GripperStates, JointAccelerations
+    from walker_sim.messages import LATCHED_QOS, SENSOR_QOS
+
+    states, accelerations, descriptions, grippers = [], [], [], []
+    node = probe.node
+    node.create_subscription(JointState, f'{NAMESPACE}/joint_states', states.append,
+                             SENSOR_QOS)
+    node.create_subscription(JointAccelerations, f'{NAMESPACE}/joint_accelerations',
+                             accelerations.append, SENSOR_QOS)
+    with start_plant(ros_env, 'sim.clock_mode:=real_time') as plant:
+        assert probe.spin_until(lambda: len(states) > 0, START_TIMEOUT), plant.output
+        states.clear()
+        probe.spin_until(lambda: len(states) >= 400, 10.0)
+        # late joiners get the latched topics
+        node.create_subscription(String, f'{NAMESPACE}/robot_description', descriptions.append,
+                                 LATCHED_QOS)
+        node.create_subscription(GripperStates, f'{NAMESPACE}/gripper_states',
+                                 grippers.append, LATCHED_QOS)
+        assert probe.spin_until(lambda: descriptions and grippers, 10.0), plant.output
+
+        reliable, volatile = ReliabilityPolicy.RELIABLE, DurabilityPolicy.VOLATILE
+        best_effort, latched = ReliabilityPolicy.BEST_EFFORT, DurabilityPolicy.TRANSIENT_LOCAL
+        topic = f'{NAMESPACE}/'.__add__
+        assert qos_of(wait_for_endpoints(probe, topic('joint_states'))) == [
+            (best_effort, volatile)]
+        assert qos_of(wait_for_endpoints(probe, topic('joint_accelerations'))) == [
+            (best_effort, volatile)]
+        assert qos_of(wait_for_endpoints(probe, topic('tip_pose'))) == [(best_effort, volatile)]
+        assert qos_of(wait_for_endpoints(probe, topic('gripper_states'))) == [
+            (reliable, latched)]
+        assert qos_of(wait_for_endpoints(probe, topic('robot_description'))) == [
+            (reliable, latched)]
+        assert qos_of(wait_for_endpoints(probe, topic('effort_commands'), False)) == [
+            (reliable, volatile)]
+        assert node.get_publishers_info_by_topic('/clock') == []
+    assert len(states) >= 100, 'too few joint states to judge the rate'
+    for message in states:
+        assert list(message.name) == JOINTS
+        assert len(message.position) == len(message.velocity) == len(message.effort) == 5
+    # On a loaded machine the timer is sometimes late (the plant then catches up with the
+    # wall clock and skips publishing); the period it keeps whenever it runs is still the
+    # most common one: the control period, 2 ms.
+    stamps = sorted({stamp_ns(m.header.stamp) for m in states})
+    bins = Counter(round((b - a) / 250_000) for a, b in zip(stamps, stamps[1:], strict=False))
+    assert bins.most_common(1)[0][0] == 8, f'periods [0.25 ms]: {sorted(bins.items())}'
+    assert accelerations and list(accelerations[-1].name) == JOINTS
+    urdf = ElementTree.fromstring(descriptions[-1].data)
+    moving = [j.get('name') for j in urdf.findall('joint') if j.get('type') != 'fixed']
+    assert moving == JOINTS
+    assert [g.name for g in grippers[-1].grippers] == ['a', 'b']
+    assert grippers[-1].base_gripper == 'a'
+
+
+def test_sim_time_mode_is_lock_stepped_with_the_controllers(ros_env, probe):
+    """Answer every state with five efforts: each is applied, /clock advances one period."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import JointState
+
+    from walker_sim.messages import COMMAND_QOS, SENSOR_QOS
+
+    period = 2_000_000  # [ns] the default control rate, 500 Hz
+    node = probe.node
+    states, clocks = {}, []
+    efforts = node.create_publisher(JointState, f'{NAMESPACE}/effort_commands', COMMAND_QOS)
+    hold = {'answer': True}
+
+    def command(step, joint):
+        return 0.001 * ((7 * step + 3 * JOINTS.index(joint)) % 100) - 0.05  # N*m, distinct
+
+    def on_state(message):
+        stamp = stamp_ns(message.header.stamp)
+        states.setdefault(stamp, message)
+        if not hold['answer']:
+            return
+        # a controller answers every state it gets, including the plant's re-sends of t=0
+        for joint in JOINTS:
+            answer = JointState(name=[joint], effort=[command(stamp // period, joint)])
+            answer.header.stamp = message.header.stamp
+            efforts.publish(answer)
+
+    node.create_subscription(JointState, f'{NAMESPACE}/joint_states', on_state, SENSOR_QOS)
+    diagnostics = []
+    node.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
+    # a deep reliable queue, so that this test sees every tick (the plant offers keep-last-1)
+    node.create_subscription(Clock, '/clock', lambda m: clocks.append(stamp_ns(m.clock)),
+                             QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    with start_plant(ros_env, 'sim.clock_mode:=sim_time', 'sim.lockstep_timeout:=30.0') as plant:
+        assert probe.spin_until(lambda: len(states) >= 300, START_TIMEOUT + 60), plant.output
+        clock_qos = qos_of(wait_for_endpoints(probe, '/clock'))
+        # stop answering: the plant must wait (its timeout is 30 s)
+        hold['answer'] = False
+        probe.spin_for(0.3)
+        newest = max(states)
+        probe.spin_for(0.5)
+        assert max(states) == newest, 'the plant stepped without the efforts'
+        hold['answer'] = True
+        on_state(states[newest])
+        assert probe.spin_until(lambda: max(states) > newest + 10 * period, 30.0)
+        hold['answer'] = False
+        probe.spin_until(lambda: clocks and max(clocks) >= max(states), 5.0)
+        diagnostics.clear()
+        assert probe.spin_until(lambda: diagnostics, 5.0), plant.output
+    report = {v.key: v.value for v in diagnostics[-1].status[0].values}
+    assert all(report[f'missed {joint}'] == '0' for joint in JOINTS), report
+    stamps = sorted(states)
+    assert stamps == [k * period for k in range(len(stamps))], 'a step was skipped'
+    assert all(list(m.name) == JOINTS and len(m.position) == 5 for m in states.values())
+    for stamp in stamps[1:]:
+        applied = list(states[stamp].effort)
+        expected = [command(stamp // period - 1, joint) for joint in JOINTS]
+        assert applied == pytest.approx(expected, abs=1e-12), f'at t={stamp * 1e-9:.3f} s'
+    ticks = sorted(set(clocks))
+    assert set(stamps) <= set(ticks)
+    assert all(b - a == period for a, b in zip(ticks, ticks[1:], strict=False))
+    assert clock_qos == [(ReliabilityPolicy.RELIABLE, clock_qos[0][1])]
+
+
+def test_the_gripper_service_releases_one_gripper_and_refuses_the_other(ros_env, probe):
+    from walker_msgs.msg import GripperState, GripperStates
+    from walker_msgs.srv import GripperCommand
+    from walker_sim.messages import LATCHED_QOS
+
+    node = probe.node
+    grippers = []
+    node.create_subscription(GripperStates, f'{NAMESPACE}/gripper_states', grippers.append,
+                             LATCHED_QOS)
+    client = node.create_client(GripperCommand, f'{NAMESPACE}/gripper_command')
+
+    def call(gripper, command):
+        future = client.call_async(GripperCommand.Request(gripper=gripper, command=command))
+        assert probe.spin_until(future.done, 10.0)
+        return future.result()
+
+    def mode_of(gripper):
+        return {g.name: g.state for g in grippers[-1].grippers}[gripper] if grippers else None
+
+    with start_plant(ros_env, 'sim.clock_mode:=real_time') as plant:
+        assert probe.spin_until(client.service_is_ready, START_TIMEOUT), plant.output
+        released = call('b', GripperCommand.Request.UNSCREW)
+        assert released.success and released.state.state == GripperState.UNSCREWING
+        refused = call('a', GripperCommand.Request.UNSCREW)
+        assert not refused.success and 'interlock' in refused.message
+        assert refused.state.state == GripperState.ATTACHED
+        assert probe.spin_until(lambda: mode_of('b') == GripperState.FREE, 10.0)
+        assert grippers[-1].base_gripper == 'a'
+        unknown = call('c', GripperCommand.Request.SCREW_IN)
+        assert not unknown.success and "unknown gripper 'c'" in unknown.message
+        again = call('b', GripperCommand.Request.SCREW_IN)
+        assert again.success and again.state.state == GripperState.SCREWING
+        assert probe.spin_until(lambda: mode_of('b') == GripperState.ATTACHED, 10.0)
+
+
+@pytest.mark.parametrize('parameter, words', [
+    ('sim.clock_mode:=fast', 'sim.clock_mode'),
+    ('sim.start.other_node:=n9_9', 'sim.start.other_node'),
+    ('sim.physics_rate:=1250.0', 'integer multiple'),
+])
+def test_the_node_refuses_to_start_on_invalid_parameters(ros_env, parameter, words):
+    with start_plant(ros_env, parameter) as plant:
+        plant.process.wait(timeout=START_TIMEOUT)
+        assert plant.process.returncode == 1
+        assert 'refusing to start' in plant.output and words in plant.output
+
+
+def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_context):
+    from rclpy.parameter import Parameter
+
+    from walker_sim.plant_node import PlantNode
+
+    node = PlantNode(context=rclpy_context, namespace=NAMESPACE)
+    try:
+        applied = node.set_parameters([Parameter('sim.lockstep_timeout', value=2.5)])[0]
+        assert applied.successful and node.lockstep.timeout == 2.5
+        refused = node.set_parameters([Parameter('sim.command_timeout', value=-1.0)])[0]
+        assert not refused.successful and node.commands.command_timeout == 0.1
+        frozen = node.set_parameters([Parameter('sim.physics_rate', value=2000.0)])[0]
+        assert not frozen.successful and node.sim.physics_rate == 1000.0
+        described = node.describe_parameter('sim.physics_rate')
+        assert '[Hz]' in described.description and described.read_only
+    finally:
+        node.destroy_node()

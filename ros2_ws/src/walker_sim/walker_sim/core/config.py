@@ -1,0 +1,106 @@
+"""The plant's parameter section ``sim.*`` of the shared parameter file.
+
+The values live in ``walker_core/config/walker.yaml`` (section ``/**``, group ``sim``), each with
+its source; this module declares them (description, unit, range) and checks the rules that tie
+them to the shared parameters (nodes on the truss, physics rate a multiple of the control rate).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+from collections.abc import Mapping
+
+from walker_core.parameter_schema import (
+    ParameterError, load_parameter_file, parameter, section_from_flat)
+from walker_core.robot_parameters import default_parameter_file
+from walker_core.truss import Truss, UnknownNodeError
+
+__all__ = ['CLOCK_MODES', 'StartConfiguration', 'SimParameters', 'load_sim_parameters',
+           'check_against_walker']
+
+#: ``sim_time``: the plant publishes /clock and is lock-stepped with the controllers;
+#: ``real_time``: the plant steps on a wall-clock timer, like hardware.
+CLOCK_MODES = ('sim_time', 'real_time')
+
+
+@dataclasses.dataclass(frozen=True)
+class StartConfiguration:
+    """Where the robot is when the plant starts or is reset."""
+
+    base_gripper: str = parameter('gripper screwed in at start, acting as the base',
+                                  choices=('a', 'b'))
+    base_node: str = parameter('truss node the base gripper is screwed into at start')
+    other_node: str = parameter('truss node under the other gripper at start')
+    other_attached: bool = parameter('whether the other gripper starts screwed into other_node')
+    other_height: float = parameter(
+        "height of the other gripper's contact point above other_node when it starts free",
+        'm', 0.0, 0.5)
+
+    def __post_init__(self) -> None:
+        if self.base_node == self.other_node:
+            raise ParameterError(f'sim.start.other_node must differ from base_node '
+                                 f'({self.base_node!r})')
+        if self.other_attached and self.other_height != 0.0:
+            raise ParameterError(
+                f'sim.start.other_height ({self.other_height} m) must be 0 when '
+                f'other_attached is true: an attached gripper sits in its hole')
+
+
+@dataclasses.dataclass(frozen=True)
+class SimParameters:
+    """Settings of the pybullet plant (``sim.*``)."""
+
+    clock_mode: str = parameter(
+        'sim_time: publish /clock, lock-step with the controllers; real_time: wall clock',
+        choices=CLOCK_MODES)
+    physics_rate: float = parameter('rate of the physics steps (a multiple of the control rate)',
+                                    'Hz', 100.0, 100000.0)
+    lockstep_timeout: float = parameter(
+        'sim time: wall-clock wait for the five efforts of a step before the last ones are '
+        'applied', 's', 0.001, 60.0, read_only=False)
+    startup_resend_period: float = parameter(
+        'sim time: wall-clock period at which the first state is re-sent until every '
+        'controller answered', 's', 0.01, 10.0, read_only=False)
+    command_timeout: float = parameter(
+        'a joint whose last effort command is older than this (plant clock) gets zero torque',
+        's', 0.001, 10.0, read_only=False)
+    gripper_state_rate: float = parameter('heartbeat rate of gripper_states', 'Hz', 0.1, 1000.0,
+                                          read_only=False)
+    stiction_velocity: float = parameter(
+        'joint speed below which a joint is stuck and must break away at the stiction level',
+        'rad/s', 1e-6, 1.0)
+    start: StartConfiguration
+
+    @classmethod
+    def from_flat(cls, flat: Mapping[str, Any]) -> 'SimParameters':
+        """Build and validate from flat dotted names (``sim.physics_rate``, ...)."""
+        return section_from_flat(cls, flat, 'sim.')
+
+
+def check_against_walker(sim: SimParameters, params) -> None:
+    """Check the rules that tie ``sim.*`` to the shared parameters.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter: start nodes not on the truss, or a physics rate that is not an
+        integer multiple of ``timing.control_rate``.
+    """
+    truss = Truss.from_parameters(params)
+    for name in ('base_node', 'other_node'):
+        try:
+            truss.index(getattr(sim.start, name))
+        except UnknownNodeError as error:
+            raise ParameterError(f'sim.start.{name}: {error}') from None
+    ratio = sim.physics_rate / params.timing.control_rate
+    if ratio < 1.0 - 1e-9 or not math.isclose(ratio, round(ratio), rel_tol=0, abs_tol=1e-9):
+        raise ParameterError(
+            f'sim.physics_rate ({sim.physics_rate:g} Hz) must be an integer multiple of '
+            f'timing.control_rate ({params.timing.control_rate:g} Hz)')
+
+
+def load_sim_parameters(path=None) -> SimParameters:
+    """Load ``sim.*`` from a parameter file (default: the installed ``walker.yaml``)."""
+    return SimParameters.from_flat(load_parameter_file(path or default_parameter_file()))

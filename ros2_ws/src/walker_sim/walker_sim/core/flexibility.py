@@ -1,0 +1,273 @@
+"""Stiffness and damping of the flexible links, computed from the parameters.
+
+The paper (section 3) gives the structural modes the joint controllers face: about 18 rad/s at
+joint 1 and about 80 rad/s at joints 2 and 3. The plant's links are rigid segments joined by
+passive bending joints (:mod:`walker_core.urdf`); here the bending springs are sized so that the
+model has those modes.
+
+What "the mode seen at joint i" means here
+------------------------------------------
+The resonance of joint i's own (collocated) response, torque at joint i to motion of joint i,
+with the other four joints held still, gripper a attached and gripper b free, at the default
+stance (gripper b one truss spacing from gripper a, both vertical, elbow up): the lowest
+flexible mode of that system that joint i's encoder and accelerometer show, i.e. whose residue
+``phi_ik^2`` (``phi`` the mass-normalised mode shapes) in joint i's response is not negligible.
+It is the first resonance of the open loop the joint controller closes, which the paper's
+low-pass filters must keep out of it. Held joints see the lower, "clamped" modes of the arm
+(reported as ``FlexTuning.clamped``); a joint under feedback sees something in between.
+:mod:`walker_sim.core.identification` measures the same modes on the simulated plant.
+
+Bending in the arm plane (about the pitch axes) is what joints 2-3 see; bending out of it (seen
+in yaw) is what joint 1 sees; at the default stance the two planes decouple, so one stiffness
+per plane sets each target. Joints 2 and 3 cannot both be matched exactly with one in-plane
+stiffness; it is chosen so that the geometric mean of their modes is the target.
+
+Damping is stiffness-proportional per plane, ``c = 2 zeta k / omega_target``: the target mode
+gets the damping ratio ``robot.flexibility.damping_ratio``, higher modes more.
+
+The modes depend on the configuration; the ones computed and measured here are those of the
+default stance.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pybullet
+import scipy.linalg
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.kinematics import WalkerKinematics
+from walker_core.urdf import flex_joints, plant_urdf, rotor_joint_name
+from walker_sim.core.bullet import direct_client, index_body, load_urdf_text
+
+__all__ = ['LinearModel', 'FlexTuning', 'default_stance', 'linear_model', 'tune_flexibility',
+           'first_visible_mode', 'IDENTIFIED_JOINTS', 'VISIBLE_RESIDUE']
+
+#: The joints whose modes the paper gives, with gripper a as base: J1, J2, J3.
+IDENTIFIED_JOINTS = ('a_yaw_joint', 'a_pitch_joint', 'vertex_joint')
+
+_RIGID_MODE = 1e-3  # [rad/s] below this a mode is a rigid-body motion
+#: Fraction of the largest residue above which a mode counts as seen at a joint.
+VISIBLE_RESIDUE = 0.01
+_MAX_ITERATIONS = 20
+_RELATIVE_TOLERANCE = 1e-10
+
+
+def default_stance(params) -> np.ndarray:
+    """Joint angles [rad] of the default stance: gripper b one truss spacing from gripper a.
+
+    Both grippers vertical (alpha = 0), elbow up, by the closed-form inverse kinematics of
+    :mod:`walker_core.kinematics`; gripper a is the base.
+    """
+    kinematics = WalkerKinematics.from_parameters(params)
+    return kinematics.inverse([0.0, params.truss.spacing, 0.0, 0.0, 0.0])
+
+
+@dataclasses.dataclass(frozen=True)
+class LinearModel:
+    """The walker linearised about a stance, gripper a fixed, rotors folded into their joints.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Degrees of freedom: the five actuated joints, then the bending joints.
+    mass : ndarray
+        Joint-space inertia matrix [kg*m^2] over ``names``; each actuated joint includes its
+        geared rotor (``n^2 I_m`` on the diagonal, exactly as the plant simulates it).
+    planes : dict
+        Bending joint name -> ``'in_plane'`` or ``'out_of_plane'``.
+    stance : ndarray, shape (5,)
+        Actuated joint angles [rad] of the stance.
+    """
+
+    names: tuple[str, ...]
+    mass: np.ndarray
+    planes: dict[str, str]
+    stance: np.ndarray
+
+    def modes(self, free: tuple[str, ...], in_plane: float, out_of_plane: float
+              ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+        """Natural frequencies and mass-normalised mode shapes with some joints free.
+
+        Parameters
+        ----------
+        free : tuple of str
+            Actuated joints left free; the others are held still.
+        in_plane, out_of_plane : float
+            Bending stiffness [N*m/rad] of the two planes.
+
+        Returns
+        -------
+        frequencies : ndarray
+            Natural frequencies [rad/s], ascending (rigid-body modes are 0).
+        shapes : ndarray
+            Mass-normalised mode shapes, one column per mode, over ``dofs``.
+        dofs : list of str
+            The degrees of freedom of the shapes: ``free`` then the bending joints.
+        """
+        dofs = [*free, *self.planes]
+        index = [self.names.index(name) for name in dofs]
+        mass = self.mass[np.ix_(index, index)]
+        stiffness = np.diag([0.0 if name in free else
+                             (in_plane if self.planes[name] == 'in_plane' else out_of_plane)
+                             for name in dofs])
+        eigenvalues, shapes = scipy.linalg.eigh(stiffness, mass)
+        return np.sqrt(np.clip(eigenvalues, 0.0, None)), shapes, dofs
+
+    def joint_modes(self, joint: str, in_plane: float, out_of_plane: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """Flexible modes of joint ``joint``'s own response, the other joints held.
+
+        Returns
+        -------
+        frequencies : ndarray
+            Natural frequencies [rad/s] of the flexible modes, ascending.
+        residues : ndarray
+            Residue ``phi^2`` [1/(kg*m^2)] of each mode in the joint's accelerance.
+        """
+        frequencies, shapes, _ = self.modes((joint,), in_plane, out_of_plane)
+        flexible = frequencies > _RIGID_MODE
+        return frequencies[flexible], shapes[0, flexible] ** 2
+
+    def joint_mode(self, joint: str, in_plane: float, out_of_plane: float) -> float:
+        """Return the first structural mode [rad/s] seen at ``joint`` (module docstring)."""
+        return first_visible_mode(*self.joint_modes(joint, in_plane, out_of_plane))
+
+
+def first_visible_mode(frequencies, residues) -> float:
+    """Lowest mode whose residue is at least :data:`VISIBLE_RESIDUE` of the largest one.
+
+    Modes of the other bending plane have no residue at all at a joint (the planes decouple
+    at the stance); the threshold only has to tell zero from non-zero.
+    """
+    frequencies = np.asarray(frequencies, dtype=float)
+    residues = np.asarray(residues, dtype=float)
+    visible = residues >= VISIBLE_RESIDUE * residues.max()
+    return float(frequencies[visible].min())
+
+
+def linear_model(params, stance=None) -> LinearModel:
+    """Linearise the plant model about a stance (default: :func:`default_stance`).
+
+    The inertia comes from pybullet's own ``calculateMassMatrix`` of the URDF the plant loads,
+    in a throwaway headless client, so it is the inertia the plant simulates.
+    """
+    stance = default_stance(params) if stance is None else np.asarray(stance, dtype=float)
+    gear = params.robot.drive.role_array('gear_ratio')
+    bends = flex_joints(params.robot.flexibility.segments_per_link)
+    with direct_client() as client:
+        body = load_urdf_text(client, plant_urdf(params), fixed_base=True)
+        index = index_body(client, body)
+        name_of = {joint: name for name, joint in index.joints.items()}
+        dof_of = {name_of[joint]: dof for dof, joint in enumerate(index.movable)}
+        positions = np.zeros(len(index.movable))
+        for name, angle in zip(PHYSICAL_JOINT_NAMES, stance, strict=True):
+            positions[dof_of[name]] = angle
+        full = np.array(pybullet.calculateMassMatrix(body, positions.tolist(),
+                                                     physicsClientId=client))
+    names = (*PHYSICAL_JOINT_NAMES, *(bend.name for bend in bends))
+    # Reduced coordinates: the rotor turns n times its joint, so qdot_full = T qdot_reduced.
+    transform = np.zeros((len(positions), len(names)))
+    for column, name in enumerate(names):
+        transform[dof_of[name], column] = 1.0
+        if name in PHYSICAL_JOINT_NAMES:
+            ratio = gear[PHYSICAL_JOINT_NAMES.index(name)]
+            transform[dof_of[rotor_joint_name(name)], column] = ratio
+    mass = transform.T @ full @ transform
+    return LinearModel(names=names, mass=0.5 * (mass + mass.T),
+                       planes={bend.name: bend.plane for bend in bends}, stance=stance)
+
+
+@dataclasses.dataclass(frozen=True)
+class FlexTuning:
+    """Bending stiffness and damping of the links, and the modes they give.
+
+    Attributes
+    ----------
+    in_plane_stiffness, out_of_plane_stiffness : float
+        Stiffness of each bending joint [N*m/rad] in the arm plane and out of it.
+    in_plane_damping, out_of_plane_damping : float
+        Damping of each bending joint [N*m*s/rad].
+    predicted : dict
+        Joint name -> predicted mode seen at that joint [rad/s] (J1-J3, default stance).
+    clamped : tuple of float
+        Lowest natural frequencies [rad/s] with all five joints held (default stance).
+    stiffest : float
+        Highest natural frequency [rad/s] of the model (all joints free or all held), which
+        bounds the physics step.
+    stance : tuple of float
+        The stance [rad] of the figures above.
+    """
+
+    in_plane_stiffness: float
+    out_of_plane_stiffness: float
+    in_plane_damping: float
+    out_of_plane_damping: float
+    predicted: dict[str, float]
+    clamped: tuple[float, ...]
+    stiffest: float
+    stance: tuple[float, ...]
+
+    def minimum_physics_rate(self) -> float:
+        """Lowest physics rate [Hz] that integrates the stiffest mode with margin.
+
+        Semi-implicit Euler, which pybullet uses, is stable for ``omega * h < 2``; we ask for
+        ``omega * h <= 1``.
+        """
+        return self.stiffest
+
+    def stiffness_of(self, plane: str) -> float:
+        """Stiffness [N*m/rad] of a bending joint of the given plane."""
+        return self.in_plane_stiffness if plane == 'in_plane' else self.out_of_plane_stiffness
+
+    def damping_of(self, plane: str) -> float:
+        """Damping [N*m*s/rad] of a bending joint of the given plane."""
+        return self.in_plane_damping if plane == 'in_plane' else self.out_of_plane_damping
+
+
+def tune_flexibility(params, model: LinearModel | None = None) -> FlexTuning:
+    """Size the bending springs so the model has the paper's modes at the default stance.
+
+    Parameters
+    ----------
+    params : WalkerParameters
+        ``robot.flexibility.joint1_mode``, ``joints23_mode`` and ``damping_ratio`` are the
+        targets.
+    model : LinearModel, optional
+        The linearised model (default: :func:`linear_model` of ``params``).
+
+    Returns
+    -------
+    FlexTuning
+        Stiffness and damping per plane, and the predicted modes.
+    """
+    model = linear_model(params) if model is None else model
+    flexibility = params.robot.flexibility
+    yaw_joint, pitch_joint, vertex_joint = IDENTIFIED_JOINTS
+    in_plane, out_of_plane = 1.0, 1.0
+    for _ in range(_MAX_ITERATIONS):
+        yaw = model.joint_mode(yaw_joint, in_plane, out_of_plane)
+        pitch = model.joint_mode(pitch_joint, in_plane, out_of_plane)
+        vertex = model.joint_mode(vertex_joint, in_plane, out_of_plane)
+        new_out = out_of_plane * (flexibility.joint1_mode / yaw) ** 2
+        new_in = in_plane * flexibility.joints23_mode ** 2 / (pitch * vertex)
+        converged = (math.isclose(new_out, out_of_plane, rel_tol=_RELATIVE_TOLERANCE)
+                     and math.isclose(new_in, in_plane, rel_tol=_RELATIVE_TOLERANCE))
+        in_plane, out_of_plane = new_in, new_out
+        if converged:
+            break
+    predicted = {joint: model.joint_mode(joint, in_plane, out_of_plane)
+                 for joint in IDENTIFIED_JOINTS}
+    held, _, _ = model.modes((), in_plane, out_of_plane)
+    free, _, _ = model.modes(PHYSICAL_JOINT_NAMES, in_plane, out_of_plane)
+    zeta = flexibility.damping_ratio
+    return FlexTuning(
+        in_plane_stiffness=in_plane, out_of_plane_stiffness=out_of_plane,
+        in_plane_damping=2.0 * zeta * in_plane / flexibility.joints23_mode,
+        out_of_plane_damping=2.0 * zeta * out_of_plane / flexibility.joint1_mode,
+        predicted=predicted, clamped=tuple(float(w) for w in held[:4]),
+        stiffest=float(max(held.max(), free.max())),
+        stance=tuple(float(a) for a in model.stance))

@@ -1,0 +1,611 @@
+"""The walker plant: pybullet behind ``reset()``, ``step(torques, dt)`` and ``state()``.
+
+What it simulates (zero gravity, headless DIRECT client, explicit client id):
+
+* the robot of :func:`walker_core.urdf.plant_urdf`: rigid bodies from the parameters, each
+  flexible link split into rigid segments joined by bending springs in both planes (stiffness
+  and damping from :mod:`walker_sim.core.flexibility`, applied by pybullet's per-step PD on the
+  bending joints: an exact linear spring-damper evaluated every physics step), each actuated
+  joint geared ``n:1`` to a rotor of inertia ``I_m`` (the reflected ``n^2 I_m`` of eqs
+  (9)-(13));
+* the drives of :mod:`walker_sim.core.motor`: torque limits, refusal of non-finite commands,
+  Coulomb friction with stiction; hard end stops at the joint limits;
+* the truss and the grippers of :mod:`walker_sim.core.grippers`: a screwed-in gripper is a
+  rigid pybullet constraint to its node, so either gripper can hold the robot (the root link is
+  gripper a, whose base is otherwise free: zero gravity, nothing else holds it).
+
+All per-joint arrays are in physical joint order (``a_yaw_joint`` ... ``b_yaw_joint``), SI
+units. Time advances only by :meth:`WalkerPlant.step`; the physics is deterministic.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pybullet
+
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, other_gripper
+from walker_core.kinematics import WalkerKinematics, invert_transform
+from walker_core.parameter_schema import ParameterError
+from walker_core.truss import Truss
+from walker_core.urdf import GRIPPER_LINKS, flex_joints, plant_urdf, rotor_joint_name
+from walker_sim.core.bullet import free_dynamics, index_body, load_urdf_text
+from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
+from walker_sim.core.flexibility import FlexTuning, tune_flexibility
+from walker_sim.core.grippers import (
+    GripperCommandError, GripperLogic, GripperMode, GripperStatus, HoleAlignment,
+    ScrewOutcome, hole_alignment)
+from walker_sim.core.motor import DriveCommand, DriveModel
+
+__all__ = ['PlantError', 'Pose', 'GripperReport', 'PlantState', 'WalkerPlant',
+           'SOLVER_ITERATIONS', 'SOLVER_RESIDUAL']
+
+# Largest force [N] and torque [N*m] the rigid constraints (attachments, gears) may apply:
+# far above anything the drives can produce, so they never give way.
+_CONSTRAINT_FORCE = 1.0e6
+# Torque [N*m] a held joint's brake may apply (identification holds joints still with it).
+_HOLD_TORQUE = 1.0e6
+# Largest spring torque [N*m] of a bending joint (pybullet's PD needs a bound).
+_BEND_TORQUE = 1.0e6
+#: Constraint solver (attachments, gears, friction) iterations and residual: pybullet's
+#: defaults. More change the walker's motion by far less than anything a controller sees
+#: (measured), and cost up to twice the time per step when the robot moves.
+SOLVER_ITERATIONS = 50
+SOLVER_RESIDUAL = 1e-7
+
+
+class PlantError(ValueError):
+    """A request the plant cannot honour (bad step, bad command); nothing changed."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Pose:
+    """A frame in the truss (world) frame.
+
+    Attributes
+    ----------
+    position : ndarray, shape (3,)
+        Origin [m].
+    orientation : ndarray, shape (4,)
+        Unit quaternion ``(x, y, z, w)``.
+    """
+
+    position: np.ndarray
+    orientation: np.ndarray
+
+    @property
+    def z_axis(self) -> tuple[float, float, float]:
+        """Unit z axis of the frame, in the truss frame (the gripper axis)."""
+        x, y, z, w = (float(v) for v in self.orientation)
+        return (2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y))
+
+    def matrix(self) -> np.ndarray:
+        """Homogeneous transform (4x4)."""
+        transform = np.eye(4)
+        transform[:3, :3] = np.reshape(pybullet.getMatrixFromQuaternion(
+            self.orientation.tolist()), (3, 3))
+        transform[:3, 3] = self.position
+        return transform
+
+    @classmethod
+    def from_matrix(cls, transform: np.ndarray) -> 'Pose':
+        """Pose of a homogeneous transform."""
+        return cls(np.array(transform[:3, 3], dtype=float),
+                   _quaternion_from_matrix(transform[:3, :3]))
+
+
+def _quaternion_from_matrix(rotation: np.ndarray) -> np.ndarray:
+    """Return the unit quaternion ``(x, y, z, w)`` of a rotation matrix."""
+    m = np.asarray(rotation, dtype=float)
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
+    q = np.array(q)
+    return q / np.linalg.norm(q)
+
+
+@dataclasses.dataclass(frozen=True)
+class GripperReport:
+    """A gripper's state and where it is relative to the nearest hole."""
+
+    status: GripperStatus
+    alignment: HoleAlignment
+
+
+@dataclasses.dataclass(frozen=True)
+class PlantState:
+    """The plant at one instant.
+
+    Attributes
+    ----------
+    time : float
+        Simulated time [s] since the last reset.
+    position, velocity : ndarray, shape (5,)
+        Joint angles [rad] and speeds [rad/s].
+    acceleration : ndarray, shape (5,)
+        Mean joint acceleration [rad/s^2] over the last step (velocity change over its length).
+    effort : ndarray, shape (5,)
+        Torque [N*m] the drives applied during the last step (after limits and refusals).
+    friction : ndarray, shape (5,)
+        Friction torque [N*m] on each joint at the end of the last step.
+    saturated, refused : ndarray of bool, shape (5,)
+        The last command was clamped at the torque limit / was non-finite and replaced by 0.
+    statuses : dict
+        ``'a'``/``'b'`` -> :class:`~walker_sim.core.grippers.GripperStatus`.
+    poses : dict
+        ``'a'``/``'b'`` -> :class:`Pose` of the gripper's contact-point frame in the truss frame.
+    base : str
+        The gripper holding the walker (``'a'`` or ``'b'``); the other one is the tip.
+    measure : callable
+        Pose -> :class:`~walker_sim.core.grippers.HoleAlignment` against the nearest hole.
+    """
+
+    time: float
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    effort: np.ndarray
+    friction: np.ndarray
+    saturated: np.ndarray
+    refused: np.ndarray
+    statuses: dict[str, GripperStatus]
+    poses: dict[str, Pose]
+    base: str
+    measure: Callable[[Pose], HoleAlignment] = dataclasses.field(repr=False, compare=False)
+
+    @functools.cached_property
+    def grippers(self) -> dict[str, GripperReport]:
+        """``'a'``/``'b'`` -> :class:`GripperReport` (state and hole alignment).
+
+        Measured on first use: the node needs it at the gripper heartbeat, not every period.
+        """
+        return {g: GripperReport(self.statuses[g], self.measure(self.poses[g]))
+                for g in GRIPPERS}
+
+    @property
+    def tip(self) -> str:
+        """The gripper that is not the base."""
+        return other_gripper(self.base)
+
+
+class WalkerPlant:
+    """The simulated walker on its truss.
+
+    Parameters
+    ----------
+    params : WalkerParameters
+        The shared robot, truss, gripper and timing parameters.
+    sim : SimParameters
+        The plant's own settings (``sim.*``).
+    flexibility : FlexTuning, optional
+        Bending stiffness and damping; computed from ``params`` when omitted.
+
+    Raises
+    ------
+    ParameterError
+        If the settings are inconsistent (start nodes off the truss, physics rate not a multiple
+        of the control rate or too low for the stiffest mode of the model, unreachable start).
+    """
+
+    def __init__(self, params, sim: SimParameters, flexibility: FlexTuning | None = None
+                 ) -> None:
+        check_against_walker(sim, params)
+        self.params = params
+        self.sim = sim
+        self.flexibility = tune_flexibility(params) if flexibility is None else flexibility
+        needed = self.flexibility.minimum_physics_rate()
+        if sim.physics_rate < needed:
+            raise ParameterError(
+                f'sim.physics_rate ({sim.physics_rate:g} Hz) is too low for the stiffest mode '
+                f'of the model ({self.flexibility.stiffest:.0f} rad/s): it needs at least '
+                f'{needed:.0f} Hz (fewer robot.flexibility.segments_per_link also lowers it)')
+        self.physics_step = 1.0 / sim.physics_rate
+        self.drive = DriveModel.from_parameters(params, sim)
+        self.truss = Truss.from_parameters(params)
+        self.kinematics = WalkerKinematics.from_parameters(params)
+        self._grippers = GripperLogic.from_parameters(params)
+        self.client = pybullet.connect(pybullet.DIRECT)
+        try:
+            self._build()
+            self.reset()
+        except Exception:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------ set-up
+    def _build(self) -> None:
+        client = self.client
+        pybullet.setGravity(0.0, 0.0, 0.0, physicsClientId=client)
+        pybullet.setPhysicsEngineParameter(fixedTimeStep=self.physics_step, numSubSteps=1,
+                                           physicsClientId=client)
+        self.set_solver(SOLVER_ITERATIONS, SOLVER_RESIDUAL)
+        self.body = load_urdf_text(client, plant_urdf(self.params), fixed_base=False)
+        self.index = index_body(client, self.body)
+        free_dynamics(client, self.body, self.index)
+        self._joints = [self.index.joints[name] for name in PHYSICAL_JOINT_NAMES]
+        self._gripper_links = {g: self.index.links[GRIPPER_LINKS[g]] for g in GRIPPERS}
+        bends = flex_joints(self.params.robot.flexibility.segments_per_link)
+        self._bends = [self.index.joints[bend.name] for bend in bends]
+        self._bend_stiffness = np.array([self.flexibility.stiffness_of(b.plane) for b in bends])
+        if self._bends:
+            pybullet.setJointMotorControlArray(
+                self.body, self._bends, pybullet.PD_CONTROL,
+                targetPositions=[0.0] * len(bends), targetVelocities=[0.0] * len(bends),
+                positionGains=self._bend_stiffness.tolist(),
+                velocityGains=[self.flexibility.damping_of(b.plane) for b in bends],
+                forces=[_BEND_TORQUE] * len(bends), physicsClientId=client)
+        self._rotors = []
+        gears = self.params.robot.drive.role_array('gear_ratio')
+        for name, joint, ratio in zip(PHYSICAL_JOINT_NAMES, self._joints, gears, strict=True):
+            rotor = self.index.joints[rotor_joint_name(name)]
+            self._rotors.append(rotor)
+            gear = pybullet.createConstraint(self.body, rotor, self.body, joint,
+                                             pybullet.JOINT_GEAR, [0.0, 0.0, 1.0],
+                                             [0.0, 0.0, 0.0], [0.0, 0.0, 0.0],
+                                             physicsClientId=client)
+            pybullet.changeConstraint(gear, gearRatio=-float(ratio), maxForce=_CONSTRAINT_FORCE,
+                                      erp=0.0, physicsClientId=client)
+        self._gear_ratio = np.asarray(gears, dtype=float)
+        self._attachments: dict[str, int] = {}
+        self._pull: dict[str, tuple[Pose, Pose]] = {}
+        self._held = np.zeros(5, dtype=bool)
+        self._friction_enabled = np.ones(5, dtype=bool)
+        self._level_override: tuple[float | None, ...] | None = None
+        self._motor_levels: tuple[float, ...] | None = None
+
+    def close(self) -> None:
+        """Disconnect the physics client (the plant cannot be used afterwards)."""
+        if getattr(self, 'client', None) is not None and pybullet.isConnected(self.client):
+            pybullet.disconnect(physicsClientId=self.client)
+
+    def __enter__(self) -> 'WalkerPlant':
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ reset
+    def start_angles(self, start: StartConfiguration) -> tuple[np.ndarray, np.ndarray]:
+        """Joint angles [rad] and base-gripper pose (4x4) of a start configuration.
+
+        The base gripper sits in its node's hole, axes aligned with the truss; the other one is
+        vertical above its node at ``other_height`` (elbow up, inverse kinematics of
+        :mod:`walker_core.kinematics`).
+
+        Raises
+        ------
+        ParameterError
+            If the other node cannot be reached from the base node.
+        """
+        base_position = self.truss.position(start.base_node)
+        target = self.truss.position(start.other_node) - base_position
+        target[2] += start.other_height
+        try:
+            roles = self.kinematics.inverse([target[0], target[1], target[2], 0.0, 0.0])
+        except ValueError as error:
+            raise ParameterError(f'sim.start: node {start.other_node} cannot be reached from '
+                                 f'{start.base_node}: {error}') from None
+        physical = roles if start.base_gripper == 'a' else roles[::-1]
+        base_pose = np.eye(4)
+        base_pose[:3, 3] = base_position
+        return np.array(physical, dtype=float), base_pose
+
+    def reset(self, start: StartConfiguration | None = None) -> PlantState:
+        """Put the robot at a start configuration (default ``sim.start``), at rest, time 0.
+
+        Raises
+        ------
+        ParameterError
+            If the start configuration is not reachable (nothing changes).
+        """
+        start = self.sim.start if start is None else start
+        angles, base_pose = self.start_angles(start)
+        for constraint in self._attachments.values():
+            pybullet.removeConstraint(constraint, physicsClientId=self.client)
+        self._attachments.clear()
+        self._pull.clear()
+        root = base_pose
+        if start.base_gripper == 'b':
+            root = base_pose @ invert_transform(self.kinematics.forward_transform(angles))
+        root_pose = Pose.from_matrix(root)
+        pybullet.resetBasePositionAndOrientation(self.body, root_pose.position.tolist(),
+                                                 root_pose.orientation.tolist(),
+                                                 physicsClientId=self.client)
+        pybullet.resetBaseVelocity(self.body, [0.0] * 3, [0.0] * 3, physicsClientId=self.client)
+        for joint in self.index.movable:
+            pybullet.resetJointState(self.body, joint, 0.0, 0.0, physicsClientId=self.client)
+        for joint, angle in zip(self._joints, angles, strict=True):
+            pybullet.resetJointState(self.body, joint, float(angle), 0.0,
+                                     physicsClientId=self.client)
+        attached = {start.base_gripper: start.base_node}
+        if start.other_attached:
+            attached[other_gripper(start.base_gripper)] = start.other_node
+        self._grippers.reset(attached, start.base_gripper)
+        for gripper in attached:
+            self._attach(gripper, self._gripper_pose(gripper))
+        self._time_steps = 0
+        self._command = DriveCommand(np.zeros(5), np.zeros(5, bool), np.zeros(5, bool))
+        self._acceleration = np.zeros(5)
+        self._motor_levels = None
+        self._read_joints()
+        return self.state()
+
+    # ------------------------------------------------------------------ stepping
+    @property
+    def time(self) -> float:
+        """Simulated time [s] since the last reset."""
+        return self._time_steps * self.physics_step
+
+    def step(self, torques, dt: float) -> PlantState:
+        """Apply joint torques for ``dt`` seconds and return the new state.
+
+        Parameters
+        ----------
+        torques : array_like, shape (5,)
+            Commanded joint torques [N*m]; clamped at the torque limits, NaN or infinite values
+            replaced by 0 (reported in the state).
+        dt : float
+            Duration [s]: a whole number of physics steps.
+
+        Raises
+        ------
+        PlantError
+            If ``dt`` is not a positive whole number of physics steps or ``torques`` does not
+            have five values (nothing happens).
+        """
+        steps = self._whole_steps(dt)
+        try:
+            command = self.drive.command(torques)
+        except ValueError as error:
+            raise PlantError(str(error)) from None
+        start_velocity = self._velocity
+        torque_list = command.torque.tolist()
+        for _ in range(steps):
+            self._set_friction_motors()
+            pybullet.setJointMotorControlArray(self.body, self._joints, pybullet.TORQUE_CONTROL,
+                                               forces=torque_list, physicsClientId=self.client)
+            pybullet.stepSimulation(physicsClientId=self.client)
+            self._time_steps += 1
+            self._read_joints()
+            if self._grippers.busy:
+                self._advance_grippers()
+        self._command = command
+        self._acceleration = ((np.array(self._velocity) - np.array(start_velocity))
+                              / (steps * self.physics_step))
+        return self.state()
+
+    def _whole_steps(self, dt: float) -> int:
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise PlantError(f'step duration must be a positive number of seconds, got {dt!r}')
+        steps = round(dt / self.physics_step)
+        if steps < 1 or not math.isclose(steps * self.physics_step, dt, rel_tol=1e-9):
+            raise PlantError(f'step duration {dt!r} s is not a whole number of physics steps of '
+                             f'{self.physics_step:g} s')
+        return steps
+
+    def _set_friction_motors(self) -> None:
+        level = self.drive.friction_level(self._velocity)
+        if self._level_override is not None:
+            level = tuple(own if override is None else override
+                          for own, override in zip(level, self._level_override, strict=True))
+        if level != self._motor_levels:
+            pybullet.setJointMotorControlArray(self.body, self._joints,
+                                               pybullet.VELOCITY_CONTROL,
+                                               targetVelocities=[0.0] * 5, forces=list(level),
+                                               physicsClientId=self.client)
+            self._motor_levels = level
+
+    def _read_joints(self) -> None:
+        states = pybullet.getJointStates(self.body, self._joints, physicsClientId=self.client)
+        self._position = [s[0] for s in states]
+        self._velocity = [s[1] for s in states]
+        self._friction = [s[3] for s in states]
+
+    # ------------------------------------------------------------------ state
+    def state(self) -> PlantState:
+        """Return the plant's state now."""
+        return PlantState(
+            time=self.time, position=np.array(self._position), velocity=np.array(self._velocity),
+            acceleration=self._acceleration.copy(), effort=self._command.torque.copy(),
+            friction=np.array(self._friction), saturated=self._command.saturated.copy(),
+            refused=self._command.refused.copy(),
+            statuses={g: self._grippers.status(g) for g in GRIPPERS},
+            poses={g: self._gripper_pose(g) for g in GRIPPERS}, base=self._grippers.base,
+            measure=self._alignment)
+
+    def _alignment(self, pose: Pose) -> HoleAlignment:
+        return hole_alignment(pose.position, pose.z_axis, self.truss,
+                              self.params.truss.hole_depth)
+
+    def _gripper_pose(self, gripper: str) -> Pose:
+        link = self._gripper_links[gripper]
+        if link == -1:
+            position, orientation = pybullet.getBasePositionAndOrientation(
+                self.body, physicsClientId=self.client)
+        else:
+            link_state = pybullet.getLinkState(self.body, link, computeForwardKinematics=True,
+                                               physicsClientId=self.client)
+            position, orientation = link_state[4], link_state[5]
+        return Pose(np.array(position), np.array(orientation))
+
+    # ------------------------------------------------------------------ grippers
+    def screw_in(self, gripper: str) -> ScrewOutcome:
+        """Screw a gripper into the hole nearest it (see :mod:`walker_sim.core.grippers`).
+
+        Returns
+        -------
+        ScrewOutcome
+            Started (SCREWING: the gripper is held and drawn into the hole over
+            ``gripper.screw_time``), or jammed (JAMMED, with the reason).
+
+        Raises
+        ------
+        GripperCommandError
+            Unknown gripper, or the gripper is not free (nothing changes).
+        """
+        try:
+            pose = self._gripper_pose(gripper)
+        except KeyError:
+            raise GripperCommandError(f'unknown gripper {gripper!r}: expected "a" or "b"'
+                                      ) from None
+        alignment = self._alignment(pose)
+        outcome = self._grippers.request_screw_in(gripper, alignment)
+        if outcome.success:
+            self._attach(gripper, pose)
+            self._pull[gripper] = (pose, self._seat_pose(pose, alignment.node))
+        return outcome
+
+    def unscrew(self, gripper: str) -> GripperStatus:
+        """Unscrew a gripper; it lets go after ``gripper.screw_time``.
+
+        Raises
+        ------
+        InterlockError
+            The other gripper is not ATTACHED (nothing changes).
+        GripperCommandError
+            Unknown gripper, or the gripper is not attached (nothing changes).
+        """
+        if gripper not in GRIPPERS:
+            raise GripperCommandError(f'unknown gripper {gripper!r}: expected "a" or "b"')
+        return self._grippers.request_unscrew(gripper)
+
+    def gripper_status(self, gripper: str) -> GripperStatus:
+        """State of one gripper."""
+        return self._grippers.status(gripper)
+
+    def _seat_pose(self, pose: Pose, node: str) -> Pose:
+        """Pose of a gripper fully screwed into ``node``: at the mouth, axis vertical."""
+        rotation = pose.matrix()[:3, :3]
+        z_axis = rotation[:, 2]
+        axis = np.cross(z_axis, [0.0, 0.0, 1.0])
+        sine, cosine = np.linalg.norm(axis), float(z_axis[2])
+        align = np.eye(3)
+        if sine > 1e-12:
+            k = axis / sine
+            skew = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+            align = np.eye(3) + sine * skew + (1.0 - cosine) * skew @ skew
+        seat = np.eye(4)
+        seat[:3, :3] = align @ rotation
+        seat[:3, 3] = self.truss.position(node)
+        return Pose.from_matrix(seat)
+
+    def _attach(self, gripper: str, pose: Pose) -> None:
+        constraint = pybullet.createConstraint(
+            self.body, self._gripper_links[gripper], -1, -1, pybullet.JOINT_FIXED,
+            [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], pose.position.tolist(),
+            childFrameOrientation=pose.orientation.tolist(), physicsClientId=self.client)
+        pybullet.changeConstraint(constraint, maxForce=_CONSTRAINT_FORCE,
+                                  physicsClientId=self.client)
+        self._attachments[gripper] = constraint
+
+    def _advance_grippers(self) -> None:
+        for gripper, (start, seat) in list(self._pull.items()):
+            progress = self._grippers.status(gripper).progress
+            self._move_attachment(gripper, start, seat, progress)
+        for status in self._grippers.advance(self.physics_step):
+            if status.mode == GripperMode.ATTACHED:
+                start, seat = self._pull.pop(status.name)
+                self._move_attachment(status.name, start, seat, 1.0)
+            elif status.mode == GripperMode.FREE:
+                constraint = self._attachments.pop(status.name)
+                pybullet.removeConstraint(constraint, physicsClientId=self.client)
+
+    def _move_attachment(self, gripper: str, start: Pose, seat: Pose, progress: float) -> None:
+        position = start.position + progress * (seat.position - start.position)
+        orientation = pybullet.getQuaternionSlerp(start.orientation.tolist(),
+                                                  seat.orientation.tolist(), progress)
+        pybullet.changeConstraint(self._attachments[gripper], position.tolist(),
+                                  jointChildFrameOrientation=orientation,
+                                  maxForce=_CONSTRAINT_FORCE, physicsClientId=self.client)
+
+    # ------------------------------------------------------------------ test rig
+    def set_solver(self, iterations: int, residual: float) -> None:
+        """Set the constraint solver's iteration limit and residual threshold.
+
+        Holding joints with brakes (:meth:`hold_joints`) needs a better converged solver than
+        the walker's own motion: the identification rig raises it.
+        """
+        if iterations < 1 or not residual > 0:
+            raise PlantError(f'solver needs iterations >= 1 and a positive residual, got '
+                             f'{iterations}, {residual}')
+        pybullet.setPhysicsEngineParameter(numSolverIterations=int(iterations),
+                                           solverResidualThreshold=float(residual),
+                                           physicsClientId=self.client)
+
+    def hold_joints(self, held) -> None:
+        """Hold some joints still with a brake far stronger than the drives (identification).
+
+        Parameters
+        ----------
+        held : array_like of bool, shape (5,)
+            True for the joints to hold.
+        """
+        held = np.asarray(held, dtype=bool)
+        if held.shape != (5,):
+            raise PlantError(f'hold_joints needs 5 flags, got shape {held.shape}')
+        self._held = held.copy()
+        self._update_override()
+
+    def enable_friction(self, enabled) -> None:
+        """Switch joint friction on or off per joint (a frictionless test rig).
+
+        Parameters
+        ----------
+        enabled : bool or array_like of bool, shape (5,)
+        """
+        enabled = np.broadcast_to(np.asarray(enabled, dtype=bool), (5,))
+        self._friction_enabled = enabled.copy()
+        self._update_override()
+
+    def _update_override(self) -> None:
+        override = tuple(_HOLD_TORQUE if held else (None if enabled else 0.0)
+                         for held, enabled in zip(self._held, self._friction_enabled,
+                                                  strict=True))
+        self._level_override = None if all(o is None for o in override) else override
+        self._motor_levels = None
+
+    def bending(self) -> np.ndarray:
+        """Angles [rad] of the bending joints, in :func:`~walker_core.urdf.flex_joints` order."""
+        states = pybullet.getJointStates(self.body, self._bends, physicsClientId=self.client)
+        return np.array([s[0] for s in states])
+
+    def energy(self) -> float:
+        """Mechanical energy [J] of the robot.
+
+        The kinetic energy of every body (rotors included) plus the energy stored in the
+        bending springs.
+        """
+        client = self.client
+        links = sorted(set(self.index.links.values()))
+        total = 0.0
+        for link in links:
+            mass, _, inertia = pybullet.getDynamicsInfo(self.body, link,
+                                                        physicsClientId=client)[:3]
+            if link == -1:
+                velocity, spin = pybullet.getBaseVelocity(self.body, physicsClientId=client)
+                orientation = pybullet.getBasePositionAndOrientation(
+                    self.body, physicsClientId=client)[1]
+            else:
+                link_state = pybullet.getLinkState(self.body, link, computeLinkVelocity=True,
+                                                   computeForwardKinematics=True,
+                                                   physicsClientId=client)
+                orientation, velocity, spin = link_state[1], link_state[6], link_state[7]
+            rotation = np.reshape(pybullet.getMatrixFromQuaternion(orientation), (3, 3))
+            local_spin = rotation.T @ np.asarray(spin)
+            total += 0.5 * mass * float(np.dot(velocity, velocity))
+            total += 0.5 * float(np.dot(inertia, local_spin ** 2))
+        return total + 0.5 * float(np.dot(self._bend_stiffness, self.bending() ** 2))

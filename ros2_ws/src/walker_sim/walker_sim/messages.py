@@ -1,0 +1,110 @@
+"""Conversions between the plant core's state and ROS messages, and the plant's QoS profiles.
+
+No node here: plain functions that the plant node calls, so that the node's callbacks stay one
+line of conversion and one call into the core. QoS as docs/architecture.md specifies.
+"""
+
+from __future__ import annotations
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseStamped
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
+from walker_msgs.msg import GripperState, GripperStates, JointAccelerations
+from walker_sim.core.plant import GripperReport, PlantState, Pose
+
+__all__ = [
+    'SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'CLOCK_QOS', 'TRUSS_FRAME', 'time_msg',
+    'stamp_ns', 'joint_state_msg', 'accelerations_msg', 'pose_msg', 'gripper_state_msg',
+    'gripper_states_msg', 'clock_msg',
+]
+
+#: Frame of every pose the plant publishes: the truss (world) frame.
+TRUSS_FRAME = 'truss'
+
+#: joint_states, joint_accelerations, poses: best effort, newest only.
+SENSOR_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                        reliability=ReliabilityPolicy.BEST_EFFORT,
+                        durability=DurabilityPolicy.VOLATILE)
+#: effort_commands: reliable, keep last 10.
+COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.VOLATILE)
+#: gripper_states, robot_description: reliable, latched for late joiners.
+LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: /clock: reliable, keep last 1.
+CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
+
+_NS_PER_S = 1_000_000_000
+
+
+def time_msg(nanoseconds: int) -> Time:
+    """``builtin_interfaces/Time`` of a time in integer nanoseconds."""
+    seconds, rest = divmod(int(nanoseconds), _NS_PER_S)
+    return Time(sec=seconds, nanosec=rest)
+
+
+def stamp_ns(stamp: Time) -> int:
+    """Integer nanoseconds of a ``builtin_interfaces/Time``."""
+    return stamp.sec * _NS_PER_S + stamp.nanosec
+
+
+def joint_state_msg(state: PlantState, stamp: int) -> JointState:
+    """``sensor_msgs/JointState`` of the five actuated joints (effort = applied torque)."""
+    message = JointState()
+    message.header.stamp = time_msg(stamp)
+    message.name = list(PHYSICAL_JOINT_NAMES)
+    message.position = state.position.tolist()
+    message.velocity = state.velocity.tolist()
+    message.effort = state.effort.tolist()
+    return message
+
+
+def accelerations_msg(state: PlantState, stamp: int) -> JointAccelerations:
+    """``walker_msgs/JointAccelerations`` of the five actuated joints."""
+    message = JointAccelerations()
+    message.header.stamp = time_msg(stamp)
+    message.name = list(PHYSICAL_JOINT_NAMES)
+    message.acceleration = state.acceleration.tolist()
+    return message
+
+
+def pose_msg(pose: Pose, stamp: int) -> PoseStamped:
+    """``geometry_msgs/PoseStamped`` in the truss frame."""
+    message = PoseStamped()
+    message.header.stamp = time_msg(stamp)
+    message.header.frame_id = TRUSS_FRAME
+    position, orientation = message.pose.position, message.pose.orientation
+    position.x, position.y, position.z = (float(v) for v in pose.position)
+    orientation.x, orientation.y, orientation.z, orientation.w = (
+        float(v) for v in pose.orientation)
+    return message
+
+
+def gripper_state_msg(report: GripperReport) -> GripperState:
+    """``walker_msgs/GripperState`` of one gripper."""
+    status, alignment = report.status, report.alignment
+    return GripperState(name=status.name, state=int(status.mode),
+                        node=status.node, position_error=alignment.position_error,
+                        axis_error=alignment.axis_error, message=status.message)
+
+
+def gripper_states_msg(state: PlantState, stamp: int) -> GripperStates:
+    """``walker_msgs/GripperStates``: both grippers (a, b) and the base."""
+    message = GripperStates()
+    message.header.stamp = time_msg(stamp)
+    message.grippers = [gripper_state_msg(state.grippers[g]) for g in GRIPPERS]
+    message.base_gripper = state.base
+    return message
+
+
+def clock_msg(stamp: int) -> Clock:
+    """``rosgraph_msgs/Clock`` of a time in integer nanoseconds."""
+    return Clock(clock=time_msg(stamp))

@@ -1,0 +1,308 @@
+"""The plant node: the simulated walker on the ROS graph (``ros2 run walker_sim plant_node``).
+
+Thin layer over :class:`walker_sim.core.plant.WalkerPlant`: it declares the parameters, converts
+messages and clocks, and calls the core. Interfaces (relative to the node's namespace, normally
+``/walker``), as docs/architecture.md specifies:
+
+* publishes ``joint_accelerations`` then ``joint_states`` every control period, ``tip_pose``,
+  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame), ``gripper_states`` (on change and at
+  ``sim.gripper_state_rate``), ``robot_description`` (once, latched), ``/clock`` (sim time),
+  ``/diagnostics`` (1 Hz, wall clock: missed commands, refused and clamped torques);
+* subscribes to ``effort_commands`` (``sensor_msgs/JointState``: joint names and efforts,
+  stamped with the state they answer);
+* serves ``gripper_command`` (``walker_msgs/srv/GripperCommand``): answers at once with the
+  gripper's new state (SCREWING, UNSCREWING, JAMMED, or the refusal); the screw-in or unscrew
+  completes ``gripper.screw_time`` later, as ``gripper_states`` reports.
+
+Clock modes (``sim.clock_mode``): ``real_time`` steps on a steady wall-clock timer, like
+hardware, stamping with the system clock; ``sim_time`` publishes ``/clock`` and is lock-stepped
+with the controllers (state for t_k out, wait for the five efforts stamped t_k, step).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.logging import get_logger
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock as ClockMsg
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+
+from walker_core.joint_roles import GRIPPERS
+from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_core.parameter_schema import ParameterError
+from walker_core.robot_parameters import WalkerParameters
+from walker_core.urdf import description_urdf
+from walker_msgs.msg import GripperStates, JointAccelerations
+from walker_msgs.srv import GripperCommand
+from walker_sim.core.commands import CommandError, EffortCommands, LockStep, seconds_to_ns
+from walker_sim.core.config import SimParameters
+from walker_sim.core.grippers import GripperCommandError, GripperMode
+from walker_sim.core.plant import PlantState, WalkerPlant
+from walker_sim.messages import (
+    CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, accelerations_msg, clock_msg,
+    gripper_state_msg, gripper_states_msg, joint_state_msg, pose_msg, stamp_ns, time_msg)
+
+__all__ = ['PlantNode', 'main']
+
+# [s] steady-clock period of the sim-time watch (timeouts, re-sends); also the pace at which
+# the plant steps when no controller answers at all
+_WATCH_PERIOD = 0.005
+# [s] period of /diagnostics and of the throttled warnings (wall clock)
+_REPORT_PERIOD = 1.0
+# Most control periods a late real-time tick steps at once to catch up with the wall clock
+_MAX_CATCH_UP = 10
+
+
+class PlantNode(Node):
+    """ROS node around the walker plant.
+
+    Raises
+    ------
+    ParameterError
+        If the parameters are invalid; the node refuses to start.
+    """
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__('plant', **kwargs)
+        self.params = declare_section(self, WalkerParameters)
+        self.sim = declare_section(self, SimParameters, 'sim.')
+        self.plant = WalkerPlant(self.params, self.sim)
+        self.period = 1.0 / self.params.timing.control_rate
+        self.period_ns = seconds_to_ns(self.period)
+        self.commands = EffortCommands(self.sim.command_timeout)
+        self.lockstep = LockStep(self.sim.lockstep_timeout)
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._system = Clock(clock_type=ClockType.SYSTEM_TIME)
+        self.sim_time = self.sim.clock_mode == 'sim_time'
+
+        self._accelerations = self.create_publisher(JointAccelerations, 'joint_accelerations',
+                                                    SENSOR_QOS)
+        self._joint_states = self.create_publisher(JointState, 'joint_states', SENSOR_QOS)
+        self._poses = {name: self.create_publisher(PoseStamped, name, SENSOR_QOS)
+                       for name in ('tip_pose', 'gripper_a_pose', 'gripper_b_pose')}
+        self._grippers = self.create_publisher(GripperStates, 'gripper_states', LATCHED_QOS)
+        self._description = self.create_publisher(String, 'robot_description', LATCHED_QOS)
+        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._clock_publisher = (self.create_publisher(ClockMsg, '/clock', CLOCK_QOS)
+                       if self.sim_time else None)
+        self.create_subscription(JointState, 'effort_commands', self._on_effort, COMMAND_QOS)
+        self.create_service(GripperCommand, 'gripper_command', self._on_gripper_command)
+        guard_section_updates(self, SimParameters, 'sim.', lambda: self.sim, self._apply_sim)
+
+        self._description.publish(String(data=description_urdf(self.params)))
+        self._counts = {'refused': 0, 'saturated': 0, 'expired': 0, 'overruns': 0}
+        self._gripper_key: tuple | None = None
+        self._gripper_sent = -math.inf
+        self._last_tick = math.nan
+        self._started = not self.sim_time
+        self._last_sent = self._steady_now()
+        self._last_warning = -math.inf
+        self._stamp = 0 if self.sim_time else self._system.now().nanoseconds
+        self._publish(self.plant.state())
+        self.create_timer(_REPORT_PERIOD, self._report, clock=self._steady)
+        if self.sim_time:
+            self.create_timer(_WATCH_PERIOD, self._watch, clock=self._steady)
+        else:
+            self.create_timer(self.period, self._tick, clock=self._steady)
+        self.get_logger().info(
+            f'plant ready: {self.sim.clock_mode}, control {self.params.timing.control_rate:g} '
+            f'Hz, physics {self.sim.physics_rate:g} Hz, base gripper {self.plant.state().base}')
+        if not self.sim_time and self.get_parameter('use_sim_time').value:
+            self.get_logger().warning(
+                'use_sim_time is true but sim.clock_mode is real_time: nobody publishes /clock '
+                'and the stamps are wall-clock time; set sim.clock_mode:=sim_time for sim time')
+
+    def destroy_node(self) -> None:
+        """Release the simulator with the node."""
+        self.plant.close()
+        super().destroy_node()
+
+    # ------------------------------------------------------------------ clocks
+    def _steady_now(self) -> float:
+        return self._steady.now().nanoseconds * 1e-9
+
+    def _apply_sim(self, sim: SimParameters) -> None:
+        self.sim = sim
+        self.commands.command_timeout = sim.command_timeout
+        self.lockstep.timeout = sim.lockstep_timeout
+
+    # ------------------------------------------------------------------ stepping
+    def _advance(self, periods: int = 1) -> None:
+        """Step the plant ``periods`` control periods with the commands in force; publish."""
+        torques, expired = self.commands.torques(self._stamp)
+        self._counts['expired'] += len(expired)
+        state = self.plant.step(torques, periods * self.period)
+        self._counts['refused'] += int(state.refused.sum())
+        self._counts['saturated'] += int(state.saturated.sum())
+        self._stamp = (self._stamp + self.period_ns if self.sim_time
+                       else self._system.now().nanoseconds)
+        self._publish(state)
+
+    def _tick(self) -> None:
+        """Real time: advance the physics by the wall-clock time since the last tick.
+
+        Normally one control period. When the process was late (a loaded machine), the physics
+        still follows the wall clock, as hardware would: the missed periods are stepped at
+        once (up to :data:`_MAX_CATCH_UP`) with the commands in force, their states are never
+        published, and they are counted as overruns.
+        """
+        now = self._steady_now()
+        periods = 1
+        if math.isfinite(self._last_tick):
+            periods = min(max(1, round((now - self._last_tick) / self.period)), _MAX_CATCH_UP)
+        self._counts['overruns'] += periods - 1
+        self._last_tick += periods * self.period
+        if not math.isfinite(self._last_tick) or now - self._last_tick > self.period:
+            self._last_tick = now  # too far behind to catch up: let time slip
+        self.lockstep.count_misses(self.commands)
+        self._advance(periods)
+
+    def _try_advance(self) -> None:
+        """Sim time: step when every joint waited for has answered the current state."""
+        waiting = self.lockstep.waiting_for(self.commands)
+        if waiting or len(self.lockstep.lost) == len(self.lockstep.joints):
+            return
+        if not self._started:
+            self._started = True
+            self.get_logger().info('every controller answered: sim time starts')
+        self.lockstep.count_misses(self.commands)
+        self._advance()
+
+    def _watch(self) -> None:
+        """Sim time: re-send the first state, or give up waiting after the timeout."""
+        now = self._steady_now()
+        if not self._started:
+            if now - self._last_sent >= self.sim.startup_resend_period:
+                self._publish(self.plant.state())
+                self._warn(now, 'waiting for effort commands stamped t=0 from: '
+                           + ', '.join(self.lockstep.waiting_for(self.commands)))
+            return
+        if len(self.lockstep.lost) == len(self.lockstep.joints):
+            self.lockstep.count_misses(self.commands)
+            self._advance()
+        elif self.lockstep.expired(now):
+            late = self.lockstep.give_up(self.commands)
+            self._warn(now, f'no effort from {", ".join(late)} within '
+                       f'{self.lockstep.timeout:g} s at t={self._stamp * 1e-9:.3f} s: applying '
+                       f'the last ones and not waiting for them until they answer again')
+            self._advance()
+
+    # ------------------------------------------------------------------ publishing
+    def _publish(self, state: PlantState) -> None:
+        stamp = self._stamp
+        if self._clock_publisher is not None:
+            self._clock_publisher.publish(clock_msg(stamp))
+        self._accelerations.publish(accelerations_msg(state, stamp))
+        self._joint_states.publish(joint_state_msg(state, stamp))
+        self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
+        for gripper in GRIPPERS:
+            self._poses[f'gripper_{gripper}_pose'].publish(pose_msg(state.poses[gripper], stamp))
+        self._publish_grippers(state)
+        self._last_sent = self._steady_now()
+        self.lockstep.begin(stamp, self._last_sent)
+
+    def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
+        key = (state.base, *((s.mode, s.node, s.message) for s in state.statuses.values()))
+        due = state.time - self._gripper_sent >= 1.0 / self.sim.gripper_state_rate
+        if force or due or key != self._gripper_key:
+            self._grippers.publish(gripper_states_msg(state, self._stamp))
+            self._gripper_key = key
+            self._gripper_sent = state.time
+
+    def _report(self) -> None:
+        """Publish /diagnostics: missed, expired, refused and clamped commands."""
+        status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: plant',
+                                  hardware_id='walker_sim')
+        missed = sum(self.lockstep.missed.values())
+        status.level = DiagnosticStatus.OK if missed == 0 else DiagnosticStatus.WARN
+        status.message = (f'{self.sim.clock_mode}, t={self.plant.time:.3f} s, '
+                          f'{missed} missed command periods')
+        values = {f'missed {joint}': count for joint, count in self.lockstep.missed.items()}
+        values.update({f'{name} commands': count for name, count in self._counts.items()})
+        values['lock-step timeouts'] = self.lockstep.timeouts
+        values['not waited for'] = ', '.join(sorted(self.lockstep.lost))
+        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
+        message = DiagnosticArray(status=[status])
+        message.header.stamp = time_msg(self._stamp)
+        self._diagnostics.publish(message)
+
+    def _warn(self, now: float, text: str) -> None:
+        if now - self._last_warning >= _REPORT_PERIOD:
+            self.get_logger().warning(text)
+            self._last_warning = now
+
+    # ------------------------------------------------------------------ callbacks
+    def _on_effort(self, message: JointState) -> None:
+        if len(message.effort) != len(message.name):
+            self._warn(self._steady_now(), f'effort command refused: {len(message.name)} '
+                       f'names but {len(message.effort)} efforts')
+            return
+        stamp = stamp_ns(message.header.stamp)
+        for name, effort in zip(message.name, message.effort, strict=True):
+            try:
+                self.commands.receive(name, effort, stamp)
+            except CommandError as error:
+                self._warn(self._steady_now(), str(error))
+        if self.sim_time:
+            self._try_advance()
+
+    def _on_gripper_command(self, request: GripperCommand.Request,
+                            response: GripperCommand.Response) -> GripperCommand.Response:
+        gripper = request.gripper
+        try:
+            if request.command == GripperCommand.Request.SCREW_IN:
+                outcome = self.plant.screw_in(gripper)
+                response.success = outcome.success
+                response.message = outcome.status.message
+            elif request.command == GripperCommand.Request.UNSCREW:
+                self.plant.unscrew(gripper)
+                response.success = True
+            else:
+                raise GripperCommandError(
+                    f'unknown gripper command {request.command}: expected SCREW_IN '
+                    f'({GripperCommand.Request.SCREW_IN}) or UNSCREW '
+                    f'({GripperCommand.Request.UNSCREW})')
+        except GripperCommandError as error:
+            response.success = False
+            response.message = str(error)
+        state = self.plant.state()
+        if gripper in GRIPPERS:
+            response.state = gripper_state_msg(state.grippers[gripper])
+        if not response.success:
+            self.get_logger().warning(f'gripper command refused: {response.message}')
+        elif state.statuses[gripper].mode in (GripperMode.SCREWING, GripperMode.UNSCREWING):
+            self.get_logger().info(f'gripper {gripper}: {state.statuses[gripper].mode.name}')
+        self._publish_grippers(state, force=True)
+        return response
+
+
+def main(args=None) -> int:
+    """Run the plant node until shut down; exit code 1 when it refuses to start."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = PlantNode()
+        rclpy.spin(node)
+    except (ParameterError, ParameterException) as error:
+        get_logger('plant').fatal(f'refusing to start: {error}')
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
