@@ -18,5 +18,7 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='Step-phase supervisor of the walker: walking across the truss, step by step.',
     license='Apache-2.0',
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': [
+        'supervisor_node = walker_supervisor.supervisor_node:main',
+    ]},
 )

@@ -93,11 +93,13 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     common = (('use_sim_time', 'true' if sim_time else 'false'),)
     nodes = []
     if record:
-        extra = (('recorder.output', str(bag_path)),) if bag_path else ()
+        bag = Path(bag_path) if bag_path else None
+        extra = ((('recorder.directory', str(bag.parent)), ('recorder.bag_name', bag.name))
+                 if bag else ())
         nodes.append(NodeSpec('walker_bag', 'recorder_node', 'recorder', namespace,
                               params_file, common + extra))
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
-                          common + (('sim.clock_mode', 'sim' if sim_time else 'real'),)))
+                          common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)))
     for joint in PHYSICAL_JOINT_NAMES:
         nodes.append(NodeSpec('walker_control', 'joint_controller_node',
                               controller_node_name(joint), namespace, params_file,

@@ -15,7 +15,8 @@ import rclpy
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
@@ -77,16 +78,29 @@ class GraphClient:
         self.reports: list[StepReport] = []
         self.phase: StepPhase | None = None
         self.grippers: GripperStates | None = None
+        self.joint_stamps: list[int] = []  # [ns] stamps of the last joint states received
         self.node.create_subscription(StepReport, 'step_reports', self.reports.append, _REPORTS)
         self.node.create_subscription(StepPhase, 'phase', self._on_phase, _LATCHED)
         self.node.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
                                       _LATCHED)
+        self.node.create_subscription(JointState, 'joint_states', self._on_joint_states,
+                                      qos_profile_sensor_data)
 
     def _on_phase(self, msg: StepPhase) -> None:
         self.phase = msg
 
     def _on_grippers(self, msg: GripperStates) -> None:
         self.grippers = msg
+
+    def _on_joint_states(self, msg: JointState) -> None:
+        self.joint_stamps = (self.joint_stamps + [msg.header.stamp.sec * 10**9
+                                                  + msg.header.stamp.nanosec])[-10:]
+
+    @property
+    def plant_stepping(self) -> bool:
+        """True once joint states arrive with advancing stamps (the control loop is closed)."""
+        stamps = self.joint_stamps
+        return len(stamps) >= 2 and stamps[-1] > stamps[0]
 
     def close(self) -> None:
         """Destroy the client node."""
@@ -122,8 +136,7 @@ class GraphClient:
                    'hold service': self.hold_client.service_is_ready(),
                    'gripper_command service': self.gripper_client.service_is_ready(),
                    'plan_trajectory service': self.plan_client.service_is_ready(),
-                   'joint_states': self.node.count_publishers(
-                       f'{self.namespace}/joint_states') > 0,
+                   'joint states advancing': self.plant_stepping,
                    'gripper states': self.grippers is not None}
         for name, up in servers.items():
             (ready if up else missing).append(name)

@@ -85,6 +85,7 @@ class PlannerNode(Node):
         self._period_ns = int(round(1e9 / self._robot.timing.control_rate))
         self._lock = threading.Lock()
         self._active: _ActiveStream | None = None
+        self._holding: np.ndarray | None = None  # last position streamed, held at rest
         self._reserved = False
         self._measured: tuple[int, np.ndarray] | None = None
         self._setpoint_publishers = {
@@ -232,7 +233,10 @@ class PlannerNode(Node):
         with self._lock:
             active = self._active
             if active is None:
-                self._timer.cancel()
+                if self._holding is None:
+                    self._timer.cancel()
+                else:
+                    self._publish_hold(self._holding)
                 return
             now = self.get_clock().now().nanoseconds
             handle = active.goal_handle
@@ -270,12 +274,23 @@ class PlannerNode(Node):
         active.goal_handle.publish_feedback(feedback)
 
     def _finish(self, active: _ActiveStream, hold) -> None:
-        """End the stream (lock held): send the hold setpoint if any, wake the waiter."""
+        """End the stream (lock held) and wake the waiter.
+
+        The controllers expect a setpoint every period while they track, so the last position
+        sent keeps being streamed, at rest, until the next stream replaces it.
+        """
         if hold is not None:
             self._publish(active, hold)
-        self._timer.cancel()
+        self._holding = None if active.last is None else np.array(active.last.position)
         self._active = None
         active.done.set()
+
+    def _publish_hold(self, position: np.ndarray) -> None:
+        stamp = to_time(self.get_clock().now().nanoseconds + self._period_ns)
+        for j, name in enumerate(PHYSICAL_JOINT_NAMES):
+            command = JointCommand(joint_name=name, position=float(position[j]))
+            command.header.stamp = stamp
+            self._setpoint_publishers[name].publish(command)
 
     def _tracking_error(self, stream: SetpointStream) -> float:
         """Largest joint error [rad] of the newest state against the stream; -1 without one."""

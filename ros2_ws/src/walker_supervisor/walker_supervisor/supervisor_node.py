@@ -426,6 +426,7 @@ class SupervisorNode(Node):
         response = future.result()
         if response is None or not response.success:
             reason = 'no response' if response is None else response.message
+            self.get_logger().error(f'planning the {request.purpose} motion failed: {reason}')
             self._execute(self.sequencer.trajectory_done(
                 False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
             return
@@ -447,6 +448,7 @@ class SupervisorNode(Node):
                 False, 'the planner refused to stream the trajectory', self._now()))
             return
         self._follow_handle = handle
+        self.get_logger().debug(f'streaming a {duration:.2f} s trajectory')
         self.sequencer.trajectory_started(duration, self._now())
         handle.get_result_async().add_done_callback(
             lambda f: self._on_follow_done(f, generation))
@@ -493,6 +495,11 @@ class SupervisorNode(Node):
                walk.step_index if walk else 0, walk is not None)
         if key == self._last_phase:
             return
+        if self._last_phase is not None and key[0] != self._last_phase[0]:
+            log = self.get_logger().warning if self.sequencer.phase == Phase.SAFE_HOLD \
+                else self.get_logger().info
+            log(f'phase {self.sequencer.phase.name}'
+                + (f': {self.sequencer.reason}' if self.sequencer.reason else ''))
         self._last_phase = key
         msg = StepPhase(phase=int(self.sequencer.phase),
                         base_gripper=self.sequencer.base_gripper,
