@@ -32,9 +32,12 @@ def test_the_graph_has_every_node_with_its_arguments():
     assert command[:6] == ['/bin/true', '--ros-args', '-r', '__node:=controller_a_yaw',
                            '-r', '__ns:=/walker']
     assert '--params-file' in command and 'joint_name:=a_yaw_joint' in command
-    assert 'use_sim_time:=true' in command
+    # controllers run on the state stream's stamps and need no /clock; the others take it
+    assert not any('use_sim_time' in arg for arg in command)
+    assert all('use_sim_time:=true' in n.command('/bin/true') for n in graph
+               if not n.name.startswith('controller_'))
     assert all('use_sim_time:=false' in n.command('/bin/true')
-               for n in walker_graph('/tmp/walker.yaml'))
+               for n in walker_graph('/tmp/walker.yaml') if not n.name.startswith('controller_'))
     assert controller_node_name('vertex_joint') == 'controller_vertex'
 
 

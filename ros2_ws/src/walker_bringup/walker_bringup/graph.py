@@ -101,9 +101,11 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
                           common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)))
     for joint in PHYSICAL_JOINT_NAMES:
+        # The controllers run on the plant's state stream and its stamps (watchdogs on the
+        # steady clock): use_sim_time would only add a /clock subscription every period.
         nodes.append(NodeSpec('walker_control', 'joint_controller_node',
                               controller_node_name(joint), namespace, params_file,
-                              common + (('joint_name', joint),)))
+                              (('joint_name', joint),)))
     nodes.append(NodeSpec('walker_planner', 'planner_node', 'planner', namespace, params_file,
                           common))
     nodes.append(NodeSpec('walker_supervisor', 'supervisor_node', 'supervisor', namespace,

@@ -31,11 +31,16 @@ RELAXED = ('-p', 'control.setpoint_timeout:=30.0', '-p', 'control.state_timeout:
 STRICT = ('-p', 'control.setpoint_timeout:=1.0', '-p', 'control.state_timeout:=1.0')
 
 
-def start_controller(ros_env, *extra, timeouts=RELAXED):
+# A controller state for every period, so that every step of the stand-in can check one.
+EVERY_STATE = ('-p', 'control.state_rate:=500.0')
+
+
+def start_controller(ros_env, *extra, timeouts=RELAXED, state_rate=EVERY_STATE):
     from ros_test_support import NodeProcess
 
     return NodeProcess([controller_executable(), '--ros-args', '-r', '__ns:=/walker',
-                        '-p', f'joint_name:={JOINT}', *timeouts, *extra], ros_env, NODE)
+                        '-p', f'joint_name:={JOINT}', *timeouts, *state_rate, *extra],
+                       ros_env, NODE)
 
 
 class StandInPlant:
@@ -302,3 +307,18 @@ def test_refuses_to_start_on_a_bad_joint_or_unstable_gains(ros_env, tmp_path):
     with start_controller(ros_env, '--params-file', str(params)) as unstable:
         assert unstable.process.wait(timeout=WAIT) == 2
         assert 'J4' in unstable.output and 'unstable' in unstable.output
+
+
+def test_controller_states_come_at_the_state_rate_and_efforts_every_period(ros_env, plant):
+    with start_controller(ros_env, state_rate=('-p', 'control.state_rate:=100.0')):
+        plant.step()
+        first = len(plant.states)
+        stamps = []
+        for _ in range(20):
+            stamps.append(plant.step().header.stamp)  # an effort for every state
+        plant.spin_until(lambda: False, timeout=0.3)
+        published = [s.header.stamp.sec * 1_000_000_000 + s.header.stamp.nanosec
+                     for s in plant.states[first:]]
+        assert len(stamps) == 20
+        assert 3 <= len(published) <= 5, published  # 20 periods of 2 ms at 100 Hz
+        assert all(b - a == 10_000_000 for a, b in zip(published, published[1:], strict=False))

@@ -36,6 +36,7 @@ from walker_msgs.msg import ControlMode, ControllerState, JointAccelerations, Jo
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.spinning import spin_nodes
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
     InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StaleInputs, validate_setpoint)
@@ -109,6 +110,7 @@ class JointControllerNode(Node):
         self._acceleration_index = -1
         self._acceleration: tuple[float, float] | None = None
         self._last_stamp: float | None = None
+        self._last_state_publish: float | None = None  # [s] stamp of the last ControllerState
         self._last_effort: JointState | None = None
         self._setpoint_lagging = False
         self._effort_msg = JointState(name=[joint])
@@ -201,8 +203,8 @@ class JointControllerNode(Node):
             self.get_logger().error(f'{error}; holding')
             return
         stamp = _seconds(msg.header.stamp)
-        if stamp == 0.0:  # unstamped (an operator's command): it applies from now
-            stamp = self.get_clock().now().nanoseconds * 1e-9
+        if stamp == 0.0:  # unstamped (an operator's command): it applies from the next state
+            stamp = self._last_stamp or 0.0
         self._setpoints.add(stamp, setpoint)
         self._setpoint_lagging = False
         self._watchdog.setpoint_received(self._steady.now().nanoseconds * 1e-9)
@@ -312,6 +314,12 @@ class JointControllerNode(Node):
         effort.effort = [out.effort]
         self._effort_pub.publish(effort)
         self._last_effort = effort
+        stamp = _seconds(msg.header.stamp)
+        period = 1.0 / self._settings.control.state_rate
+        if self._last_state_publish is not None and \
+                0.0 <= stamp - self._last_state_publish < period - 1e-9:
+            return
+        self._last_state_publish = stamp
         state = self._state_msg
         state.header.stamp = msg.header.stamp
         state.role = out.role
@@ -337,7 +345,9 @@ class JointControllerNode(Node):
     def _publish_stale_report(self) -> None:
         last = self._controller.last_output
         state = ControllerState()
-        state.header.stamp = self.get_clock().now().to_msg()
+        if self._last_stamp is not None:  # the controller's time is the state stream's
+            state.header.stamp.sec = int(self._last_stamp)
+            state.header.stamp.nanosec = int(round((self._last_stamp % 1.0) * 1e9)) % 1_000_000_000
         state.joint_name = self._joint
         state.role = self._controller.role
         state.mode = int(self._controller.mode)
@@ -356,7 +366,7 @@ def main(args: list[str] | None = None) -> int:
     code = 0
     try:
         node = JointControllerNode(default_node_name(argv))
-        rclpy.spin(node)
+        spin_nodes(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ParameterError, ValueError) as error:

@@ -13,31 +13,31 @@ Interfaces (relative to the node's namespace, ``/walker`` by default; docs/archi
 * ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors.
 
 All planning is in :mod:`walker_planner.core`; this node converts messages, parameters and
-clocks. Timers follow the ROS clock, so ``use_sim_time`` drives the stream from ``/clock``.
+clocks. The stream is paced by the plant's ``joint_states`` (one per control period) and
+stamped from them, in real time and in sim time alike, as the controllers are.
 """
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException
+from rclpy.task import Future
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 from walker_msgs.action import FollowTrajectory
-from walker_msgs.msg import JointCommand
+from walker_msgs.msg import ControlMode, JointCommand
 from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
+from walker_core.spinning import spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
@@ -53,19 +53,15 @@ LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                          history=HistoryPolicy.KEEP_LAST)
 STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
                        history=HistoryPolicy.KEEP_LAST)
-_WAIT_SLICE = 0.1  # [s] how often a waiting action thread checks for shutdown
-# Executor threads: the stream's timer, the services and joint_states, an action goal waiting
-# for its stream, and the action server's own goal, cancel and result requests.
-_THREADS = 4
 
 
 class _ActiveStream:
-    """A running stream and how it ends (shared by the timer and the action thread)."""
+    """A running stream and how it ends (the timer completes ``done``; the goal awaits it)."""
 
     def __init__(self, stream: SetpointStream, goal_handle) -> None:
         self.stream = stream
         self.goal_handle = goal_handle
-        self.done = threading.Event()
+        self.done = Future()
         self.last = None
         self.ticks = 0
         self.cancelled = False
@@ -83,9 +79,9 @@ class PlannerNode(Node):
                               self._apply_planner_parameters)
         self._planning = PlanningContext.from_parameters(self._robot, self._planner)
         self._period_ns = int(round(1e9 / self._robot.timing.control_rate))
-        self._lock = threading.Lock()
         self._active: _ActiveStream | None = None
         self._holding: np.ndarray | None = None  # last position streamed, held at rest
+        self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
         self._reserved = False
         self._measured: tuple[int, np.ndarray] | None = None
         self._setpoint_publishers = {
@@ -94,16 +90,12 @@ class PlannerNode(Node):
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
         self.create_subscription(JointState, 'joint_states', self._on_joint_state, STATE_QOS)
-        stream_group = MutuallyExclusiveCallbackGroup()
-        self._timer = self.create_timer(self._period_ns / 1e9, self._on_tick,
-                                        callback_group=stream_group, autostart=False)
-        # planning takes milliseconds: it runs beside the stream's timer, never blocking it
+        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, LATCHED_QOS)
         self.create_service(PlanTrajectory, 'plan_trajectory', self._on_plan)
         self.create_service(Trigger, 'stop_trajectory', self._on_stop)
         self._action_server = ActionServer(
             self, FollowTrajectory, 'follow_trajectory', execute_callback=self._on_execute,
-            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
-            callback_group=ReentrantCallbackGroup())
+            goal_callback=self._on_goal, cancel_callback=self._on_cancel)
         self.get_logger().info(
             f'planner ready: {len(PHYSICAL_JOINT_NAMES)} controllers at '
             f'{self._robot.timing.control_rate:g} Hz')
@@ -123,6 +115,10 @@ class PlannerNode(Node):
         if np.all(np.isfinite(positions)):
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
             self._measured = (stamp, positions)
+            self._stream_tick(stamp)
+
+    def _on_control_mode(self, message: ControlMode) -> None:
+        self._tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
 
     # ------------------------------------------------------------------ planning service
     def _on_plan(self, request, response):
@@ -149,28 +145,26 @@ class PlannerNode(Node):
         return response
 
     def _on_stop(self, request, response):
-        with self._lock:
-            active = self._active
-            if active is not None:
-                active.cancelled, active.message = True, 'stopped by stop_trajectory'
+        active = self._active
+        if active is not None:
+            active.cancelled, active.message = True, 'stopped by stop_trajectory'
         response.success = active is not None
         response.message = 'stopping the stream' if active else 'no stream is running'
         return response
 
     # ------------------------------------------------------------------ action
     def _on_goal(self, goal) -> GoalResponse:
-        with self._lock:
-            if self._active is not None or self._reserved:
-                self.get_logger().warning('follow_trajectory goal rejected: a stream is '
-                                          'already running (cancel it first)')
-                return GoalResponse.REJECT
-            self._reserved = True
+        if self._active is not None or self._reserved:
+            self.get_logger().warning('follow_trajectory goal rejected: a stream is '
+                                      'already running (cancel it first)')
+            return GoalResponse.REJECT
+        self._reserved = True
         return GoalResponse.ACCEPT
 
     def _on_cancel(self, goal_handle) -> CancelResponse:
         return CancelResponse.ACCEPT
 
-    def _on_execute(self, goal_handle):
+    async def _on_execute(self, goal_handle):
         result = FollowTrajectory.Result()
         try:
             trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
@@ -178,21 +172,18 @@ class PlannerNode(Node):
         except PlanningError as refusal:
             error = str(refusal)
         finally:
-            with self._lock:
-                self._reserved = False
+            self._reserved = False
         if error:
             result.message = error
             goal_handle.abort()
             return result
-        return self._wait_for_stream(goal_handle, result)
+        return await self._wait_for_stream(goal_handle, result)
 
-    def _wait_for_stream(self, goal_handle, result):
-        with self._lock:
-            active = self._active
-        while active is not None and not active.done.wait(_WAIT_SLICE):
-            if not rclpy.ok(context=self.context):
-                break
-        if active is None or not active.done.is_set():
+    async def _wait_for_stream(self, goal_handle, result):
+        active = self._active
+        if active is not None:
+            await active.done
+        if active is None or not active.done.done():
             result.message = 'the planner is shutting down'
             goal_handle.abort()
             return result
@@ -217,38 +208,38 @@ class PlannerNode(Node):
             check_start(trajectory, measured, self._planner.stream.start_tolerance)
         except PlanningError as error:
             return str(error)
-        with self._lock:
-            if self._active is not None:
-                return 'a stream is already running (cancel it or call stop_trajectory)'
-            now = self.get_clock().now().nanoseconds
-            stream = SetpointStream(trajectory, now, self._period_ns)
-            self._active = _ActiveStream(stream, goal_handle)
-            message.header.stamp = to_time(stream.origin)
-            self._plan_publisher.publish(message)
-            self._publish(self._active, stream.setpoint(now))
-            self._timer.reset()
+        if self._active is not None:
+            return 'a stream is already running (cancel it or call stop_trajectory)'
+        now = self._measured[0]  # the stream's time is the plant's: the newest state's stamp
+        stream = SetpointStream(trajectory, now, self._period_ns)
+        self._active = _ActiveStream(stream, goal_handle)
+        message.header.stamp = to_time(stream.origin)
+        self._plan_publisher.publish(message)
+        self._publish(self._active, stream.setpoint(now))
         return ''
 
-    def _on_tick(self) -> None:
-        with self._lock:
-            active = self._active
-            if active is None:
-                if self._holding is None:
-                    self._timer.cancel()
-                else:
-                    self._publish_hold(self._holding)
-                return
-            now = self.get_clock().now().nanoseconds
-            handle = active.goal_handle
-            if handle is not None and handle.is_cancel_requested and not active.cancelled:
-                active.cancelled, active.message = True, 'cancelled'
-            if active.cancelled:
-                self._finish(active, active.stream.hold(now, active.last))
-                return
-            setpoint = active.stream.setpoint(now)
-            self._publish(active, setpoint)
-            if setpoint.final:
-                self._finish(active, None)
+    def _stream_tick(self, now: int) -> None:
+        """Send the setpoints of the period after the state stamped ``now`` [ns].
+
+        The stream runs on the plant's state stream (one state per control period, in real
+        time and in sim time alike), so a setpoint is always stamped one period after the
+        state it follows and is in place before the state it applies to.
+        """
+        active = self._active
+        if active is None:
+            if self._holding is not None and self._tracking:
+                self._publish_hold(self._holding, now)
+            return
+        handle = active.goal_handle
+        if handle is not None and handle.is_cancel_requested and not active.cancelled:
+            active.cancelled, active.message = True, 'cancelled'
+        if active.cancelled:
+            self._finish(active, active.stream.hold(now, active.last))
+            return
+        setpoint = active.stream.setpoint(now)
+        self._publish(active, setpoint)
+        if setpoint.final:
+            self._finish(active, None)
 
     def _publish(self, active: _ActiveStream, setpoint) -> None:
         stamp = to_time(setpoint.stamp)
@@ -276,17 +267,18 @@ class PlannerNode(Node):
     def _finish(self, active: _ActiveStream, hold) -> None:
         """End the stream (lock held) and wake the waiter.
 
-        The controllers expect a setpoint every period while they track, so the last position
-        sent keeps being streamed, at rest, until the next stream replaces it.
+        The controllers expect a setpoint every period while they track (COARSE or FINE), so the
+        last position sent keeps being streamed, at rest, while they do, until the next stream
+        replaces it.
         """
         if hold is not None:
             self._publish(active, hold)
         self._holding = None if active.last is None else np.array(active.last.position)
         self._active = None
-        active.done.set()
+        active.done.set_result(True)
 
-    def _publish_hold(self, position: np.ndarray) -> None:
-        stamp = to_time(self.get_clock().now().nanoseconds + self._period_ns)
+    def _publish_hold(self, position: np.ndarray, now: int) -> None:
+        stamp = to_time(now + self._period_ns)
         for j, name in enumerate(PHYSICAL_JOINT_NAMES):
             command = JointCommand(joint_name=name, position=float(position[j]))
             command.header.stamp = stamp
@@ -315,9 +307,7 @@ def main(args=None) -> int:
     node = None
     try:
         node = PlannerNode()
-        executor = MultiThreadedExecutor(num_threads=_THREADS)
-        executor.add_node(node)
-        executor.spin()
+        spin_nodes(node)
     except ParameterError as error:
         print(f'planner: invalid parameters, not starting: {error}', flush=True)
         return 1

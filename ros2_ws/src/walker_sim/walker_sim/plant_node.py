@@ -4,9 +4,10 @@ Thin layer over :class:`walker_sim.core.plant.WalkerPlant`: it declares the para
 messages and clocks, and calls the core. Interfaces (relative to the node's namespace, normally
 ``/walker``), as docs/architecture.md specifies:
 
-* publishes ``joint_accelerations`` then ``joint_states`` every control period, ``tip_pose``,
-  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame), ``gripper_states`` (on change and at
-  ``sim.gripper_state_rate``), ``robot_description`` (once, latched), ``/clock`` (sim time),
+* publishes ``joint_accelerations`` then ``joint_states`` every control period; ``tip_pose``,
+  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame) at ``sim.pose_rate``; ``gripper_states``
+  (on change and at ``sim.gripper_state_rate``); ``robot_description`` (once, latched);
+  ``/clock`` (sim time, at ``sim.clock_rate``);
   ``/diagnostics`` (1 Hz, wall clock: missed commands, refused and clamped torques);
 * subscribes to ``effort_commands`` (``sensor_msgs/JointState``: joint names and efforts,
   stamped with the state they answer);
@@ -41,6 +42,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf
+from walker_core.spinning import spin_nodes
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import CommandError, EffortCommands, LockStep, seconds_to_ns
@@ -87,6 +89,8 @@ class PlantNode(Node):
         self._accelerations = self.create_publisher(JointAccelerations, 'joint_accelerations',
                                                     SENSOR_QOS)
         self._joint_states = self.create_publisher(JointState, 'joint_states', SENSOR_QOS)
+        self._last_clock_stamp: int | None = None  # [ns]
+        self._last_pose_stamp: int | None = None  # [ns]
         self._poses = {name: self.create_publisher(PoseStamped, name, SENSOR_QOS)
                        for name in ('tip_pose', 'gripper_a_pose', 'gripper_b_pose')}
         self._grippers = self.create_publisher(GripperStates, 'gripper_states', LATCHED_QOS)
@@ -199,13 +203,20 @@ class PlantNode(Node):
     # ------------------------------------------------------------------ publishing
     def _publish(self, state: PlantState) -> None:
         stamp = self._stamp
-        if self._clock_publisher is not None:
+        if self._clock_publisher is not None and (
+                self._last_clock_stamp is None
+                or not 0 <= stamp - self._last_clock_stamp < 1e9 / self.sim.clock_rate - 1):
+            self._last_clock_stamp = stamp
             self._clock_publisher.publish(clock_msg(stamp))
         self._accelerations.publish(accelerations_msg(state, stamp))
         self._joint_states.publish(joint_state_msg(state, stamp))
-        self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
-        for gripper in GRIPPERS:
-            self._poses[f'gripper_{gripper}_pose'].publish(pose_msg(state.poses[gripper], stamp))
+        if self._last_pose_stamp is None or not \
+                0 <= stamp - self._last_pose_stamp < 1e9 / self.sim.pose_rate - 1:
+            self._last_pose_stamp = stamp
+            self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
+            for gripper in GRIPPERS:
+                self._poses[f'gripper_{gripper}_pose'].publish(
+                    pose_msg(state.poses[gripper], stamp))
         self._publish_grippers(state)
         self._last_sent = self._steady_now()
         self.lockstep.begin(stamp, self._last_sent)
@@ -291,7 +302,7 @@ def main(args=None) -> int:
     node = None
     try:
         node = PlantNode()
-        rclpy.spin(node)
+        spin_nodes(node)
     except (ParameterError, ParameterException) as error:
         get_logger('plant').fatal(f'refusing to start: {error}')
         return 1

@@ -38,6 +38,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
+from walker_core.spinning import spin_nodes
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps)
 from walker_supervisor.core.sequencer import (
@@ -535,7 +536,7 @@ def main(args: list[str] | None = None) -> None:
     node = None
     try:
         node = SupervisorNode()
-        rclpy.spin(node)
+        spin_nodes(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ParameterError as error:

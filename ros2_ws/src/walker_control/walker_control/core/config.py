@@ -165,6 +165,9 @@ class ControlParameters:
     state_timeout: float = parameter(
         'a controller holds when no joint state arrived for this long', 's', 0.005, 60.0,
         read_only=False)
+    state_rate: float = parameter(
+        'rate of the controller state messages (plots and bags; every period at or above the '
+        'control rate)', 'Hz', 1.0, 5000.0, read_only=False)
 
     def __post_init__(self) -> None:
         _require_five(self, 'in_position_tolerance')

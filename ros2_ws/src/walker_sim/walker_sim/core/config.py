@@ -68,6 +68,12 @@ class SimParameters:
         's', 0.001, 10.0, read_only=False)
     gripper_state_rate: float = parameter('heartbeat rate of gripper_states', 'Hz', 0.1, 1000.0,
                                           read_only=False)
+    clock_rate: float = parameter(
+        'rate of /clock in sim-time mode (every period at or above the control rate)', 'Hz',
+        1.0, 5000.0)
+    pose_rate: float = parameter(
+        'rate of tip_pose, gripper_a_pose and gripper_b_pose (every period at or above the '
+        'control rate)', 'Hz', 1.0, 5000.0, read_only=False)
     stiction_velocity: float = parameter(
         'joint speed below which a joint is stuck and must break away at the stiction level',
         'rad/s', 1e-6, 1.0)
