@@ -32,13 +32,17 @@ def _cell(value: float | None, spec: str) -> str:
 
 
 def format_table(results: list[JointModes], tuning: FlexTuning | None = None) -> str:
-    """Text table: joint, held-arm mode measured, damping, predicted, target, error, free."""
+    """Text table: joint, held-arm mode measured, damping, amplitude, predicted, target, error.
+
+    The amplitude is the mode's reaction torque at the brake when the joints are all held: a
+    joint whose record holds nothing but solver noise (of the order of 1e-6 N*m) sees no mode.
+    """
     predicted = {} if tuning is None else tuning.predicted
     free_predicted = {} if tuning is None else tuning.free_joint
-    lines = [f'{"joint":<15} {"role":<5} {"measured":>9} {"damping":>8} {"predicted":>9} '
-             f'{"target":>7} {"error":>6}   {"free-joint resonance":>22}',
-             f'{"":<15} {"":<5} {"[rad/s]":>9} {"[-]":>8} {"[rad/s]":>9} {"[rad/s]":>7} '
-             f'{"[%]":>6}   {"measured / predicted":>22}']
+    lines = [f'{"joint":<15} {"role":<5} {"measured":>9} {"damping":>8} {"amplitude":>9} '
+             f'{"predicted":>9} {"target":>7} {"error":>6}   {"free-joint resonance":>22}',
+             f'{"":<15} {"":<5} {"[rad/s]":>9} {"[-]":>8} {"[N*m]":>9} {"[rad/s]":>9} '
+             f'{"[rad/s]":>7} {"[%]":>6}   {"measured / predicted":>22}']
     for result in results:
         role = f'J{PHYSICAL_JOINT_NAMES.index(result.joint) + 1}'
         free = result.free_joint
@@ -46,7 +50,8 @@ def format_table(results: list[JointModes], tuning: FlexTuning | None = None) ->
                      f'{_cell(free_predicted.get(result.joint), ".2f")}')
         lines.append(
             f'{result.joint:<15} {role:<5} {result.seen.frequency:>9.2f} '
-            f'{result.seen.damping:>8.4f} {_cell(predicted.get(result.joint), ".2f"):>9} '
+            f'{result.seen.damping:>8.4f} {result.seen.amplitude:>9.2g} '
+            f'{_cell(predicted.get(result.joint), ".2f"):>9} '
             f'{_cell(result.target, ".1f"):>7} '
             f'{_cell(None if result.error is None else 100 * result.error, "+.1f"):>6}   '
             f'{free_text:>22}')
