@@ -55,8 +55,24 @@ def test_figure6_harness_runs_on_any_plant_core():
     run = analysis.figure6_experiment(lambda: analysis.TwoMassJoint1Model(SETTINGS), SETTINGS,
                                       0.5, distance=0.3, move_time=2.0, settle_time=2.0)
     assert len(run.time) == len(run.joint1) == len(run.tip_deviation) == 2000
+    assert run.tip_position.shape == (2000, 3)
     assert run.ka == 0.5 and math.isfinite(run.residual_amplitude)
     assert abs(run.joint1[-1] - 0.3) < 0.05 * 0.3
+    # the model's joint sticks at the target and its link rings at the model's 18 rad/s
+    assert run.joint1_motion == 0.0
+    assert run.residual_frequency == pytest.approx(
+        SETTINGS.robot.flexibility.joint1_mode, rel=0.05)
+
+
+def test_dominant_frequency_finds_the_peak_of_a_moving_point():
+    time = np.arange(2500) * 0.002
+    direction = np.array([0.6, 0.8, 0.0])
+    points = (np.outer(1e-3 * np.exp(-0.3 * time) * np.sin(17.3 * time), direction)
+              + np.outer(1e-5 * np.sin(90.0 * time), [0.0, 0.0, 1.0]) + [0.2, 0.9, 0.03])
+    assert analysis.dominant_frequency(time, points) == pytest.approx(17.3, rel=0.01)
+    assert analysis.dominant_frequency(time, np.ones((2500, 3))) == 0.0
+    with pytest.raises(ValueError, match='uniformly'):
+        analysis.dominant_frequency(time[:5], points[:5])
 
 
 def test_figure6_with_an_unstable_ka_is_refused():

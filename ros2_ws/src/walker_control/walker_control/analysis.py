@@ -31,13 +31,15 @@ from walker_control.core.stability import (
 
 __all__ = [
     'RouthGridResult', 'routh_grid', 'BodeCurve', 'figure5_curves', 'achievable_ratio',
-    'PlantCore', 'Figure6Run', 'figure6_experiment', 'TwoMassJoint1Model', 'main',
+    'PlantCore', 'Figure6Run', 'figure6_experiment', 'dominant_frequency',
+    'TwoMassJoint1Model', 'main',
 ]
 
 DEFAULT_OUT = Path('runs') / 'analysis'
 FIGURE5_RATIO = 5.0               # wf / wc of the paper's Figure 5
 FIGURE5_KA = (0.0, 0.25, 0.5, 1.0, 2.0, 4.0)
 PEAK_LIMIT_DB = 3.0               # resonance peak allowed in the "achievable" comparison
+FIGURE6_DISTANCE = 0.5            # [rad] joint-1 move of the Figure 6 experiment
 
 
 # ------------------------------------------------------------------------------- routh
@@ -330,19 +332,62 @@ class Figure6Run:
     time, joint1, tip_deviation : ndarray
         Time [s], joint-1 angle [rad], tip distance from its mean position near the target
         (over the residual window) [m].
+    tip_position : ndarray, shape (N, 3)
+        Tip position [m] in the base frame.
     move_time : float
         When the motion to the target ends [s].
     residual_amplitude : float
         Largest tip distance from that mean in the residual window (from ``move_time`` plus
         the settling allowance to the end) [m]: the vibration near the target.
+    residual_frequency : float
+        Dominant angular frequency [rad/s] of the tip's motion in the residual window (the
+        peak of its spectrum along the direction it moves most); 0 when it does not move.
+    joint1_motion : float
+        Peak-to-peak joint-1 angle [rad] in the residual window: 0 when joint 1 has stopped
+        (stuck in its friction) and only the structure rings.
     """
 
     ka: float
     time: np.ndarray
     joint1: np.ndarray
     tip_deviation: np.ndarray
+    tip_position: np.ndarray
     move_time: float
     residual_amplitude: float
+    residual_frequency: float
+    joint1_motion: float
+
+
+def dominant_frequency(time: np.ndarray, points: np.ndarray) -> float:
+    """Angular frequency [rad/s] of the largest spectral peak of a moving point.
+
+    The points (N, 3) are projected on the direction they move most (their principal axis),
+    the mean removed, a Hann window applied and the spectrum zero-padded 8 times; the peak is
+    refined by a parabola through its neighbours. Returns 0 when the points do not move.
+
+    Raises
+    ------
+    ValueError
+        If fewer than 8 samples or non-uniform times are given.
+    """
+    time = np.asarray(time, dtype=float)
+    points = np.asarray(points, dtype=float).reshape(len(time), -1)
+    if len(time) < 8 or not np.allclose(np.diff(time), time[1] - time[0], rtol=1e-6):
+        raise ValueError('dominant_frequency needs at least 8 uniformly spaced samples')
+    centred = points - points.mean(axis=0)
+    if not np.any(centred):
+        return 0.0
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    signal_1d = centred @ axes[0]
+    padded = 8 * len(signal_1d)
+    spectrum = np.abs(np.fft.rfft(signal_1d * np.hanning(len(signal_1d)), padded))
+    peak = int(np.argmax(spectrum[1:])) + 1
+    offset = 0.0
+    if 1 <= peak < len(spectrum) - 1:
+        left, centre, right = spectrum[peak - 1:peak + 2]
+        denominator = left - 2.0 * centre + right
+        offset = 0.5 * (left - right) / denominator if denominator != 0.0 else 0.0
+    return float(2.0 * math.pi * (peak + offset) / (padded * (time[1] - time[0])))
 
 
 def _smooth_move(start: float, distance: float, duration: float, t: float):
@@ -357,7 +402,7 @@ def _smooth_move(start: float, distance: float, duration: float, t: float):
 
 
 def figure6_experiment(make_plant: Callable[[], PlantCore], settings, ka: float, *,
-                       distance: float = 0.5, move_time: float = 4.0,
+                       distance: float = FIGURE6_DISTANCE, move_time: float = 4.0,
                        settle_time: float = 6.0, allowance: float = 1.0) -> Figure6Run:
     """Joint 1 moves to a target in coarse mode with acceleration feedback ``ka``.
 
@@ -407,11 +452,14 @@ def figure6_experiment(make_plant: Callable[[], PlantCore], settings, ka: float,
         tips.append(np.asarray(state.tip_position, dtype=float))
     tips = np.array(tips)
     times = np.array(times)
+    joint1 = np.array(joint1)
     after = times >= move_time + allowance
     deviation = np.linalg.norm(tips - tips[after].mean(axis=0), axis=1)
-    return Figure6Run(ka=float(ka), time=times, joint1=np.array(joint1),
-                      tip_deviation=deviation, move_time=move_time,
-                      residual_amplitude=float(np.max(deviation[after])))
+    return Figure6Run(ka=float(ka), time=times, joint1=joint1, tip_deviation=deviation,
+                      tip_position=tips, move_time=move_time,
+                      residual_amplitude=float(np.max(deviation[after])),
+                      residual_frequency=dominant_frequency(times[after], tips[after]),
+                      joint1_motion=float(np.ptp(joint1[after])))
 
 
 class TwoMassJoint1Model:
@@ -496,8 +544,14 @@ def _plant_factory(args: argparse.Namespace, settings):
         from walker_sim.core import make_plant
     except ImportError:
         return None, ('the Figure 6 experiment runs on the pybullet plant (walker_sim.core), '
-                      'which this installation does not have yet')
-    return (lambda: make_plant(settings)), 'pybullet plant'
+                      'which this installation does not have')
+    from walker_core.robot_parameters import load_walker_parameters
+
+    # Gripper a screwed in, gripper b free at the approach height above its node: the arm is
+    # free to turn about joint 1, as in the paper's experiment.
+    height = load_walker_parameters(args.params_file).gripper.approach_height
+    return (lambda: make_plant(args.params_file, other_attached=False,
+                               other_height=height)), 'pybullet plant'
 
 
 def _run_figure6(args: argparse.Namespace) -> int:
@@ -511,9 +565,14 @@ def _run_figure6(args: argparse.Namespace) -> int:
     ka_file = settings.control.coarse.acceleration_feedback[0]
     runs = [figure6_experiment(factory, settings, ka) for ka in sorted({0.0, ka_file})]
     print(f'Figure 6 on the {what}: joint 1 moves 0.5 rad in 4 s (coarse mode), then holds')
-    print('   Ka  | residual tip vibration after the move [mm]')
+    print('   Ka  | residual tip vibration [mm] | its frequency [rad/s] | joint 1 moves [mrad] '
+          '| joint-1 error at the end [mrad]')
     for run in runs:
-        print(f' {run.ka:5.2f} | {run.residual_amplitude * 1e3:10.3f}')
+        error = run.joint1[-1] - (run.joint1[0] + FIGURE6_DISTANCE)
+        print(f' {run.ka:5.2f} | {run.residual_amplitude * 1e3:27.3f} | '
+              f'{run.residual_frequency:21.1f} | {run.joint1_motion * 1e3:20.4f} | '
+              f'{error * 1e3:+.3f}')
+    print('(residual window: from 1 s after the move to the end, 6 s after it)')
     plt = _pyplot()
     fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
     for run in runs:

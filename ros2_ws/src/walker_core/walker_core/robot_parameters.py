@@ -109,11 +109,19 @@ class Drives:
 
 @dataclasses.dataclass(frozen=True)
 class Flexibility:
-    """Structural modes of the flexible links, as seen at the joints (paper section 3)."""
+    """Structural modes of the flexible links, as seen at the joints (paper section 3).
 
-    joint1_mode: float = parameter('first structural mode seen at joint 1', 'rad/s', 1.0, 1000.0)
-    joints23_mode: float = parameter('first structural mode seen at joints 2 and 3', 'rad/s',
-                                     1.0, 1000.0)
+    The mode seen at a joint is the lowest structural mode of its bending plane that rings at
+    it with the joints held (by the servos, or stuck at rest): see
+    :mod:`walker_sim.core.flexibility`.
+    """
+
+    joint1_mode: float = parameter(
+        'lowest out-of-plane structural mode with the joints held, seen at joint 1', 'rad/s',
+        1.0, 1000.0)
+    joints23_mode: float = parameter(
+        'lowest in-plane structural mode with the joints held, seen at joints 2 and 3',
+        'rad/s', 1.0, 1000.0)
     damping_ratio: float = parameter('structural damping ratio of the modes', '', 0.0, 1.0)
     segments_per_link: int = parameter('rigid segments each flexible link is split into', '',
                                        2, 20)

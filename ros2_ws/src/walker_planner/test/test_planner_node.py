@@ -225,12 +225,16 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
                                    expected.samples.velocity[:, j], atol=1e-12)
         np.testing.assert_allclose([m.acceleration for m in messages],
                                    expected.samples.acceleration[:, j], atol=1e-9)
-    # the stream has ended: another tick brings no setpoint
-    count = probe.count()
-    probe.now += period
-    probe.publish_clock()
-    probe.spin_until(lambda: probe.count() > count, timeout=0.5)
-    assert probe.count() == count
+    # the stream has ended: each tick now brings the last position again, at rest, one period
+    # ahead (the controllers expect a setpoint every period while they track)
+    for _ in range(2):
+        probe.step(stance, period)
+        for j, name in enumerate(probe.names):
+            hold = probe.setpoints[name][-1]
+            assert hold.position == pytest.approx(expected.samples.position[-1, j], abs=1e-12)
+            assert hold.velocity == 0.0 and hold.acceleration == 0.0
+            assert (hold.header.stamp.sec * 1_000_000_000 + hold.header.stamp.nanosec
+                    == probe.now + period)
     probe.clear()
 
 
@@ -300,11 +304,11 @@ def test_stop_trajectory_ends_a_stream_started_by_the_service(graph, context, st
     probe.step(stance, period)  # the hold setpoint
     holds = [probe.setpoints[name][-1] for name in probe.names]
     assert all(h.velocity == 0.0 and h.acceleration == 0.0 for h in holds)
-    count = probe.count()
-    probe.now += period
-    probe.publish_clock()
-    probe.spin_until(lambda: probe.count() > count, timeout=0.5)
-    assert probe.count() == count
+    # the plan no longer advances: the same position keeps coming, at rest
+    probe.step(stance, period)
+    again = [probe.setpoints[name][-1] for name in probe.names]
+    assert [h.position for h in again] == [h.position for h in holds]
+    assert all(h.velocity == 0.0 and h.acceleration == 0.0 for h in again)
     answer = stop.call_async(Trigger.Request())
     assert probe.spin_until(answer.done) and not answer.result().success
     probe.clear()

@@ -90,7 +90,7 @@ def test_torques_are_limited_and_non_finite_ones_refused(make_plant, one_attache
     assert np.all(np.isfinite(state.position)) and np.all(np.isfinite(state.velocity))
 
 
-@pytest.mark.parametrize('dt', [0.0, -0.002, 0.0015, float('nan')])
+@pytest.mark.parametrize('dt', [0.0, -0.002, 0.00125, float('nan')])
 def test_a_step_that_is_not_whole_physics_steps_is_refused(make_plant, dt):
     plant = make_plant()
     with pytest.raises(PlantError, match='step duration'):
@@ -228,3 +228,27 @@ def test_accelerations_are_the_velocity_change_over_the_step(make_plant, one_att
     state = plant.step(5.0 * np.ones(5), 0.002)
     np.testing.assert_allclose(state.acceleration, (state.velocity - before) / 0.002)
     assert np.any(np.abs(state.acceleration) > 1.0)
+
+
+@pytest.mark.parametrize('base', ['a', 'b'])
+def test_the_tip_position_is_in_the_base_frame_of_eq_1(make_plant, one_attached, params, base):
+    """At rest (links straight) it is the forward kinematics of the role angles."""
+    plant = make_plant(one_attached(base, height=0.03))
+    state = plant.state()
+    roles = state.position if base == 'a' else state.position[::-1]
+    expected = WalkerKinematics.from_parameters(params).forward(roles)[:3]
+    assert state.tip_position == pytest.approx(expected, abs=1e-6)
+    assert state.tip_position[2] == pytest.approx(0.03, abs=1e-6)
+
+
+def test_make_plant_builds_the_file_plant_with_a_free_tip():
+    from walker_core.parameter_schema import ParameterError
+    from walker_sim.core import make_plant
+
+    with make_plant(other_attached=False, other_height=0.03) as plant:
+        state = plant.reset()
+        assert state.statuses['a'].mode == GripperMode.ATTACHED
+        assert state.statuses['b'].mode == GripperMode.FREE
+        assert state.tip_position[2] == pytest.approx(0.03, abs=1e-6)
+    with pytest.raises(ParameterError, match='other_height'):
+        make_plant(other_attached=False, other_height=-0.1)

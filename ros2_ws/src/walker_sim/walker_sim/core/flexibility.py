@@ -7,20 +7,36 @@ model has those modes.
 
 What "the mode seen at joint i" means here
 ------------------------------------------
-The resonance of joint i's own (collocated) response, torque at joint i to motion of joint i,
-with the other four joints held still, gripper a attached and gripper b free, at the default
-stance (gripper b one truss spacing from gripper a, both vertical, elbow up): the lowest
-flexible mode of that system that joint i's encoder and accelerometer show, i.e. whose residue
-``phi_ik^2`` (``phi`` the mass-normalised mode shapes) in joint i's response is not negligible.
-It is the first resonance of the open loop the joint controller closes, which the paper's
-low-pass filters must keep out of it. Held joints see the lower, "clamped" modes of the arm
-(reported as ``FlexTuning.clamped``); a joint under feedback sees something in between.
-:mod:`walker_sim.core.identification` measures the same modes on the simulated plant.
+The lowest structural mode that rings at joint i when the joints are held by their servos (all
+five held, gripper a attached, gripper b free, at the default stance: gripper b one truss
+spacing from gripper a, both vertical, elbow up), in joint i's bending plane: for joint 1 the
+lowest out-of-plane mode of the held arm, for joints 2 and 3 the lowest in-plane one. "Rings at
+joint i" means that the mode's reaction torque at joint i's brake (``M_ib phi_k``, ``M`` the
+mass matrix, ``b`` the bending coordinates, ``phi_k`` the mass-normalised mode shape) is not
+negligible: it is what a joint torque sensor or the motor current shows. It is the vibration
+the paper's Figure 6 shows near the target, where the joints are held.
+
+Why this definition: the filters of section 3 must keep these modes out of the loops, and they
+are the modes that ring at rest, when the joints are held by their servos or stuck in their
+stiction, which is most of the time near a target. A definition by the collocated resonance of
+a free joint (joint i free, the others held) gives a link soft enough to lock a bend in: with
+joint 1's free-joint resonance at 18 rad/s the held arm's lowest out-of-plane mode is 5.9 rad/s,
+and at the end of a coarse motion the joint sticks while the link is bent and the spring torque
+is below the breakaway friction, so the bend never decays (the tip 20 mm from where the joint
+angles put it, for a 2 mm insertion tolerance).
+
+With joint i free (the others held) the same springs give higher, *free-joint* (collocated)
+resonances: the first resonance of joint i's own response, torque at joint i to motion of joint
+i, whose residue ``phi_ik^2`` is not negligible. They are reported as
+``FlexTuning.free_joint`` so the controller design can check its filters against them too; a
+joint under feedback sees something between the held and the free figure.
+:mod:`walker_sim.core.identification` measures both on the simulated plant.
 
 Bending in the arm plane (about the pitch axes) is what joints 2-3 see; bending out of it (seen
 in yaw) is what joint 1 sees; at the default stance the two planes decouple, so one stiffness
-per plane sets each target. Joints 2 and 3 cannot both be matched exactly with one in-plane
-stiffness; it is chosen so that the geometric mean of their modes is the target.
+per plane sets each target. Joints 2 and 3 see the same held-arm in-plane modes; the in-plane
+stiffness is chosen so that the geometric mean of what they see is the target (both see the
+same lowest mode, so each is the target).
 
 Damping is stiffness-proportional per plane, ``c = 2 zeta k / omega_target``: the target mode
 gets the damping ratio ``robot.flexibility.damping_ratio``, higher modes more.
@@ -44,10 +60,15 @@ from walker_core.urdf import flex_joints, plant_urdf, rotor_joint_name
 from walker_sim.core.bullet import direct_client, index_body, load_urdf_text
 
 __all__ = ['LinearModel', 'FlexTuning', 'default_stance', 'linear_model', 'tune_flexibility',
-           'first_visible_mode', 'IDENTIFIED_JOINTS', 'VISIBLE_RESIDUE']
+           'first_visible_mode', 'IDENTIFIED_JOINTS', 'JOINT_PLANES', 'VISIBLE_RESIDUE']
 
 #: The joints whose modes the paper gives, with gripper a as base: J1, J2, J3.
 IDENTIFIED_JOINTS = ('a_yaw_joint', 'a_pitch_joint', 'vertex_joint')
+#: The bending plane each joint's axis sees at the stance: the yaw joints turn the arm plane
+#: (out-of-plane bending), the pitch and vertex joints act in it.
+JOINT_PLANES = {'a_yaw_joint': 'out_of_plane', 'a_pitch_joint': 'in_plane',
+                'vertex_joint': 'in_plane', 'b_pitch_joint': 'in_plane',
+                'b_yaw_joint': 'out_of_plane'}
 
 _RIGID_MODE = 1e-3  # [rad/s] below this a mode is a rigid-body motion
 #: Fraction of the largest residue above which a mode counts as seen at a joint.
@@ -117,9 +138,58 @@ class LinearModel:
         eigenvalues, shapes = scipy.linalg.eigh(stiffness, mass)
         return np.sqrt(np.clip(eigenvalues, 0.0, None)), shapes, dofs
 
-    def joint_modes(self, joint: str, in_plane: float, out_of_plane: float
-                    ) -> tuple[np.ndarray, np.ndarray]:
-        """Flexible modes of joint ``joint``'s own response, the other joints held.
+    def held_modes(self, in_plane: float, out_of_plane: float
+                   ) -> tuple[np.ndarray, list[str], np.ndarray]:
+        """Modes of the arm with all five joints held, and the torque each puts on the brakes.
+
+        Parameters
+        ----------
+        in_plane, out_of_plane : float
+            Bending stiffness [N*m/rad] of the two planes.
+
+        Returns
+        -------
+        frequencies : ndarray
+            Natural frequencies [rad/s], ascending.
+        planes : list of str
+            The bending plane of each mode (the plane whose bending joints carry most of its
+            kinetic energy; at the stance each mode lies wholly in one plane).
+        coupling : ndarray, shape (5, modes)
+            ``M_ib phi_k`` [kg*m^2 * 1/sqrt(kg*m^2)]: the reaction torque at held joint i per
+            unit modal acceleration of mode k.
+        """
+        frequencies, shapes, dofs = self.modes((), in_plane, out_of_plane)
+        bends = [self.names.index(name) for name in dofs]
+        in_rows = np.array([self.planes[name] == 'in_plane' for name in dofs])
+        energy = shapes * (self.mass[np.ix_(bends, bends)] @ shapes)
+        planes = ['in_plane' if energy[in_rows, k].sum() >= energy[~in_rows, k].sum()
+                  else 'out_of_plane' for k in range(len(frequencies))]
+        coupling = self.mass[np.ix_(range(len(PHYSICAL_JOINT_NAMES)), bends)] @ shapes
+        return frequencies, planes, coupling
+
+    def held_joint_modes(self, joint: str, in_plane: float, out_of_plane: float
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Held-arm modes in ``joint``'s bending plane and their residues at its brake.
+
+        Returns
+        -------
+        frequencies : ndarray
+            Natural frequencies [rad/s] of the modes in the joint's plane, ascending.
+        residues : ndarray
+            ``(M_ib phi_k)^2`` [kg*m^2] of each: how strongly the mode loads the joint.
+        """
+        frequencies, planes, coupling = self.held_modes(in_plane, out_of_plane)
+        row = PHYSICAL_JOINT_NAMES.index(joint)
+        mine = np.array([plane == JOINT_PLANES[joint] for plane in planes])
+        return frequencies[mine], coupling[row, mine] ** 2
+
+    def held_joint_mode(self, joint: str, in_plane: float, out_of_plane: float) -> float:
+        """Return the mode seen at ``joint`` [rad/s]: held arm, its plane (module docstring)."""
+        return first_visible_mode(*self.held_joint_modes(joint, in_plane, out_of_plane))
+
+    def free_joint_modes(self, joint: str, in_plane: float, out_of_plane: float
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Flexible modes of joint ``joint``'s own response, that joint free, the others held.
 
         Returns
         -------
@@ -132,19 +202,23 @@ class LinearModel:
         flexible = frequencies > _RIGID_MODE
         return frequencies[flexible], shapes[0, flexible] ** 2
 
-    def joint_mode(self, joint: str, in_plane: float, out_of_plane: float) -> float:
-        """Return the first structural mode [rad/s] seen at ``joint`` (module docstring)."""
-        return first_visible_mode(*self.joint_modes(joint, in_plane, out_of_plane))
+    def free_joint_mode(self, joint: str, in_plane: float, out_of_plane: float) -> float:
+        """Return the free-joint (collocated) resonance [rad/s] of ``joint``."""
+        return first_visible_mode(*self.free_joint_modes(joint, in_plane, out_of_plane))
 
 
 def first_visible_mode(frequencies, residues) -> float:
     """Lowest mode whose residue is at least :data:`VISIBLE_RESIDUE` of the largest one.
 
-    Modes of the other bending plane have no residue at all at a joint (the planes decouple
-    at the stance); the threshold only has to tell zero from non-zero.
+    Raises
+    ------
+    ValueError
+        If there is no mode, or none with a residue above zero.
     """
     frequencies = np.asarray(frequencies, dtype=float)
     residues = np.asarray(residues, dtype=float)
+    if len(frequencies) == 0 or not residues.max() > 0.0:
+        raise ValueError('no mode is seen: every residue is zero')
     visible = residues >= VISIBLE_RESIDUE * residues.max()
     return float(frequencies[visible].min())
 
@@ -192,9 +266,14 @@ class FlexTuning:
     in_plane_damping, out_of_plane_damping : float
         Damping of each bending joint [N*m*s/rad].
     predicted : dict
-        Joint name -> predicted mode seen at that joint [rad/s] (J1-J3, default stance).
-    clamped : tuple of float
-        Lowest natural frequencies [rad/s] with all five joints held (default stance).
+        Joint name -> predicted mode seen at that joint [rad/s] (J1-J3, default stance): the
+        lowest held-arm mode of its plane (module docstring).
+    free_joint : dict
+        Joint name -> predicted free-joint (collocated) resonance [rad/s] (J1-J3): joint i
+        free, the others held. Higher than ``predicted``; what the filter of a joint whose
+        own loop is soft faces.
+    held : tuple of float
+        Lowest natural frequencies [rad/s] with all five joints held, both planes.
     stiffest : float
         Highest natural frequency [rad/s] of the model (all joints free or all held), which
         bounds the physics step.
@@ -207,7 +286,8 @@ class FlexTuning:
     in_plane_damping: float
     out_of_plane_damping: float
     predicted: dict[str, float]
-    clamped: tuple[float, ...]
+    free_joint: dict[str, float]
+    held: tuple[float, ...]
     stiffest: float
     stance: tuple[float, ...]
 
@@ -229,7 +309,7 @@ class FlexTuning:
 
 
 def tune_flexibility(params, model: LinearModel | None = None) -> FlexTuning:
-    """Size the bending springs so the model has the paper's modes at the default stance.
+    """Size the bending springs so the held arm has the paper's modes at the default stance.
 
     Parameters
     ----------
@@ -242,16 +322,23 @@ def tune_flexibility(params, model: LinearModel | None = None) -> FlexTuning:
     Returns
     -------
     FlexTuning
-        Stiffness and damping per plane, and the predicted modes.
+        Stiffness and damping per plane, the predicted modes seen at J1-J3 (held arm) and the
+        free-joint resonances.
+
+    Notes
+    -----
+    Each plane's modes scale with the square root of its stiffness; the planes decouple at the
+    stance, so the fixed-point iteration (one stiffness per plane rescaled by its target ratio
+    squared) converges in a step or two. It is kept general for stances where they do not.
     """
     model = linear_model(params) if model is None else model
     flexibility = params.robot.flexibility
     yaw_joint, pitch_joint, vertex_joint = IDENTIFIED_JOINTS
     in_plane, out_of_plane = 1.0, 1.0
     for _ in range(_MAX_ITERATIONS):
-        yaw = model.joint_mode(yaw_joint, in_plane, out_of_plane)
-        pitch = model.joint_mode(pitch_joint, in_plane, out_of_plane)
-        vertex = model.joint_mode(vertex_joint, in_plane, out_of_plane)
+        yaw = model.held_joint_mode(yaw_joint, in_plane, out_of_plane)
+        pitch = model.held_joint_mode(pitch_joint, in_plane, out_of_plane)
+        vertex = model.held_joint_mode(vertex_joint, in_plane, out_of_plane)
         new_out = out_of_plane * (flexibility.joint1_mode / yaw) ** 2
         new_in = in_plane * flexibility.joints23_mode ** 2 / (pitch * vertex)
         converged = (math.isclose(new_out, out_of_plane, rel_tol=_RELATIVE_TOLERANCE)
@@ -259,8 +346,10 @@ def tune_flexibility(params, model: LinearModel | None = None) -> FlexTuning:
         in_plane, out_of_plane = new_in, new_out
         if converged:
             break
-    predicted = {joint: model.joint_mode(joint, in_plane, out_of_plane)
+    predicted = {joint: model.held_joint_mode(joint, in_plane, out_of_plane)
                  for joint in IDENTIFIED_JOINTS}
+    free_joint = {joint: model.free_joint_mode(joint, in_plane, out_of_plane)
+                  for joint in IDENTIFIED_JOINTS}
     held, _, _ = model.modes((), in_plane, out_of_plane)
     free, _, _ = model.modes(PHYSICAL_JOINT_NAMES, in_plane, out_of_plane)
     zeta = flexibility.damping_ratio
@@ -268,6 +357,6 @@ def tune_flexibility(params, model: LinearModel | None = None) -> FlexTuning:
         in_plane_stiffness=in_plane, out_of_plane_stiffness=out_of_plane,
         in_plane_damping=2.0 * zeta * in_plane / flexibility.joints23_mode,
         out_of_plane_damping=2.0 * zeta * out_of_plane / flexibility.joint1_mode,
-        predicted=predicted, clamped=tuple(float(w) for w in held[:4]),
+        predicted=predicted, free_joint=free_joint, held=tuple(float(w) for w in held[:4]),
         stiffest=float(max(held.max(), free.max())),
         stance=tuple(float(a) for a in model.stance))

@@ -181,6 +181,17 @@ class PlantState:
         """The gripper that is not the base."""
         return other_gripper(self.base)
 
+    @property
+    def tip_position(self) -> np.ndarray:
+        """True position [m] of the tip gripper's contact point in the base gripper's frame.
+
+        Where the flexible robot's tip really is (links bent or not), in the frame of the
+        paper's eq (1); compare with the forward kinematics of ``position``.
+        """
+        base = self.poses[self.base].matrix()
+        tip = self.poses[self.tip].position
+        return base[:3, :3].T @ (tip - base[:3, 3])
+
 
 class WalkerPlant:
     """The simulated walker on its truss.

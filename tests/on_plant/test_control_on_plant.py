@@ -1,0 +1,125 @@
+"""The joint controllers on the flexible plant: filters, fine steps, and Figure 6 measured.
+
+The plant core and the five controller cores run in one process (no ROS), at the control rate,
+gripper a screwed into its node and gripper b free at the approach height above its own.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from plant_loop import ClosedLoop
+from walker_control import analysis
+from walker_control.core.config import load_controller_settings
+from walker_control.core.lowpass import LowPassFilter
+from walker_control.core.modes import Mode
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.robot_parameters import load_walker_parameters
+from walker_sim.core import make_plant
+from walker_sim.core.config import StartConfiguration, load_sim_parameters
+from walker_sim.core.flexibility import IDENTIFIED_JOINTS, tune_flexibility
+from walker_sim.core.plant import WalkerPlant
+
+PARAMS = load_walker_parameters()
+SETTINGS = load_controller_settings()
+TUNING = tune_flexibility(PARAMS)
+STEP = 0.02  # [rad] the fine-mode step, as on the rigid model (walker_control's tests)
+
+
+def attenuation_db(role: int, frequency: float) -> float:
+    """Gain [dB] of role ``role``'s low-pass filter at ``frequency`` [rad/s]."""
+    settings = SETTINGS.control.filter
+    lowpass = LowPassFilter(settings.order[role - 1], settings.corner[role - 1],
+                            SETTINGS.sample_time, settings.kind)
+    return 20 * math.log10(abs(lowpass.frequency_response(np.array([frequency]))[0]))
+
+
+@pytest.mark.parametrize('joint', IDENTIFIED_JOINTS)
+def test_the_filters_keep_the_plants_modes_out_of_the_loops(joint):
+    """Section 3: the held-arm mode and the free-joint resonance of each filtered joint.
+
+    Joint 1: at least 20 dB down at both; joints 2-3 at least 12 dB (the bounds of
+    walker_control's own filter test, against the plant's figures rather than the file's).
+    """
+    role = PHYSICAL_JOINT_NAMES.index(joint) + 1
+    bound = -20.0 if role == 1 else -12.0
+    assert attenuation_db(role, TUNING.predicted[joint]) < bound
+    assert attenuation_db(role, TUNING.free_joint[joint]) < bound
+
+
+@pytest.mark.parametrize('joint', PHYSICAL_JOINT_NAMES)
+def test_each_joint_reaches_a_fine_step_within_its_tolerance_on_the_plant(joint):
+    index = PHYSICAL_JOINT_NAMES.index(joint)
+    tolerance = SETTINGS.control.in_position_tolerance[index]
+    start = StartConfiguration('a', 'n1_1', 'n2_1', False, PARAMS.gripper.approach_height)
+    with WalkerPlant(PARAMS, load_sim_parameters()) as plant:
+        loop = ClosedLoop(plant, SETTINGS)
+        target = plant.reset(start).position.copy()
+        target[index] += STEP
+        loop.command(Mode.FINE)
+        # J1 settles in about 3 s (wc = 0.7 rad/s), the others within 1 s
+        seconds = 8.0 / SETTINGS.control.fine.bandwidth[index] + 1.0
+        loop.hold_setpoint(target, seconds)
+        time, position, _, _ = loop.record.arrays()
+    last_second = time > time[-1] - 1.0
+    error = np.abs(position[last_second] - target)
+    assert error[:, index].max() < tolerance, f'{joint} ends {error[-1, index]:.4f} rad off'
+
+
+@pytest.fixture(scope='module')
+def figure6():
+    """Figure 6 on the plant: joint 1 moves 0.5 rad in coarse mode without and with Ka."""
+    height = PARAMS.gripper.approach_height
+    ka = SETTINGS.control.coarse.acceleration_feedback[0]
+    assert ka > 0.0
+    return {k: analysis.figure6_experiment(
+        lambda: make_plant(other_attached=False, other_height=height), SETTINGS, k)
+        for k in (0.0, ka)}
+
+
+def test_figure6_joint_1_reaches_its_target_with_and_without_ka(figure6):
+    for run in figure6.values():
+        target = run.joint1[0] + analysis.FIGURE6_DISTANCE
+        assert abs(run.joint1[-1] - target) < SETTINGS.control.in_position_tolerance[0]
+
+
+def test_figure6_the_residual_vibration_is_the_held_arm_mode_with_joint_1_stuck(figure6):
+    """What rings near the target is the structure, not the loop.
+
+    After arrival joint 1 stops in its stiction and does not move again; the tip rings at the
+    lowest out-of-plane mode of the held arm (18 rad/s), decaying at the structure's own
+    damping. A joint-space controller whose command is filtered below 8 rad/s, acting on a
+    joint that does not move, has no hold on it.
+    """
+    for run in figure6.values():
+        assert run.joint1_motion < 1e-6
+        assert run.residual_frequency == pytest.approx(TUNING.predicted['a_yaw_joint'],
+                                                       rel=0.10)
+
+
+def test_figure6_ka_does_not_reduce_the_residual_vibration_on_the_plant(figure6):
+    """The paper's claim ("effectively eliminated") does not hold on this plant.
+
+    Ka damps the loop's own filter-lag resonance (eq (14), Figure 5), but at the file's gains
+    the loop without Ka already arrives without oscillating and the residual is the held-arm
+    mode above; Ka leaves it about as it is (measured: slightly larger). See the README.
+    """
+    without, with_ka = figure6[0.0], figure6[max(figure6)]
+    assert with_ka.residual_amplitude > 0.8 * without.residual_amplitude
+
+
+def test_the_figure6_command_runs_on_the_pybullet_plant_with_the_tip_free():
+    import argparse
+
+    factory, what = analysis._plant_factory(argparse.Namespace(model='plant', params_file=None),
+                                            SETTINGS)
+    assert what == 'pybullet plant'
+    plant = factory()
+    try:
+        plant.reset()
+        state = plant.state()
+        assert isinstance(plant, WalkerPlant) and state.base == 'a'
+        assert state.tip_position[2] == pytest.approx(PARAMS.gripper.approach_height, abs=1e-6)
+    finally:
+        plant.close()
