@@ -38,7 +38,7 @@ class Probe:
         from sensor_msgs.msg import JointState
         from trajectory_msgs.msg import JointTrajectory
         from walker_msgs.action import FollowTrajectory
-        from walker_msgs.msg import JointCommand
+        from walker_msgs.msg import ControlMode, JointCommand
         from walker_msgs.srv import PlanTrajectory
 
         from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
@@ -55,6 +55,10 @@ class Probe:
             JointState, '/walker/joint_states',
             QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
         self.planner = self.node.create_client(PlanTrajectory, '/walker/plan_trajectory')
+        self.mode_publisher = self.node.create_publisher(
+            ControlMode, '/walker/control_mode',
+            QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.follow = ActionClient(self.node, FollowTrajectory, '/walker/follow_trajectory')
         self.setpoints = {name: [] for name in self.names}
         for name in self.names:
@@ -94,6 +98,12 @@ class Probe:
         message.header.stamp.sec, message.header.stamp.nanosec = divmod(self.now,
                                                                         1_000_000_000)
         self.state_publisher.publish(message)
+
+    def command_mode(self, mode: str) -> None:
+        from walker_msgs.msg import ControlMode
+
+        value = {'hold': ControlMode.HOLD, 'fine': ControlMode.FINE}[mode]
+        self.mode_publisher.publish(ControlMode(mode=value, base_gripper='a'))
 
     def call(self, **fields):
         future = self.planner.call_async(self.Request(**fields))
@@ -225,8 +235,17 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
                                    expected.samples.velocity[:, j], atol=1e-12)
         np.testing.assert_allclose([m.acceleration for m in messages],
                                    expected.samples.acceleration[:, j], atol=1e-9)
-    # the stream has ended: each tick now brings the last position again, at rest, one period
-    # ahead (the controllers expect a setpoint every period while they track)
+    # the stream has ended: with the controllers holding on their own, a tick brings nothing
+    count = probe.count()
+    probe.now += period
+    probe.publish_clock()
+    probe.publish_state(stance)
+    probe.spin_until(lambda: probe.count() > count, timeout=0.5)
+    assert probe.count() == count
+    # while they track (COARSE or FINE) they need a setpoint every period: the last position
+    # comes again, at rest, one period ahead of each state
+    probe.command_mode('fine')
+    settle(probe, stance)
     for _ in range(2):
         probe.step(stance, period)
         for j, name in enumerate(probe.names):
@@ -235,6 +254,8 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
             assert hold.velocity == 0.0 and hold.acceleration == 0.0
             assert (hold.header.stamp.sec * 1_000_000_000 + hold.header.stamp.nanosec
                     == probe.now + period)
+    probe.command_mode('hold')
+    settle(probe, stance)
     probe.clear()
 
 
@@ -304,11 +325,12 @@ def test_stop_trajectory_ends_a_stream_started_by_the_service(graph, context, st
     probe.step(stance, period)  # the hold setpoint
     holds = [probe.setpoints[name][-1] for name in probe.names]
     assert all(h.velocity == 0.0 and h.acceleration == 0.0 for h in holds)
-    # the plan no longer advances: the same position keeps coming, at rest
-    probe.step(stance, period)
-    again = [probe.setpoints[name][-1] for name in probe.names]
-    assert [h.position for h in again] == [h.position for h in holds]
-    assert all(h.velocity == 0.0 and h.acceleration == 0.0 for h in again)
+    # the plan no longer advances: with the controllers holding, nothing more comes
+    count = probe.count()
+    probe.now += period
+    probe.publish_state(stance)
+    probe.spin_until(lambda: probe.count() > count, timeout=0.5)
+    assert probe.count() == count
     answer = stop.call_async(Trigger.Request())
     assert probe.spin_until(answer.done) and not answer.result().success
     probe.clear()
