@@ -24,7 +24,7 @@ import rclpy
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 
-__all__ = ['make_executor', 'spin_nodes', 'EXECUTOR_VARIABLE']
+__all__ = ['make_executor', 'spin_nodes', 'TopicSampler', 'EXECUTOR_VARIABLE']
 
 #: Environment variable choosing the executor: ``events`` (default) or ``single``.
 EXECUTOR_VARIABLE = 'WALKER_EXECUTOR'
@@ -67,3 +67,47 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
         for node in nodes:
             executor.remove_node(node)
         executor.shutdown(timeout_sec=0.0)
+
+
+class TopicSampler:
+    """Subscriptions read on demand, for high-rate topics a node needs only now and then.
+
+    A subscription that an executor spins costs a Python callback per message; the supervisor
+    needs the 500 Hz joint states only at its own decision rate. The sampler's subscriptions
+    live on a helper node that no executor spins: DDS keeps the newest messages (up to the QoS
+    depth) and :meth:`take` hands them over when asked.
+
+    Parameters
+    ----------
+    name : str
+        Name of the helper node (shown in the ROS graph).
+    namespace : str
+        Its namespace: the namespace of the node it serves. Command-line remaps are not applied
+        to it, so topic names are taken literally (relative to ``namespace``).
+    context : rclpy.context.Context, optional
+    """
+
+    def __init__(self, name: str, namespace: str, context=None) -> None:
+        self.node = Node(name, namespace=namespace, context=context, use_global_arguments=False,
+                         start_parameter_services=False, enable_rosout=False)
+        self._types: dict[object, type] = {}
+
+    def subscribe(self, message_type: type, topic: str, qos) -> object:
+        """Create a sampled subscription; return the handle :meth:`take` expects."""
+        subscription = self.node.create_subscription(message_type, topic, lambda _: None, qos)
+        self._types[subscription] = message_type
+        return subscription
+
+    def take(self, subscription) -> list:
+        """Every message received on ``subscription`` since the last call, oldest first."""
+        message_type = self._types[subscription]
+        messages = []
+        while True:
+            taken = subscription.handle.take_message(message_type, False)
+            if taken is None:
+                return messages
+            messages.append(taken[0])
+
+    def destroy(self) -> None:
+        """Destroy the helper node and its subscriptions."""
+        self.node.destroy_node()

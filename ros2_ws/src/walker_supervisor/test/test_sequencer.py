@@ -29,7 +29,7 @@ class World:
     """Executes the sequencer's commands: ideal tracking, scripted gripper results."""
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
-                 stall_trajectories=False):
+                 stall_trajectories=False, coarse_miss=0.0):
         self.stance = stance
         self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
         self.now = 0.0
@@ -39,6 +39,7 @@ class World:
         self.grippers = {'a': 'attached', 'b': 'attached'}
         self.frame = BaseFrame.from_stance(KIN, self.theta, base, other)
         self.jams, self.refuse_unscrew, self.stall = jams, refuse_unscrew, stall_trajectories
+        self.coarse_miss = coarse_miss  # [rad] J1 stops this short of the coarse goal
         self.log = []
         self.phases = []
         self.motion = None
@@ -89,7 +90,10 @@ class World:
             request, started, duration = self.motion
             fraction = min(1.0, (self.now - started) / duration)
             previous = self.theta
-            self.theta = request.start + fraction * (request.goal - request.start)
+            goal = request.goal.copy()
+            if request.purpose == 'coarse':
+                goal[0] -= self.coarse_miss * math.copysign(1.0, request.sweep)
+            self.theta = request.start + fraction * (goal - request.start)
             velocities = (self.theta - previous) / DT
             if fraction >= 1.0:
                 self.motion = None
@@ -128,16 +132,31 @@ def test_controller_modes_follow_the_phases():
     assert modes[0] == 'fine' and 'coarse' in modes
     assert modes.index('coarse') < len(modes) - 1 - modes[::-1].index('fine')
     purposes = [c.purpose for c in world.log if isinstance(c, TrajectoryRequest)]
-    assert purposes[0] == 'extraction' and purposes[1] == 'coarse'
-    assert purposes[-1] == 'insertion' and 'fine' in purposes
+    # tracking is ideal here: the coarse motion ends on the point above the hole, no fine line
+    assert purposes == ['extraction', 'coarse', 'insertion']
 
 
-def test_coarse_hands_over_to_fine_inside_the_region_cancelling_the_stream():
+def test_coarse_hands_over_to_fine_mode_inside_the_region_and_runs_to_its_end():
     world = World()
     world.run_step(possible_steps(TRUSS, world.stance)[0])
-    index = next(i for i, c in enumerate(world.log)
-                 if isinstance(c, TrajectoryRequest) and c.purpose == 'fine')
-    assert isinstance(world.log[index - 2], CancelTrajectory), 'coarse stream not cancelled'
+    coarse = next(i for i, c in enumerate(world.log)
+                  if isinstance(c, TrajectoryRequest) and c.purpose == 'coarse')
+    fine = next(i for i, c in enumerate(world.log[coarse:], coarse)
+                if isinstance(c, SetControlMode) and c.mode == 'fine')
+    assert not any(isinstance(c, CancelTrajectory) for c in world.log), 'nothing is cancelled'
+    assert world.phases.count(Phase.FINE) > 0
+    assert fine > coarse
+
+
+def test_a_tip_that_settles_off_the_hole_gets_a_fine_line_from_where_it_settled():
+    world = World(coarse_miss=0.004)  # 3.6 mm short at 0.9 m
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    lines = [c for c in world.log if isinstance(c, TrajectoryRequest) and c.purpose == 'fine']
+    assert len(lines) == 1
+    settled_tip = KIN.forward(lines[0].start)[:3]
+    assert np.linalg.norm(settled_tip - lines[0].goal_point) > SUPERVISOR.insertion_alignment
+    np.testing.assert_allclose(lines[0].goal_point, world.targets.point_above_to)
 
 
 def test_the_unscrew_waits_for_the_base_and_never_releases_it():

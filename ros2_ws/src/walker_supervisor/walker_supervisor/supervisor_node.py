@@ -23,7 +23,7 @@ import numpy as np
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -38,7 +38,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
-from walker_core.spinning import spin_nodes
+from walker_core.spinning import TopicSampler
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps)
 from walker_supervisor.core.sequencer import (
@@ -58,6 +58,10 @@ _REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       history=HistoryPolicy.KEEP_LAST)
 _SENSOR = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
                      durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+# Poses are kept between two decisions (at 100 Hz, two or three per 50 Hz tick) for the
+# vibration figures.
+_POSES = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT,
+                    durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
 _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
                    GripperState.ATTACHED: 'attached', GripperState.UNSCREWING: 'unscrewing',
                    GripperState.JAMMED: 'jammed'}
@@ -103,10 +107,15 @@ class SupervisorNode(Node):
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
-        self.create_subscription(JointState, 'joint_states', self._on_joint_states, _SENSOR)
+        # The joint states (500 Hz) and the tip pose are sampled at the decision rate, not
+        # handled message by message: a Python callback per message would cost more CPU than
+        # every decision the supervisor makes.
+        self._sampler = TopicSampler(f'{self.get_name()}_sampler', self.get_namespace(),
+                                     self.context)
+        self._joint_states = self._sampler.subscribe(JointState, 'joint_states', _SENSOR)
+        self._tip_poses = self._sampler.subscribe(PoseStamped, 'tip_pose', _POSES)
         self.create_subscription(GripperStates, 'gripper_states', self._on_gripper_states,
                                  _LATCHED)
-        self.create_subscription(PoseStamped, 'tip_pose', self._on_tip_pose, _SENSOR)
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, _LATCHED)
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
@@ -158,7 +167,8 @@ class SupervisorNode(Node):
 
     def _on_tip_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
-        self.vibration.add(self._now(), np.array([p.x, p.y, p.z]))
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        self.vibration.add(stamp, np.array([p.x, p.y, p.z]))
 
     def _on_control_mode(self, msg: ControlMode) -> None:
         # A restarted supervisor takes the base back from the latched mode.
@@ -282,8 +292,21 @@ class SupervisorNode(Node):
         return 'the walk did not finish'
 
     # ------------------------------------------------------------------ the decision loop
+    def _sample_measurements(self) -> None:
+        states = self._sampler.take(self._joint_states)
+        if states:
+            self._on_joint_states(states[-1])
+        for pose in self._sampler.take(self._tip_poses):
+            self._on_tip_pose(pose)
+
+    def destroy_node(self) -> None:
+        """Destroy the node and its sampler."""
+        self._sampler.destroy()
+        super().destroy_node()
+
     def _tick(self) -> None:
         now = self._now()
+        self._sample_measurements()
         if self._positions is not None:
             self._execute(self.sequencer.tick(now, self._theta_roles(),
                                               physical_to_roles(self._velocities,
@@ -360,9 +383,12 @@ class SupervisorNode(Node):
         report.residual_vibration = float(self._residual_vibration)
         report.insertion_attempts = outcome.insertion_attempts
         self.report_pub.publish(report)
-        level = self.get_logger().info if outcome.success else self.get_logger().error
-        level(f'step {report.step_index + 1} {"done" if outcome.success else "failed"} in '
-              f'{outcome.duration:.2f} s' + (f': {outcome.message}' if outcome.message else ''))
+        text = (f'step {report.step_index + 1} {"done" if outcome.success else "failed"} in '
+                f'{outcome.duration:.2f} s' + (f': {outcome.message}' if outcome.message else ''))
+        if outcome.success:
+            self.get_logger().info(text)
+        else:
+            self.get_logger().error(text)
 
     # ------------------------------------------------------------------ commands
     def _execute(self, commands: list) -> None:
@@ -497,10 +523,12 @@ class SupervisorNode(Node):
         if key == self._last_phase:
             return
         if self._last_phase is not None and key[0] != self._last_phase[0]:
-            log = self.get_logger().warning if self.sequencer.phase == Phase.SAFE_HOLD \
-                else self.get_logger().info
-            log(f'phase {self.sequencer.phase.name}'
-                + (f': {self.sequencer.reason}' if self.sequencer.reason else ''))
+            text = (f'phase {self.sequencer.phase.name}'
+                    + (f': {self.sequencer.reason}' if self.sequencer.reason else ''))
+            if self.sequencer.phase == Phase.SAFE_HOLD:
+                self.get_logger().warning(text)
+            else:
+                self.get_logger().info(text)
         self._last_phase = key
         msg = StepPhase(phase=int(self.sequencer.phase),
                         base_gripper=self.sequencer.base_gripper,
@@ -536,7 +564,13 @@ def main(args: list[str] | None = None) -> None:
     node = None
     try:
         node = SupervisorNode()
-        spin_nodes(node)
+        # The default executor: the supervisor's asynchronous service and action calls have
+        # shown a failure inside the events executor, and it handles few messages (its high-rate
+        # inputs are sampled).
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ParameterError as error:

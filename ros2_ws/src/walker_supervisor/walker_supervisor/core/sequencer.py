@@ -11,9 +11,14 @@ Rules it enforces:
 * a step starts only with both grippers attached, and the moving gripper is unscrewed only while
   the base gripper is verified attached;
 * coarse motion (controllers in COARSE mode: low gains, acceleration feedback) ends when the tip
-  error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``;
-* fine motion (FINE mode: higher gains, integral action) ends when the tip is within
-  ``insertion_alignment`` of the point above the hole and the joints have settled;
+  error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``:
+  the controllers then switch to FINE mode (higher gains, integral action) while the coarse
+  trajectory runs on to its end, the point above the hole;
+* fine motion ends when the joints have settled (``settle_time``, long enough for the links'
+  ringing to decay, which the joints do not show) with the tip within ``insertion_alignment``
+  of the point above the hole; if it is not, a constant-velocity fine line (paper section 5)
+  takes it there from where it settled, up to ``MAX_FINE_LINES`` times before insertion is
+  tried anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
   ``max_insertion_attempts`` times, then the step is aborted to SAFE_HOLD;
 * any failure or a phase that overruns its planned time by ``phase_timeout`` ends in SAFE_HOLD:
@@ -48,6 +53,10 @@ class Phase(enum.IntEnum):
     FINE = 3
     INSERTION = 4
     SAFE_HOLD = 5
+
+
+#: Fine correction lines tried before insertion is attempted anyway.
+MAX_FINE_LINES = 3
 
 
 class SequencerError(ValueError):
@@ -190,6 +199,7 @@ class StepSequencer:
         self._settled_since: float | None = None
         self._attempts = 0
         self._durations: dict[str, float] = {}
+        self._fine_lines = 0
         self._insertion_error = math.nan
         self._trajectory_running = False
 
@@ -239,6 +249,7 @@ class StepSequencer:
         self._step_started = now
         self._durations = {}
         self._attempts = 0
+        self._fine_lines = 0
         self._insertion_error = math.nan
         self.outcome = None
         self.reason = ''
@@ -283,17 +294,18 @@ class StepSequencer:
                                f'{message}', now)
         if self.stage == 'lifting':
             return self._enter_coarse(now)
-        if self.stage == 'moving' and self.phase == Phase.COARSE:
+        if self.phase == Phase.COARSE:  # arrived before the region: wait for the error
             self.stage = 'arriving'
             self._deadline = now + self.parameters.phase_timeout
             return []
-        if self.stage == 'moving' and self.phase == Phase.FINE:
+        if self.phase == Phase.FINE:  # the coarse motion or a fine line ended: settle
             self.stage = 'settling'
             self._settled_since = None
             self._deadline = now + self.parameters.phase_timeout
             return []
-        if self.stage == 'retry_lift':
-            return self._enter_fine(now)
+        if self.stage == 'retry_lift':  # above the hole again: settle, check, insert again
+            self._fine_lines = 0
+            return self._enter_fine(now, correction=False)
         if self.stage == 'descending':
             self.stage = 'settling'
             self._settled_since = None
@@ -315,12 +327,13 @@ class StepSequencer:
             return self._abort(f'{self.phase.name.lower()} overran its planned time '
                                f'({self.stage})', now)
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
-            return self._enter_fine(now)
+            return self._enter_fine(now, correction=False)
         if self.stage == 'settling' and self._settled(now, velocities):
             if self.phase == Phase.FINE:
-                if self.tip_error() <= self.parameters.insertion_alignment:
+                if self.tip_error() <= self.parameters.insertion_alignment \
+                        or self._fine_lines >= MAX_FINE_LINES:
                     return self._enter_insertion(now)
-                return self._enter_fine(now)  # settled but not aligned: another fine line
+                return self._enter_fine(now, correction=True)  # settled, not aligned: a line
             if self.phase == Phase.INSERTION:
                 self.stage = 'screwing'
                 self._deadline = math.inf
@@ -368,15 +381,24 @@ class StepSequencer:
                 self._trajectory('coarse', t.above_from, t.above_to, t.point_above_from,
                                  t.point_above_to, t.sweep)]
 
-    def _enter_fine(self, now: float) -> list:
-        commands = [CancelTrajectory()] if self._trajectory_running else []
-        self._trajectory_running = False
+    def _enter_fine(self, now: float, correction: bool) -> list:
+        """Switch the controllers to FINE; with ``correction``, also run a fine line.
+
+        Without a correction the coarse trajectory (if still streaming) runs on to its end, the
+        point above the hole; a correction starts from where the joints have settled.
+        """
+        commands = []
         if self.phase != Phase.FINE:
-            self._enter(Phase.FINE, now, 'moving')
+            self._enter(Phase.FINE, now, 'arriving' if self._trajectory_running else 'settling')
+            self._deadline = now + self.parameters.phase_timeout if not self._trajectory_running \
+                else self._deadline
+            commands.append(SetControlMode('fine', self._step.base_gripper))
+        if not correction:
+            return commands
+        self._fine_lines += 1
         self.stage = 'moving'
         tip = self.kinematics.forward(self._theta)[:3]
-        return commands + [SetControlMode('fine', self._step.base_gripper),
-                           self._trajectory('fine', self._theta, self._targets.above_to, tip,
+        return commands + [self._trajectory('fine', self._theta, self._targets.above_to, tip,
                                             self._targets.point_above_to)]
 
     def _enter_insertion(self, now: float) -> list:
