@@ -1,63 +1,31 @@
 #!/usr/bin/env python3
-"""walker's main job: set up what is missing, bring up the node graph, walk, report.
+"""walker's main job: set up what is missing, bring up the node graph, walk, record, report.
 
-Usage: ``python3 scripts/run_all.py`` (no arguments needed).
+Usage: ``python3 scripts/run_all.py`` (no arguments needed); ``--help`` lists the options.
 
-The node graph (plant, five joint controllers, planner, step-phase supervisor) is being built
-package by package; until the walk exists this command sets everything up, validates the
-parameter file, shows the robot model it describes, and says which parts of the graph exist.
+It brings the plant, the five joint controllers, the planner, the step-phase supervisor and the
+recorder up as separate processes, waits until the graph is ready, walks the robot across the
+default truss to a target node, records the walk as a rosbag2 bag, prints a summary per step
+and shuts everything down, leaving no process behind.
 """
 
-import argparse
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import walker_env
-
-
-def _parse_arguments() -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('--params-file', default=None,
-                        help='parameter file (default: walker_core/config/walker.yaml)')
-    return parser.parse_args()
+import walker_env  # noqa: E402
 
 
 def main() -> int:
-    """Run the main job; return the process exit code."""
-    args = _parse_arguments()
+    """Set up, then run :func:`walker_bringup.run.main` in the prepared environment."""
+    if any(arg in ('-h', '--help') for arg in sys.argv[1:]) and \
+            os.environ.get('WALKER_ENV_READY') != '1':
+        print(__doc__)
     walker_env.reexec_in_environment(os.path.abspath(__file__), sys.argv[1:])
+    from walker_bringup.run import main as run
 
-    import numpy as np
-
-    from walker_core.dynamics import RigidModel, diagonal_inertia
-    from walker_core.kinematics import WalkerKinematics
-    from walker_core.parameter_schema import ParameterError
-    from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-    from walker_core.truss import Truss
-
-    path = args.params_file or default_parameter_file()
-    try:
-        params = load_walker_parameters(path)
-    except ParameterError as error:
-        print(f'[walker] invalid parameter file {path}: {error}', file=sys.stderr)
-        return 2
-    kinematics = WalkerKinematics.from_parameters(params)
-    truss = Truss.from_parameters(params)
-    stance = kinematics.inverse([0.0, truss.spacing, 0.0, 0.0, 0.0])
-    inertia = diagonal_inertia(stance, RigidModel.from_parameters(params))
-    print(f'[walker] parameter file: {path}')
-    print(f'[walker] robot {params.robot.name!r}: l1 = {params.robot.geometry.l1} m, '
-          f'l2 = {params.robot.geometry.l2} m; truss {truss.columns} x {truss.rows} nodes, '
-          f'spacing {truss.spacing} m')
-    print('[walker] stance between neighbouring nodes, J1..J5 [deg]: '
-          + ', '.join(f'{v + 0.0:.1f}' for v in np.degrees(stance)))
-    print('[walker] rigid-model inertia at that stance, I11..I55 [kg*m^2]: '
-          + ', '.join(f'{v:.3f}' for v in inertia))
-    print('[walker] the node graph (plant, controllers, planner, supervisor) does not exist '
-          'yet: nothing to bring up, no walk to run. Set-up and model check complete.')
-    return 0
+    return run(sys.argv[1:])
 
 
 if __name__ == '__main__':

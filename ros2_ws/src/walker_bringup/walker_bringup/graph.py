@@ -12,7 +12,18 @@ from pathlib import Path
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
-__all__ = ['NodeSpec', 'walker_graph', 'executable_path', 'controller_node_name']
+__all__ = ['NodeSpec', 'walker_graph', 'executable_path', 'controller_node_name',
+           'RECORDED_TOPICS']
+
+#: What a walk's bag holds (relative to the robot's namespace): everything the walk report
+#: uses. The high-rate inner-loop topics (effort_commands, joint_accelerations, the setpoint
+#: streams) are left out: the controller states carry the setpoints and efforts at
+#: ``control.state_rate``, and recording every message of the 500 Hz loop would take about a
+#: core of CPU on its own.
+RECORDED_TOPICS = ('joint_states', 'tip_pose', 'gripper_a_pose', 'gripper_b_pose',
+                   'gripper_states', 'phase', 'step_reports', 'control_mode',
+                   'controllers/*/state', 'planned_trajectory', 'robot_description',
+                   '/diagnostics', '/clock')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,6 +107,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         bag = Path(bag_path) if bag_path else None
         extra = ((('recorder.directory', str(bag.parent)), ('recorder.bag_name', bag.name))
                  if bag else ())
+        topics = '[' + ', '.join(f"'{t}'" for t in RECORDED_TOPICS) + ']'
+        extra += (('recorder.topics', topics),)
         nodes.append(NodeSpec('walker_bag', 'recorder_node', 'recorder', namespace,
                               params_file, common + extra))
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
