@@ -68,6 +68,8 @@ _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
 _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMode.COARSE,
           'fine': ControlMode.FINE}
 TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
+#: The motions whose planner bounds make up a step's time-optimal bound.
+_BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
 
 
@@ -83,7 +85,8 @@ class SupervisorNode(Node):
                               self._apply_settings)
         self.kinematics = WalkerKinematics.from_parameters(self.params)
         self.truss = Truss.from_parameters(self.params)
-        self.sequencer = StepSequencer(self.settings, self.kinematics, 'a')
+        self.sequencer = StepSequencer(self.settings, self.kinematics, 'a',
+                                       self.params.gripper.screw_time)
         self.vibration = VibrationMeter(window=max(self.settings.settle_time, 0.2))
         self.walk: Walk | None = None
         self._walk_stance: Stance | None = None
@@ -103,6 +106,7 @@ class SupervisorNode(Node):
         self._last_phase: tuple | None = None
         self._step_in_progress = False
         self._residual_vibration = math.nan
+        self._bounded: set[str] = set()
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
@@ -350,7 +354,8 @@ class SupervisorNode(Node):
             self.get_logger().error(walk.outcomes[-1].message)
             return
         self._step_in_progress = True
-        self._step_bound = 0.0
+        self._step_bound = 2.0 * self.params.gripper.screw_time
+        self._bounded: set[str] = set()
         self._true_insertion_error = math.nan
         self.get_logger().info(f'step {walk.step_index + 1}/{len(walk.route)}: gripper '
                                f'{step.moving_gripper} {step.from_node} -> {step.to_node} '
@@ -457,14 +462,19 @@ class SupervisorNode(Node):
             self._execute(self.sequencer.trajectory_done(
                 False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
             return
-        if request.purpose == 'coarse':
-            self._step_bound = response.time_optimal_bound
+        if request.purpose in _BOUNDED and request.purpose not in self._bounded:
+            # the step's bound: its extraction, coarse motion and insertion at their limits,
+            # plus the two screw actions (fine corrections and retries are not in it)
+            self._bounded.add(request.purpose)
+            self._step_bound += response.time_optimal_bound
         goal = FollowTrajectory.Goal(trajectory=response.trajectory)
+        self._publish_mode(request.mode, request.base_gripper)  # clears a latched hold
         send = self.follow_client.send_goal_async(goal)
         send.add_done_callback(
-            lambda f: self._on_follow_accepted(f, generation, response.duration))
+            lambda f: self._on_follow_accepted(f, generation, response.duration, request.purpose))
 
-    def _on_follow_accepted(self, future, generation: int, duration: float) -> None:
+    def _on_follow_accepted(self, future, generation: int, duration: float,
+                            purpose: str) -> None:
         handle = future.result()
         if generation != self._trajectory_generation:
             if handle is not None and handle.accepted:
@@ -475,7 +485,7 @@ class SupervisorNode(Node):
                 False, 'the planner refused to stream the trajectory', self._now()))
             return
         self._follow_handle = handle
-        self.get_logger().debug(f'streaming a {duration:.2f} s trajectory')
+        self.get_logger().info(f'{purpose} motion: {duration:.2f} s')
         self.sequencer.trajectory_started(duration, self._now())
         handle.get_result_async().add_done_callback(
             lambda f: self._on_follow_done(f, generation))
