@@ -18,6 +18,7 @@ Interfaces (relative to the node's namespace):
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import rclpy
@@ -68,6 +69,8 @@ _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
 _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMode.COARSE,
           'fine': ControlMode.FINE}
 TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
+_FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
+_SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
 #: The motions whose planner bounds make up a step's time-optimal bound.
 _BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
@@ -107,6 +110,8 @@ class SupervisorNode(Node):
         self._step_in_progress = False
         self._residual_vibration = math.nan
         self._bounded: set[str] = set()
+        self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
+        self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
@@ -203,9 +208,30 @@ class SupervisorNode(Node):
     def _on_cancel(self, goal_handle) -> CancelResponse:
         return CancelResponse.ACCEPT
 
+    async def _measurements_ready(self) -> None:
+        """Wait (at most ``_FIRST_STATE_WAIT`` seconds) for the first joint and gripper states.
+
+        A goal may arrive before this node's own subscriptions have matched the plant's.
+        """
+        if self._positions is not None and len(self._grippers) == 2:
+            return
+        waiter = rclpy.task.Future()
+        self._measurement_waiters.append((time.monotonic() + _FIRST_STATE_WAIT, waiter))
+        await waiter
+
+    def _release_measurement_waiters(self) -> None:
+        ready = self._positions is not None and len(self._grippers) == 2
+        now = time.monotonic()
+        for entry in list(self._measurement_waiters):
+            deadline, waiter = entry
+            if ready or now > deadline:
+                self._measurement_waiters.remove(entry)
+                waiter.set_result(ready)
+
     async def _execute_walk(self, goal_handle):
         target = goal_handle.request.target_node
         result = WalkTo.Result()
+        await self._measurements_ready()
         try:
             stance = self._start_checks()
             route = plan_route(self.truss, stance, target, yaws=self._yaws(),
@@ -229,6 +255,7 @@ class SupervisorNode(Node):
     async def _execute_step(self, goal_handle):
         target = goal_handle.request.target_node
         result = Step.Result()
+        await self._measurements_ready()
         try:
             stance = self._start_checks()
             self.truss.index(target)
@@ -311,6 +338,8 @@ class SupervisorNode(Node):
     def _tick(self) -> None:
         now = self._now()
         self._sample_measurements()
+        self._release_measurement_waiters()
+        self._send_waiting_requests()
         if self._positions is not None:
             self._execute(self.sequencer.tick(now, self._theta_roles(),
                                               physical_to_roles(self._velocities,
@@ -418,10 +447,13 @@ class SupervisorNode(Node):
             tip = self.vibration.mean()
             hole = self.truss.position(self.sequencer.step.to_node)
             self._true_insertion_error = float(np.linalg.norm(tip[:2] - hole[:2]))
-        if not self.gripper_client.service_is_ready():
-            self._execute(self.sequencer.gripper_done(
-                False, 'the plant gripper_command service is not available', self._now()))
-            return
+        self._when_ready(self.gripper_client.service_is_ready,
+                         lambda: self._send_gripper_request(request),
+                         lambda: self._execute(self.sequencer.gripper_done(
+                             False, 'the plant gripper_command service is not available',
+                             self._now())))
+
+    def _send_gripper_request(self, request: GripperRequest) -> None:
         call = GripperCommand.Request(
             gripper=request.gripper,
             command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
@@ -444,13 +476,40 @@ class SupervisorNode(Node):
         generation = self._trajectory_generation
         if request.purpose in ('fine', 'insertion'):
             self.vibration.clear()
-        if not self.plan_client.service_is_ready() or not self.follow_client.server_is_ready():
-            self._execute(self.sequencer.trajectory_done(
-                False, 'the planner is not available', self._now()))
-            return
-        call = plan_request(request, self.kinematics)
-        future = self.plan_client.call_async(call)
-        future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+        def ready() -> bool:
+            return self.plan_client.service_is_ready() and self.follow_client.server_is_ready()
+
+        def send() -> None:
+            if generation != self._trajectory_generation:
+                return  # cancelled while waiting
+            future = self.plan_client.call_async(plan_request(request, self.kinematics))
+            future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+
+        def unavailable() -> None:
+            if generation == self._trajectory_generation:
+                self._execute(self.sequencer.trajectory_done(
+                    False, 'the planner is not available', self._now()))
+
+        self._when_ready(ready, send, unavailable)
+
+    def _when_ready(self, ready, send, unavailable) -> None:
+        """Send a request now, or once its server is discovered (within _SERVER_WAIT s)."""
+        if ready():
+            send()
+        else:
+            self._waiting_requests.append((time.monotonic() + _SERVER_WAIT, ready, send,
+                                           unavailable))
+
+    def _send_waiting_requests(self) -> None:
+        now = time.monotonic()
+        for entry in list(self._waiting_requests):
+            deadline, ready, send, unavailable = entry
+            if ready():
+                self._waiting_requests.remove(entry)
+                send()
+            elif now > deadline:
+                self._waiting_requests.remove(entry)
+                unavailable()
 
     def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
         if generation != self._trajectory_generation:
