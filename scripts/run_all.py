@@ -14,7 +14,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import walker_env  # noqa: E402
+import walker_env
 
 
 def main() -> int:
