@@ -54,8 +54,9 @@ def _event(time, phase, index=0, source='n0_0', target='n1_0', reason=''):
 def test_repeated_phase_messages_merge_and_a_safe_hold_ends_its_step():
     events = [_event(0.0, IDLE, source='', target=''), _event(1.0, EXTRACTION),
               _event(1.5, EXTRACTION), _event(2.0, FINE), _event(3.0, SAFE_HOLD, reason='jam'),
-              _event(4.0, IDLE, source='', target=''), _event(5.0, EXTRACTION),
-              _event(6.0, INSERTION)]
+              _event(3.5, SAFE_HOLD, index=1, source='', target='', reason='jam'),
+              _event(4.0, IDLE, source='', target=''), _event(4.5, IDLE, index=1),
+              _event(5.0, EXTRACTION), _event(6.0, INSERTION)]
     intervals = phase_intervals(events, 7.0)
     assert [(i.phase, i.start, i.end) for i in intervals] == [
         (IDLE, 0.0, 1.0), (EXTRACTION, 1.0, 2.0), (FINE, 2.0, 3.0), (SAFE_HOLD, 3.0, 4.0),
@@ -69,6 +70,13 @@ def test_repeated_phase_messages_merge_and_a_safe_hold_ends_its_step():
 def test_a_safe_hold_outside_any_step_belongs_to_no_step():
     intervals = phase_intervals([_event(0.0, IDLE), _event(1.0, SAFE_HOLD, reason='hold')], 2.0)
     assert step_spans(intervals) == []
+
+
+def test_a_new_fault_while_holding_is_a_new_interval():
+    intervals = phase_intervals([_event(1.0, SAFE_HOLD, reason='jam'),
+                                 _event(2.0, SAFE_HOLD, reason='base gripper free')], 3.0)
+    assert [(i.start, i.reason) for i in intervals] == [(1.0, 'jam'),
+                                                         (2.0, 'base gripper free')]
 
 
 def test_joint_states_are_reordered_to_the_physical_joints(walk):

@@ -10,7 +10,8 @@ from PIL import Image
 
 from walker_report.core import figures
 from walker_report.core.errors import ReportError
-from walker_report.core.report import ReportOptions, default_output_dir, make_report
+from walker_report.core.report import (
+    ReportOptions, default_output_dir, make_report, prepare_output)
 
 from conftest import SMALL_ANIMATION
 from synthetic_walk import (
@@ -18,7 +19,7 @@ from synthetic_walk import (
 
 #: Every figure of the synthetic walk's report and its size in inches (times figures.DPI).
 FIGURES = {'timeline': None, 'tip_path': (13.0, 6.0), 'joints': (13.0, 11.0),
-           'vibration': None, 'steps': None, 'step_01': (13.0, 3.8), 'step_02': (13.0, 3.8)}
+           'vibration': None, 'steps': None, 'step_01': (13.0, 4.2), 'step_02': (13.0, 4.2)}
 
 
 def test_the_report_lists_exactly_the_steps_written(report):
@@ -51,8 +52,8 @@ def test_every_figure_is_a_png_of_the_expected_size_with_something_drawn(report,
         if FIGURES[name] is not None:
             assert image.size == tuple(round(v * figures.DPI) for v in FIGURES[name])
         assert image.width >= 600 and image.height >= 150
-        pixels = np.asarray(image.convert('RGB'))
-    assert len(np.unique(pixels.reshape(-1, 3), axis=0)) > 20  # not a blank canvas
+        colors = image.convert('RGB').getcolors(maxcolors=2**20)
+    assert len(colors) > 20  # not a blank canvas
 
 
 def test_the_markdown_embeds_every_figure_and_the_animation_and_they_exist(report):
@@ -142,14 +143,13 @@ def test_a_bag_without_reports_or_controllers_gives_what_it_can_and_says_what_is
     assert result.animation is None and not (tmp_path / 'out' / 'walk.gif').exists()
 
 
-def test_a_report_replaces_the_files_of_a_former_one(tmp_path, walk_bag):
+def test_a_report_replaces_the_files_of_a_former_one(tmp_path):
     out = tmp_path / 'out'
     out.mkdir()
-    for name in ('step_07.png', 'walk.gif', 'notes.txt'):
+    for name in ('step_07.png', 'walk.gif', 'walk_final.png', 'notes.txt'):
         (out / name).write_bytes(b'old')
-    make_report(walk_bag, out, options=ReportOptions(animation=False))
-    assert not (out / 'step_07.png').exists() and not (out / 'walk.gif').exists()
-    assert (out / 'notes.txt').read_bytes() == b'old'  # not the report's: left alone
+    assert prepare_output(out) == out
+    assert sorted(p.name for p in out.iterdir()) == ['notes.txt']  # not the report's: kept
 
 
 def test_the_default_output_is_beside_the_bag(walk_bag):

@@ -129,6 +129,11 @@ def phase_intervals(phases: tuple[PhaseEvent, ...] | list[PhaseEvent],
                     end_time: float) -> list[PhaseInterval]:
     """Turn the phase messages into intervals; repeated messages of one phase are merged.
 
+    Messages repeating a step's phase merge into one interval; so do consecutive IDLE
+    messages, and SAFE_HOLD messages with the same reason, whatever their step fields say (the
+    supervisor re-publishes them as the walk's bookkeeping ends: a rest or a hold is one
+    interval). The first message's fields are kept.
+
     Parameters
     ----------
     phases : sequence of PhaseEvent
@@ -139,8 +144,13 @@ def phase_intervals(phases: tuple[PhaseEvent, ...] | list[PhaseEvent],
     intervals: list[PhaseInterval] = []
     key = None
     for event in phases:
-        this = (event.phase, event.step_index, event.step_count, event.from_node, event.to_node,
-                event.reason)
+        if event.phase == IDLE:
+            this = (IDLE,)
+        elif event.phase == SAFE_HOLD:
+            this = (SAFE_HOLD, event.reason)
+        else:
+            this = (event.phase, event.step_index, event.step_count, event.from_node,
+                    event.to_node, event.reason)
         if this == key:
             continue
         key = this

@@ -252,7 +252,8 @@ def _draw_approaches(axes, tip, spans: list[StepSpan], truss: Truss, tolerance: 
         axes.legend(fontsize=8, loc='upper left', bbox_to_anchor=(0.0, -0.12), ncol=2,
                     frameon=False)
     else:
-        axes.text(0.5, 0.5, 'no insertion recorded', transform=axes.transAxes, ha='center')
+        axes.text(0.5, 0.9, 'no insertion recorded', transform=axes.transAxes, ha='center',
+                  color='0.4')
 
 
 def joints_figure(path: Path, controllers: dict[str, ControllerSeries], limits: JointLimits,
@@ -388,7 +389,7 @@ def step_table_figure(path: Path, rows: list[StepRow]) -> Path:
 def step_figure(path: Path, span: StepSpan, walk: WalkData, truss: Truss, tolerance: float,
                 vibration: TargetVibration | None) -> Path:
     """Draw one step: its phases, the tip's height and distance to the target, its vibration."""
-    figure = Figure(figsize=(13.0, 3.8))
+    figure = Figure(figsize=(13.0, 4.2))
     axes = figure.subplots(1, 3, gridspec_kw={'width_ratios': [1.4, 1.0, 1.0]})
     tip = walk.tip
     inside = (tip.time >= span.start) & (tip.time <= span.end)

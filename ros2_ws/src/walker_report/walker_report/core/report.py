@@ -43,7 +43,7 @@ from walker_report.core.steps import StepRow, format_table, rows_from_reports, w
 from walker_report.core.walk_data import TOPICS, WalkData, load_walk
 
 __all__ = ['ReportOptions', 'ReportContent', 'ReportResult', 'default_output_dir',
-           'make_report', 'Progress']
+           'make_report', 'prepare_output', 'analyse', 'summary_text', 'Progress']
 
 #: ``progress(stage, done, total)``: what the report is doing and how far it is.
 Progress = Callable[[str, int, int], None]
@@ -149,7 +149,8 @@ def _settle_time(params_file: Path) -> float:
     return section_from_flat(SupervisorParameters, flat, 'supervisor.').settle_time
 
 
-def _prepare_output(out: Path) -> Path:
+def prepare_output(out: Path) -> Path:
+    """Create the output directory, or clear the files of a former report out of it."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise ReportError(f'the output {out} exists and is not a directory')
@@ -242,7 +243,7 @@ def make_report(bag: str | Path, out: str | Path | None = None,
     if walk.bag.message_count == 0:
         raise ReportError(f'the bag {walk.bag.path} holds no message: nothing to report')
     content = analyse(walk, params_file, params, settle_time)
-    out = _prepare_output(Path(out) if out is not None else default_output_dir(walk.bag.path))
+    out = prepare_output(Path(out) if out is not None else default_output_dir(walk.bag.path))
     written = _draw(out, content, say)
     animation = None
     if options.animation:
