@@ -211,7 +211,8 @@ def error_at(joint: str, t: float) -> float:
 
 
 def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True,
-                   description: bool = True, safe_hold: bool = False) -> Path:
+                   description: bool = True, safe_hold: bool = False,
+                   leave_out: tuple[str, ...] = ()) -> Path:
     """Write the synthetic walk as a bag at ``path`` and return it.
 
     Parameters
@@ -220,12 +221,14 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
         Record the step reports, the controller states, the URDF.
     safe_hold : bool
         Stop step 2 in SAFE_HOLD during fine motion (no insertion, no report for it).
+    leave_out : tuple of str
+        Further topics (relative names) not to record.
     """
     steps = _steps(safe_hold)
     truss = walker_truss()
     topics = [t for t in TOPICS if (reports or t != 'step_reports')
               and (controllers or not t.startswith('controllers/'))
-              and (description or t != 'robot_description')]
+              and (description or t != 'robot_description') and t not in leave_out]
     store = walker_typestore()
     with BagWriter(path, custom_data={'clock': 'sim_time'}) as bag:
         w = _Writer(bag, store, topics)

@@ -15,7 +15,7 @@ from walker_report.core.report import (
 
 from conftest import SMALL_ANIMATION
 from synthetic_walk import (
-    CLAMPED, END, PEAK_FRACTION, STEPS, URDF_LIMITS, build_walk_bag, walker_truss)
+    CLAMPED, END, PEAK_FRACTION, STEPS, TOPICS, URDF_LIMITS, build_walk_bag, walker_truss)
 
 #: Every figure of the synthetic walk's report and its size in inches (times figures.DPI).
 FIGURES = {'timeline': None, 'tip_path': (13.0, 6.0), 'joints': (13.0, 11.0),
@@ -141,6 +141,27 @@ def test_a_bag_without_reports_or_controllers_gives_what_it_can_and_says_what_is
     text = result.markdown.read_text()
     assert 'SAFE_HOLD at 10.00 s' in text and 'No step report in the bag' in text
     assert result.animation is None and not (tmp_path / 'out' / 'walk.gif').exists()
+
+
+def test_a_bag_without_poses_states_or_phases_still_gives_a_report(tmp_path):
+    left_out = ('tip_pose', 'joint_states', 'phase', 'gripper_states', 'control_mode')
+    bag = build_walk_bag(tmp_path / 'bag', leave_out=left_out)
+    result = make_report(bag, tmp_path / 'out',
+                         options=ReportOptions(animation_options=SMALL_ANIMATION))
+    notes = '\n'.join(result.content.notes)
+    for topic in left_out:
+        assert f'the bag has no /walker/{topic}: ' in notes
+    assert 'no animation: the bag has no joint_states' in notes
+    assert result.animation is None and result.content.spans == []
+    assert len(result.content.rows) == len(STEPS)  # the step reports are still there
+    assert set(result.figures) == {'timeline', 'tip_path', 'joints', 'vibration', 'steps'}
+
+
+def test_a_bag_without_messages_is_refused(tmp_path):
+    bag = build_walk_bag(tmp_path / 'bag', leave_out=tuple(TOPICS))
+    with pytest.raises(ReportError, match='holds no message'):
+        make_report(bag, tmp_path / 'out')
+    assert not (tmp_path / 'out').exists()
 
 
 def test_a_report_replaces_the_files_of_a_former_one(tmp_path):

@@ -94,8 +94,8 @@ def timeline_figure(path: Path, spans: list[StepSpan], intervals: list[PhaseInte
     top.set_yticks(range(len(spans)), [s.label for s in spans])
     top.set_ylim(rows - 0.5, -0.5)
     if not spans:
-        top.text(0.5, 0.5, 'no step in this bag', transform=top.transAxes, ha='center',
-                 va='center', color='0.4')
+        top.text(0.5, 0.5, 'no step in this bag' if walk.phases else 'no phase recorded',
+                 transform=top.transAxes, ha='center', va='center', color='0.4')
         top.set_yticks([])
     top.legend(handles=_phase_legend(), loc='lower center', bbox_to_anchor=(0.5, 1.0), ncol=5,
                frameon=False, fontsize=9)
@@ -129,6 +129,9 @@ def _draw_states(axes, walk: WalkData, end: float) -> None:
         if stop - event.time > 0.05 * max(end, 1e-9):
             axes.text(0.5 * (event.time + stop), 2, f'{text} (base {event.base_gripper})',
                       ha='center', va='center', fontsize=7, color='white')
+    if not events and not walk.modes:
+        axes.text(0.5, 0.5, 'no gripper states or control modes recorded', ha='center',
+                  va='center', transform=axes.transAxes, color='0.4')
     axes.set_yticks(range(3), labels)
     axes.set_ylim(2.5, -0.5)
     axes.grid(axis='x', alpha=0.3)
