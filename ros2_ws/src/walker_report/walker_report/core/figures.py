@@ -38,6 +38,12 @@ _GRIPPER_STATES = {0: ('free', '#f0f0f0'), 1: ('screwing', '#fdd49e'), 2: ('atta
 _MODES = {0: ('off', '#bdbdbd'), 1: ('hold', '#969696'), 2: ('coarse', PHASE_COLORS[COARSE]),
           3: ('fine', PHASE_COLORS[FINE])}
 _STEP_COLORS = matplotlib.colormaps['tab10'].colors
+_LABEL_BOX = {'facecolor': 'white', 'alpha': 0.85, 'lw': 0, 'pad': 1.5}
+
+
+def _short(text: str, length: int = 70) -> str:
+    """Shorten a long reason for a label (the report's tables give it whole)."""
+    return text if len(text) <= length else text[:length - 3].rstrip() + '...'
 
 
 def _save(figure: Figure, path: Path) -> Path:
@@ -78,10 +84,10 @@ def timeline_figure(path: Path, spans: list[StepSpan], intervals: list[PhaseInte
                      edgecolor='k' if hold else 'none', lw=0.5)
             if hold:
                 late = interval.start > 0.6 * end  # write the reason where it fits
-                top.annotate(f'SAFE HOLD: {interval.reason}', (interval.start, row),
+                top.annotate(f'SAFE HOLD: {_short(interval.reason)}', (interval.start, row),
                              xytext=(-4 if late else 4, 9), textcoords='offset points',
                              ha='right' if late else 'left', fontsize=8,
-                             color=PHASE_COLORS[SAFE_HOLD])
+                             color=PHASE_COLORS[SAFE_HOLD], bbox=_LABEL_BOX)
             elif interval.duration > 0.06 * max(end, 1e-9):
                 top.text(interval.start + 0.5 * interval.duration, row,
                          f'{interval.duration:.1f} s', ha='center', va='center', fontsize=7,
@@ -89,7 +95,7 @@ def timeline_figure(path: Path, spans: list[StepSpan], intervals: list[PhaseInte
     for interval in intervals:  # a SAFE_HOLD outside any step
         if interval.phase == SAFE_HOLD and not any(interval in s.intervals for s in spans):
             top.axvspan(interval.start, interval.end, color=PHASE_COLORS[SAFE_HOLD], alpha=0.3)
-            top.annotate(f'SAFE HOLD: {interval.reason}', (interval.start, rows - 0.5),
+            top.annotate(f'SAFE HOLD: {_short(interval.reason)}', (interval.start, rows - 0.5),
                          fontsize=8, color=PHASE_COLORS[SAFE_HOLD])
     top.set_yticks(range(len(spans)), [s.label for s in spans])
     top.set_ylim(rows - 0.5, -0.5)
@@ -421,8 +427,8 @@ def step_figure(path: Path, span: StepSpan, walk: WalkData, truss: Truss, tolera
         axes[2].set_axis_off()
     hold = span.safe_hold
     if hold is not None:
-        figure.text(0.01, 0.01, f'SAFE HOLD at {hold.start:.2f} s: {hold.reason}',
+        figure.text(0.01, 0.01, f'SAFE HOLD at {hold.start:.2f} s: {_short(hold.reason, 150)}',
                     color=PHASE_COLORS[SAFE_HOLD], fontsize=9)
-    figure.tight_layout()
+    figure.tight_layout(rect=(0, 0.04 if hold is not None else 0, 1, 1))
     return _save(figure, path)
 
