@@ -157,6 +157,19 @@ def test_a_bag_without_poses_states_or_phases_still_gives_a_report(tmp_path):
     assert set(result.figures) == {'timeline', 'tip_path', 'joints', 'vibration', 'steps'}
 
 
+def test_what_cannot_be_measured_is_null_in_the_json_not_nan(tmp_path):
+    bag = build_walk_bag(tmp_path / 'bag', leave_out=('tip_pose',))
+    result = make_report(bag, tmp_path / 'out', options=ReportOptions(animation=False))
+    assert all(math.isnan(v.amplitude) for v in result.content.vibrations.values())
+
+    def refuse(constant):
+        raise AssertionError(f'report.json holds {constant}, which is not JSON')
+
+    numbers = json.loads(result.json.read_text(), parse_constant=refuse)
+    assert [v['amplitude'] for v in numbers['vibration']] == [None, None]
+    assert '| 1 | n1_2 | 4.00 - 5.00 | 0 | - | - | - |' in result.markdown.read_text()
+
+
 def test_a_bag_without_messages_is_refused(tmp_path):
     bag = build_walk_bag(tmp_path / 'bag', leave_out=tuple(TOPICS))
     with pytest.raises(ReportError, match='holds no message'):
