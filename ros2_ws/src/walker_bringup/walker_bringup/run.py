@@ -67,20 +67,31 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 class _Progress:
-    """One status line, rewritten in place on a terminal, printed on change otherwise."""
+    """One status line, rewritten in place on a terminal.
+
+    Without a terminal (a log file, CI) a line is printed only when ``key`` changes (a new step
+    or phase) or every ``LOG_PERIOD`` seconds, so a long walk does not flood the log.
+    """
+
+    LOG_PERIOD = 5.0  # [s]
 
     def __init__(self, quiet: bool) -> None:
         self.quiet = quiet
         self.tty = sys.stdout.isatty()
         self.last = ''
+        self._key = None
+        self._printed = -float('inf')
 
-    def update(self, text: str) -> None:
+    def update(self, text: str, key=None) -> None:
         if self.quiet or text == self.last:
             return
-        self.last = text
         if self.tty:
+            self.last = text
             print(f'\r\033[K{text}', end='', flush=True)
-        else:
+            return
+        now = time.monotonic()
+        if key != self._key or now - self._printed >= self.LOG_PERIOD:
+            self._key, self._printed, self.last = key, now, text
             print(text, flush=True)
 
     def say(self, text: str) -> None:
@@ -135,7 +146,8 @@ def main(argv: list[str] | None = None) -> int:
             [n.full_name for n in graph], args.startup_timeout,
             progress=lambda r: progress.update(
                 f'[walker] bringing the graph up: {len(r.ready)}/{len(r.ready) + len(r.missing)}'
-                f' ready' + (f' (waiting for {", ".join(r.missing[:3])})' if r.missing else '')),
+                f' ready' + (f' (waiting for {", ".join(r.missing[:3])})' if r.missing else ''),
+                key=len(r.ready)),
             should_stop=should_stop)
         progress.say(f'[walker] graph ready in {time.monotonic() - started:.1f} s')
         if not args.walk:
@@ -201,7 +213,7 @@ def _walk(client: GraphClient, args, progress: _Progress, should_stop, out: Path
             f'{feedback.from_node} -> {feedback.to_node}: '
             f'{PHASE_NAMES[feedback.phase] if feedback.phase < len(PHASE_NAMES) else "?"}, '
             f'tip error {feedback.tip_position_error * 1e3:.1f} mm '
-            f'({time.monotonic() - started:.0f} s)')
+            f'({time.monotonic() - started:.0f} s)', key=(feedback.step_index, feedback.phase))
 
     progress.say(f'[walker] walking to {args.target}')
     status, result = client.walk_to(args.target, args.walk_timeout, on_feedback, should_stop)

@@ -123,13 +123,33 @@ def test_cartesian_lines_are_straight(planned, context, stance):
     assert np.all(np.diff(along) >= -1e-12)  # never backwards
 
 
-def test_the_time_optimal_bound_is_reported_for_sweeps(planned):
+def test_the_time_optimal_bound_is_reported_for_sweeps_and_lines(planned, context, stance):
     name, result = planned
     if name in ('bang_bang_node', 'joint_parabolic_time', 'joint_parabolic_accel',
                 'joint_min_jerk'):  # the joint moves turn J1 about the base at one radius
         assert 0.0 < result.time_optimal_bound <= result.duration
+    elif name in ('cartesian_line', 'insertion_line', 'extraction_line'):
+        length = np.linalg.norm(np.subtract(requests(stance)[name]['goal'],
+                                            requests(stance)[name]['start']))
+        acceleration = context.planner.cartesian.acceleration_limit
+        assert result.time_optimal_bound == pytest.approx(2 * math.sqrt(length / acceleration))
+        assert result.time_optimal_bound <= result.duration
     else:
         assert result.time_optimal_bound is None
+
+
+def test_the_sweep_bound_is_the_larger_of_the_torque_and_rate_bounds(context):
+    from walker_planner.core.bounds import sweep_rate_bound, tip_move_bound
+
+    for goal, sweep in (((-0.9, 0.0, H), math.pi / 2), ((0.0, -0.9, H), math.pi)):
+        result = plan(PlanRequest('bang_bang_node', 'a', ABOVE, goal), context)
+        torque = tip_move_bound(context.robot, ABOVE, goal,
+                                context.planner.bang_bang.min_radius)
+        rate = sweep_rate_bound(context.robot, sweep, context.planner.bang_bang.min_radius, H)
+        assert result.time_optimal_bound == pytest.approx(max(torque, rate))
+        yaw = context.robot.robot.drive.yaw
+        assert rate >= sweep / yaw.velocity_limit  # no faster than the yaw's speed limit
+        assert rate > sweep / yaw.velocity_limit + 0.1  # it must also speed up and slow down
 
 
 def test_the_bang_bang_plan_ends_on_the_node_and_reports_its_solution(context, stance):

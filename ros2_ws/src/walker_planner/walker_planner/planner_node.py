@@ -19,9 +19,12 @@ stamped from them, in real time and in sim time alike, as the controllers are.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.task import Future
 from rclpy.node import Node
@@ -55,13 +58,23 @@ STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
                        history=HistoryPolicy.KEEP_LAST)
 
 
+#: [s] how often the main thread completes ended streams and sends action feedback
+_RELAY_PERIOD = 0.02
+
+
 class _ActiveStream:
-    """A running stream and how it ends (the timer completes ``done``; the goal awaits it)."""
+    """A running stream and how it ends.
+
+    The stream thread sets ``ended``; the main thread's relay completes ``done``, which the
+    action goal awaits (rclpy futures are completed in the thread of their executor).
+    """
 
     def __init__(self, stream: SetpointStream, goal_handle) -> None:
         self.stream = stream
         self.goal_handle = goal_handle
         self.done = Future()
+        self.ended = False
+        self.fed_back = 0
         self.last = None
         self.ticks = 0
         self.cancelled = False
@@ -69,7 +82,12 @@ class _ActiveStream:
 
 
 class PlannerNode(Node):
-    """Plan trajectories (service), stream them (action, timer), publish the current plan."""
+    """Plan trajectories (service), stream them (action), publish the current plan.
+
+    Streaming runs on a helper node (``<name>_stream``) spun in a thread of its own, so that
+    planning, which takes tens to hundreds of milliseconds for a long Cartesian path, never
+    stalls the setpoints the controllers expect every period.
+    """
 
     def __init__(self) -> None:
         super().__init__('planner')
@@ -84,13 +102,24 @@ class PlannerNode(Node):
         self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
         self._reserved = False
         self._measured: tuple[int, np.ndarray] | None = None
+        self._lock = threading.Lock()  # the state shared by the stream thread and this one
+        self._ended: list[_ActiveStream] = []
+        self._stream_node = Node(f'{self.get_name()}_stream', namespace=self.get_namespace(),
+                                 context=self.context, use_global_arguments=False,
+                                 start_parameter_services=False)
+        self._stream_thread: threading.Thread | None = None
         self._setpoint_publishers = {
-            name: self.create_publisher(JointCommand, f'controllers/{name}/setpoint',
-                                        SETPOINT_QOS) for name in PHYSICAL_JOINT_NAMES}
+            name: self._stream_node.create_publisher(
+                JointCommand, f'controllers/{name}/setpoint', SETPOINT_QOS)
+            for name in PHYSICAL_JOINT_NAMES}
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
-        self.create_subscription(JointState, 'joint_states', self._on_joint_state, STATE_QOS)
-        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, LATCHED_QOS)
+        self._stream_node.create_subscription(JointState, 'joint_states', self._on_joint_state,
+                                              STATE_QOS)
+        self._stream_node.create_subscription(ControlMode, 'control_mode',
+                                              self._on_control_mode, LATCHED_QOS)
+        self.create_timer(_RELAY_PERIOD, self._relay,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.create_service(PlanTrajectory, 'plan_trajectory', self._on_plan)
         self.create_service(Trigger, 'stop_trajectory', self._on_stop)
         self._action_server = ActionServer(
@@ -99,6 +128,38 @@ class PlannerNode(Node):
         self.get_logger().info(
             f'planner ready: {len(PHYSICAL_JOINT_NAMES)} controllers at '
             f'{self._robot.timing.control_rate:g} Hz')
+
+    def start_streaming(self) -> None:
+        """Spin the stream node in its own thread (until the context shuts down)."""
+        self._stream_thread = threading.Thread(
+            target=spin_nodes, args=(self._stream_node,), kwargs={'context': self.context},
+            name='setpoint-stream', daemon=True)
+        self._stream_thread.start()
+
+    def destroy_node(self) -> None:
+        """Stop the stream thread, then destroy both nodes."""
+        if self._stream_thread is not None:
+            rclpy.try_shutdown(context=self.context)
+            self._stream_thread.join(timeout=5.0)
+        self._stream_node.destroy_node()
+        super().destroy_node()
+
+    def _relay(self) -> None:
+        """Complete the goals of ended streams and send feedback (this node's thread)."""
+        with self._lock:
+            ended, self._ended = self._ended, []
+            active = self._active
+            feedback = None
+            if active is not None and active.goal_handle is not None and active.last is not None:
+                every = max(1, round(self._robot.timing.control_rate
+                                     / self._planner.stream.feedback_rate))
+                if active.ticks // every > active.fed_back // every:  # a multiple was passed
+                    active.fed_back = active.ticks
+                    feedback = self._feedback(active, active.last)
+        if feedback is not None:
+            active.goal_handle.publish_feedback(feedback)
+        for stream in ended:
+            stream.done.set_result(True)
 
     # ------------------------------------------------------------------ parameters
     def _apply_planner_parameters(self, section: PlannerParameters) -> None:
@@ -114,11 +175,13 @@ class PlannerNode(Node):
             return
         if np.all(np.isfinite(positions)):
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-            self._measured = (stamp, positions)
-            self._stream_tick(stamp)
+            with self._lock:
+                self._measured = (stamp, positions)
+                self._stream_tick(stamp)
 
     def _on_control_mode(self, message: ControlMode) -> None:
-        self._tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
+        with self._lock:
+            self._tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
 
     # ------------------------------------------------------------------ planning service
     def _on_plan(self, request, response):
@@ -135,7 +198,8 @@ class PlannerNode(Node):
         response.success = True
         if request.execute:
             trajectory = SampledTrajectory(result.times, *samples)
-            error = self._start_stream(trajectory, response.trajectory, None)
+            with self._lock:
+                error = self._start_stream(trajectory, response.trajectory, None)
             if error:
                 response.success = False
                 response.message = f'planned but not executed: {error}'
@@ -145,16 +209,19 @@ class PlannerNode(Node):
         return response
 
     def _on_stop(self, request, response):
-        active = self._active
-        if active is not None:
-            active.cancelled, active.message = True, 'stopped by stop_trajectory'
+        with self._lock:
+            active = self._active
+            if active is not None:
+                active.cancelled, active.message = True, 'stopped by stop_trajectory'
         response.success = active is not None
         response.message = 'stopping the stream' if active else 'no stream is running'
         return response
 
     # ------------------------------------------------------------------ action
     def _on_goal(self, goal) -> GoalResponse:
-        if self._active is not None or self._reserved:
+        with self._lock:
+            busy = self._active is not None
+        if busy or self._reserved:
             self.get_logger().warning('follow_trajectory goal rejected: a stream is '
                                       'already running (cancel it first)')
             return GoalResponse.REJECT
@@ -168,7 +235,9 @@ class PlannerNode(Node):
         result = FollowTrajectory.Result()
         try:
             trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
-            error = self._start_stream(trajectory, goal_handle.request.trajectory, goal_handle)
+            with self._lock:
+                error = self._start_stream(trajectory, goal_handle.request.trajectory,
+                                           goal_handle)
         except PlanningError as refusal:
             error = str(refusal)
         finally:
@@ -180,15 +249,17 @@ class PlannerNode(Node):
         return await self._wait_for_stream(goal_handle, result)
 
     async def _wait_for_stream(self, goal_handle, result):
-        active = self._active
+        with self._lock:
+            active = self._active
         if active is not None:
             await active.done
         if active is None or not active.done.done():
             result.message = 'the planner is shutting down'
             goal_handle.abort()
             return result
-        result.duration = active.last.time_from_start if active.last else 0.0
-        result.final_position_error = self._tracking_error(active.stream)
+        with self._lock:
+            result.duration = active.last.time_from_start if active.last else 0.0
+            result.final_position_error = self._tracking_error(active.stream)
         result.message = active.message
         result.success = not active.cancelled
         if active.cancelled and goal_handle.is_cancel_requested:
@@ -251,18 +322,13 @@ class PlannerNode(Node):
             self._setpoint_publishers[name].publish(command)
         active.last = setpoint
         active.ticks += 1
-        every = max(1, round(self._robot.timing.control_rate
-                             / self._planner.stream.feedback_rate))
-        if active.goal_handle is not None and active.ticks % every == 0:
-            self._publish_feedback(active, setpoint)
 
-    def _publish_feedback(self, active: _ActiveStream, setpoint) -> None:
+    def _feedback(self, active: _ActiveStream, setpoint) -> FollowTrajectory.Feedback:
         duration = active.stream.trajectory.duration
-        feedback = FollowTrajectory.Feedback(
+        return FollowTrajectory.Feedback(
             time_from_start=setpoint.time_from_start,
             fraction=min(1.0, setpoint.time_from_start / duration) if duration else 1.0,
             max_position_error=self._tracking_error(active.stream))
-        active.goal_handle.publish_feedback(feedback)
 
     def _finish(self, active: _ActiveStream, hold) -> None:
         """End the stream (lock held) and wake the waiter.
@@ -275,7 +341,8 @@ class PlannerNode(Node):
             self._publish(active, hold)
         self._holding = None if active.last is None else np.array(active.last.position)
         self._active = None
-        active.done.set_result(True)
+        active.ended = True
+        self._ended.append(active)
 
     def _publish_hold(self, position: np.ndarray, now: int) -> None:
         stamp = to_time(now + self._period_ns)
@@ -307,6 +374,7 @@ def main(args=None) -> int:
     node = None
     try:
         node = PlannerNode()
+        node.start_streaming()
         spin_nodes(node)
     except ParameterError as error:
         print(f'planner: invalid parameters, not starting: {error}', flush=True)

@@ -29,7 +29,8 @@ class World:
     """Executes the sequencer's commands: ideal tracking, scripted gripper results."""
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
-                 stall_trajectories=False, coarse_miss=0.0):
+                 stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
+                 gripper_never=False):
         self.stance = stance
         self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
         self.now = 0.0
@@ -40,6 +41,9 @@ class World:
         self.frame = BaseFrame.from_stance(KIN, self.theta, base, other)
         self.jams, self.refuse_unscrew, self.stall = jams, refuse_unscrew, stall_trajectories
         self.coarse_miss = coarse_miss  # [rad] J1 stops this short of the coarse goal
+        self.gripper_delay = gripper_delay  # [s] screwing/unscrewing time the plant takes
+        self.gripper_never = gripper_never  # the plant accepts but never completes
+        self.pending = []  # (time, gripper, state) changes the plant will report
         self.log = []
         self.phases = []
         self.motion = None
@@ -73,18 +77,27 @@ class World:
             if self.refuse_unscrew:
                 self.execute(self.sequencer.gripper_done(False, 'interlock', self.now))
                 return
-            self.grippers[request.gripper] = 'free'
+            self.grippers[request.gripper] = 'unscrewing'
+            self.later(request.gripper, 'free')
             self.execute(self.sequencer.gripper_done(True, '', self.now))
         else:
             if self.jams > 0:
                 self.jams -= 1
                 self.execute(self.sequencer.gripper_done(False, 'jammed 3 mm off', self.now))
                 return
-            self.grippers[request.gripper] = 'attached'
+            self.grippers[request.gripper] = 'screwing'
+            self.later(request.gripper, 'attached')
             self.execute(self.sequencer.gripper_done(True, '', self.now))
+
+    def later(self, gripper, state):
+        if not self.gripper_never:
+            self.pending.append((self.now + self.gripper_delay, gripper, state))
 
     def advance(self):
         self.now += DT
+        for change in [c for c in self.pending if c[0] <= self.now]:
+            self.pending.remove(change)
+            self.grippers[change[1]] = change[2]
         velocities = np.zeros(5)
         if self.motion is not None and not self.stall:
             request, started, duration = self.motion
@@ -134,6 +147,8 @@ def test_controller_modes_follow_the_phases():
     purposes = [c.purpose for c in world.log if isinstance(c, TrajectoryRequest)]
     # tracking is ideal here: the coarse motion ends on the point above the hole, no fine line
     assert purposes == ['extraction', 'coarse', 'insertion']
+    assert [c.mode for c in world.log if isinstance(c, TrajectoryRequest)] == \
+        ['fine', 'coarse', 'fine']
 
 
 def test_coarse_hands_over_to_fine_mode_inside_the_region_and_runs_to_its_end():
@@ -270,3 +285,22 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
         SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3)
+
+
+def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():
+    world = World(gripper_delay=0.5)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    lift = next(i for i, c in enumerate(world.log) if isinstance(c, TrajectoryRequest))
+    assert world.log[lift].purpose == 'extraction'
+    # the extraction line starts only once the plant reported gripper b free (0.5 s later)
+    assert outcome.phase_durations['extraction'] >= 0.5 + 1.0
+    assert outcome.phase_durations['insertion'] >= 0.5 + SUPERVISOR.settle_time
+
+
+def test_a_gripper_that_never_completes_aborts_the_step_with_the_base_attached():
+    world = World(gripper_never=True)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert not outcome.success and 'did not unscrew in time' in outcome.message
+    assert not any(isinstance(c, TrajectoryRequest) for c in world.log)
+    assert world.grippers['a'] == 'attached'

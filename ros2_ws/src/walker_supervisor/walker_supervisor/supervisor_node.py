@@ -18,6 +18,7 @@ Interfaces (relative to the node's namespace):
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import rclpy
@@ -68,6 +69,10 @@ _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
 _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMode.COARSE,
           'fine': ControlMode.FINE}
 TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
+_FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
+_SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
+#: The motions whose planner bounds make up a step's time-optimal bound.
+_BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
 
 
@@ -83,7 +88,8 @@ class SupervisorNode(Node):
                               self._apply_settings)
         self.kinematics = WalkerKinematics.from_parameters(self.params)
         self.truss = Truss.from_parameters(self.params)
-        self.sequencer = StepSequencer(self.settings, self.kinematics, 'a')
+        self.sequencer = StepSequencer(self.settings, self.kinematics, 'a',
+                                       self.params.gripper.screw_time)
         self.vibration = VibrationMeter(window=max(self.settings.settle_time, 0.2))
         self.walk: Walk | None = None
         self._walk_stance: Stance | None = None
@@ -103,6 +109,9 @@ class SupervisorNode(Node):
         self._last_phase: tuple | None = None
         self._step_in_progress = False
         self._residual_vibration = math.nan
+        self._bounded: set[str] = set()
+        self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
+        self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
@@ -199,9 +208,30 @@ class SupervisorNode(Node):
     def _on_cancel(self, goal_handle) -> CancelResponse:
         return CancelResponse.ACCEPT
 
+    async def _measurements_ready(self) -> None:
+        """Wait (at most ``_FIRST_STATE_WAIT`` seconds) for the first joint and gripper states.
+
+        A goal may arrive before this node's own subscriptions have matched the plant's.
+        """
+        if self._positions is not None and len(self._grippers) == 2:
+            return
+        waiter = rclpy.task.Future()
+        self._measurement_waiters.append((time.monotonic() + _FIRST_STATE_WAIT, waiter))
+        await waiter
+
+    def _release_measurement_waiters(self) -> None:
+        ready = self._positions is not None and len(self._grippers) == 2
+        now = time.monotonic()
+        for entry in list(self._measurement_waiters):
+            deadline, waiter = entry
+            if ready or now > deadline:
+                self._measurement_waiters.remove(entry)
+                waiter.set_result(ready)
+
     async def _execute_walk(self, goal_handle):
         target = goal_handle.request.target_node
         result = WalkTo.Result()
+        await self._measurements_ready()
         try:
             stance = self._start_checks()
             route = plan_route(self.truss, stance, target, yaws=self._yaws(),
@@ -225,6 +255,7 @@ class SupervisorNode(Node):
     async def _execute_step(self, goal_handle):
         target = goal_handle.request.target_node
         result = Step.Result()
+        await self._measurements_ready()
         try:
             stance = self._start_checks()
             self.truss.index(target)
@@ -307,6 +338,8 @@ class SupervisorNode(Node):
     def _tick(self) -> None:
         now = self._now()
         self._sample_measurements()
+        self._release_measurement_waiters()
+        self._send_waiting_requests()
         if self._positions is not None:
             self._execute(self.sequencer.tick(now, self._theta_roles(),
                                               physical_to_roles(self._velocities,
@@ -350,7 +383,8 @@ class SupervisorNode(Node):
             self.get_logger().error(walk.outcomes[-1].message)
             return
         self._step_in_progress = True
-        self._step_bound = 0.0
+        self._step_bound = 2.0 * self.params.gripper.screw_time
+        self._bounded: set[str] = set()
         self._true_insertion_error = math.nan
         self.get_logger().info(f'step {walk.step_index + 1}/{len(walk.route)}: gripper '
                                f'{step.moving_gripper} {step.from_node} -> {step.to_node} '
@@ -413,10 +447,13 @@ class SupervisorNode(Node):
             tip = self.vibration.mean()
             hole = self.truss.position(self.sequencer.step.to_node)
             self._true_insertion_error = float(np.linalg.norm(tip[:2] - hole[:2]))
-        if not self.gripper_client.service_is_ready():
-            self._execute(self.sequencer.gripper_done(
-                False, 'the plant gripper_command service is not available', self._now()))
-            return
+        self._when_ready(self.gripper_client.service_is_ready,
+                         lambda: self._send_gripper_request(request),
+                         lambda: self._execute(self.sequencer.gripper_done(
+                             False, 'the plant gripper_command service is not available',
+                             self._now())))
+
+    def _send_gripper_request(self, request: GripperRequest) -> None:
         call = GripperCommand.Request(
             gripper=request.gripper,
             command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
@@ -439,13 +476,40 @@ class SupervisorNode(Node):
         generation = self._trajectory_generation
         if request.purpose in ('fine', 'insertion'):
             self.vibration.clear()
-        if not self.plan_client.service_is_ready() or not self.follow_client.server_is_ready():
-            self._execute(self.sequencer.trajectory_done(
-                False, 'the planner is not available', self._now()))
-            return
-        call = plan_request(request, self.kinematics)
-        future = self.plan_client.call_async(call)
-        future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+        def ready() -> bool:
+            return self.plan_client.service_is_ready() and self.follow_client.server_is_ready()
+
+        def send() -> None:
+            if generation != self._trajectory_generation:
+                return  # cancelled while waiting
+            future = self.plan_client.call_async(plan_request(request, self.kinematics))
+            future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+
+        def unavailable() -> None:
+            if generation == self._trajectory_generation:
+                self._execute(self.sequencer.trajectory_done(
+                    False, 'the planner is not available', self._now()))
+
+        self._when_ready(ready, send, unavailable)
+
+    def _when_ready(self, ready, send, unavailable) -> None:
+        """Send a request now, or once its server is discovered (within _SERVER_WAIT s)."""
+        if ready():
+            send()
+        else:
+            self._waiting_requests.append((time.monotonic() + _SERVER_WAIT, ready, send,
+                                           unavailable))
+
+    def _send_waiting_requests(self) -> None:
+        now = time.monotonic()
+        for entry in list(self._waiting_requests):
+            deadline, ready, send, unavailable = entry
+            if ready():
+                self._waiting_requests.remove(entry)
+                send()
+            elif now > deadline:
+                self._waiting_requests.remove(entry)
+                unavailable()
 
     def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
         if generation != self._trajectory_generation:
@@ -457,14 +521,19 @@ class SupervisorNode(Node):
             self._execute(self.sequencer.trajectory_done(
                 False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
             return
-        if request.purpose == 'coarse':
-            self._step_bound = response.time_optimal_bound
+        if request.purpose in _BOUNDED and request.purpose not in self._bounded:
+            # the step's bound: its extraction, coarse motion and insertion at their limits,
+            # plus the two screw actions (fine corrections and retries are not in it)
+            self._bounded.add(request.purpose)
+            self._step_bound += response.time_optimal_bound
         goal = FollowTrajectory.Goal(trajectory=response.trajectory)
+        self._publish_mode(request.mode, request.base_gripper)  # clears a latched hold
         send = self.follow_client.send_goal_async(goal)
         send.add_done_callback(
-            lambda f: self._on_follow_accepted(f, generation, response.duration))
+            lambda f: self._on_follow_accepted(f, generation, response.duration, request.purpose))
 
-    def _on_follow_accepted(self, future, generation: int, duration: float) -> None:
+    def _on_follow_accepted(self, future, generation: int, duration: float,
+                            purpose: str) -> None:
         handle = future.result()
         if generation != self._trajectory_generation:
             if handle is not None and handle.accepted:
@@ -475,7 +544,7 @@ class SupervisorNode(Node):
                 False, 'the planner refused to stream the trajectory', self._now()))
             return
         self._follow_handle = handle
-        self.get_logger().debug(f'streaming a {duration:.2f} s trajectory')
+        self.get_logger().info(f'{purpose} motion: {duration:.2f} s')
         self.sequencer.trajectory_started(duration, self._now())
         handle.get_result_async().add_done_callback(
             lambda f: self._on_follow_done(f, generation))

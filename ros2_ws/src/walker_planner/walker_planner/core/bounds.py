@@ -9,6 +9,12 @@ can be said to have taken, e.g., 2.3 times the bound.
 It is the minimum over the paper's family of bang-bang profiles (each axis switching as in
 Figure 8, one of the two torques at its limit), not a proof of global time optimality; and the
 joint velocity limits, which it ignores, can make real steps much slower (see the README).
+
+:func:`sweep_rate_bound` is the other lower bound of a sweep: the base yaw cannot turn faster
+than its velocity limit, nor speed up faster than its available torque over the smallest yaw
+inertia the sweep can have. The larger of the two bounds a node-to-node move from below
+(:func:`coarse_move_bound`); :func:`line_bound` bounds a straight tip move under the planner's
+Cartesian acceleration limit. A step's bound adds these to its screw times (the supervisor).
 """
 
 from __future__ import annotations
@@ -23,7 +29,8 @@ from walker_planner.core.node_to_node import (
     NodeToNodeSolution, PlanarModel, solve_node_to_node)
 
 __all__ = ['bound_solution', 'time_optimal_bound', 'step_time_optimal_bound',
-           'tip_move_bound', 'NODE_RADIUS_TOLERANCE', 'MIN_SWEEP']
+           'tip_move_bound', 'sweep_rate_bound', 'coarse_move_bound', 'line_bound',
+           'NODE_RADIUS_TOLERANCE', 'MIN_SWEEP']
 
 #: Start and end of a node-to-node move must be this close in radius and height [m].
 NODE_RADIUS_TOLERANCE = 1e-3
@@ -132,3 +139,62 @@ def tip_move_bound(params, start, goal, min_radius: float | None = None,
         if strict:
             raise
         return None
+
+
+def _rest_to_rest_time(distance: float, speed: float, acceleration: float) -> float:
+    """Fastest rest-to-rest move [s] of ``distance`` under a speed and an acceleration limit."""
+    if distance * acceleration <= speed * speed:  # never reaches the speed limit
+        return 2.0 * math.sqrt(distance / acceleration)
+    return distance / speed + speed / acceleration
+
+
+def sweep_rate_bound(params, sweep: float, min_radius: float, height: float = 0.0) -> float:
+    """Lower bound [s] of a sweep from the base yaw's velocity limit and available torque.
+
+    The yaw J1 must turn through ``sweep`` from rest to rest at no more than its velocity limit,
+    accelerating at no more than its available torque (limit minus Coulomb friction) over the
+    smallest yaw inertia the tip can give it (the tip at ``min_radius`` from the axis; eq (9),
+    corrected, which includes the rotor inertia).
+
+    Parameters
+    ----------
+    params : WalkerParameters
+    sweep : float
+        Sweep angle [rad], sign ignored.
+    min_radius : float
+        Smallest distance [m] of the tip from the yaw axis during the sweep.
+    height : float
+        Tip height [m] above the base during the sweep.
+    """
+    from walker_core.dynamics import RigidModel, diagonal_inertia
+    from walker_core.kinematics import WalkerKinematics
+
+    drive = params.robot.drive.yaw
+    kinematics = WalkerKinematics(params.robot.geometry.l1, params.robot.geometry.l2)
+    joints = kinematics.inverse([0.0, float(min_radius), float(height), 0.0, 0.0])
+    inertia = diagonal_inertia(joints, RigidModel.from_parameters(params))[0]
+    acceleration = (drive.torque_limit - drive.friction_torque) / inertia
+    return _rest_to_rest_time(abs(float(sweep)), drive.velocity_limit, acceleration)
+
+
+def coarse_move_bound(params, start, goal, min_radius: float) -> float | None:
+    """Lower bound [s] of a node-to-node move: the larger of the torque and the rate bounds.
+
+    ``None`` when the move is not a sweep about the base at one radius and height
+    (:func:`tip_move_bound`).
+    """
+    torque = tip_move_bound(params, start, goal, min_radius)
+    if torque is None:
+        return None
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    sweep = abs(math.remainder(math.atan2(-goal[0], goal[1])
+                               - math.atan2(-start[0], start[1]), 2.0 * math.pi))
+    rate = sweep_rate_bound(params, sweep, min_radius, float(start[2]))
+    return max(torque, rate)
+
+
+def line_bound(length: float, acceleration_limit: float) -> float:
+    """Fastest rest-to-rest straight move [s] of ``length`` [m] at ``acceleration_limit``."""
+    if not acceleration_limit > 0:
+        raise ValueError(f'the acceleration limit must be positive, got {acceleration_limit}')
+    return 2.0 * math.sqrt(abs(float(length)) / acceleration_limit)

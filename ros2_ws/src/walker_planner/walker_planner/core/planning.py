@@ -17,7 +17,8 @@ import numpy as np
 
 from walker_core.joint_roles import GRIPPERS, joint_of_role, physical_to_roles, roles_to_physical
 from walker_core.kinematics import KinematicsError, WalkerKinematics
-from walker_planner.core.bounds import MIN_SWEEP, NODE_RADIUS_TOLERANCE, tip_move_bound
+from walker_planner.core.bounds import (
+    MIN_SWEEP, NODE_RADIUS_TOLERANCE, coarse_move_bound, line_bound)
 from walker_planner.core.cartesian import CartesianInJointSpace, branch_of
 from walker_planner.core.errors import InvalidRequestError, LimitError, WorkspaceError
 from walker_planner.core.registry import TRAJECTORY_TYPES, ValidRequest
@@ -235,14 +236,25 @@ def _check_rates(plan_times: np.ndarray, samples: Samples, context: PlanningCont
         raise WorkspaceError(f'{type_name}: the joint trajectory is not finite')
 
 
+_LINES = frozenset({'cartesian_line', 'insertion_line', 'extraction_line'})
+
+
 def _bound(kind, valid: ValidRequest, context: PlanningContext) -> float | None:
+    """Lower bound of the move's time under the robot's limits, or None when there is none.
+
+    A sweep about the base at one radius: the larger of the paper's bang-bang bound (torques)
+    and the yaw's rate bound; a straight line: rest to rest at the Cartesian acceleration limit.
+    """
+    if kind.name in _LINES:
+        return line_bound(float(np.linalg.norm(valid.goal - valid.start)),
+                          context.planner.cartesian.acceleration_limit)
     min_radius = valid.min_radius or context.planner.bang_bang.min_radius
     if kind.space == CARTESIAN:
         start, goal = valid.start, valid.goal
     else:
         start, goal = (context.kinematics.forward(valid.start)[:3],
                        context.kinematics.forward(valid.goal)[:3])
-    return tip_move_bound(context.robot, start, goal, min_radius)
+    return coarse_move_bound(context.robot, start, goal, min(min_radius, math.hypot(*start[:2])))
 
 
 def plan(request: PlanRequest, context: PlanningContext) -> Plan:

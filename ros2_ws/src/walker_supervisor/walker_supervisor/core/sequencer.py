@@ -124,6 +124,9 @@ class TrajectoryRequest:
         Signed base yaw sweep [rad] (coarse motion only, else 0).
     base_gripper : str
         The base during the motion.
+    mode : str
+        Controller mode for the motion ('coarse' or 'fine'), commanded again just before it
+        streams: a controller that latched a hold (a stale input) tracks again.
     """
 
     purpose: str
@@ -133,6 +136,7 @@ class TrajectoryRequest:
     goal_point: np.ndarray
     sweep: float
     base_gripper: str
+    mode: str = 'fine'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -178,13 +182,18 @@ class StepSequencer:
         For the tip position from the measured joints.
     base_gripper : str
         The base before the first step; after each completed step, the gripper that moved.
+    screw_time : float
+        Time a gripper takes to screw in or out [s] (``gripper.screw_time``).
     """
 
     def __init__(self, parameters: SupervisorParameters, kinematics: WalkerKinematics,
-                 base_gripper: str = 'a') -> None:
+                 base_gripper: str = 'a', screw_time: float = 0.5) -> None:
         self.parameters = parameters
         self.kinematics = kinematics
         self.base_gripper = base_gripper
+        # [s] how long a gripper may take to report free or attached after accepting
+        self._screw_allowance = screw_time + parameters.phase_timeout
+        self._gripper_deadline = math.inf
         self.phase = Phase.IDLE
         self.stage = ''
         self.reason = ''
@@ -254,30 +263,41 @@ class StepSequencer:
         self.outcome = None
         self.reason = ''
         self._enter(Phase.EXTRACTION, now, 'unscrewing')
+        self._deadline = math.inf
+        self._gripper_deadline = now + self._screw_allowance
         return [SetControlMode('fine', step.base_gripper),
                 GripperRequest(step.moving_gripper, 'unscrew')]
 
     def gripper_done(self, success: bool, message: str, now: float) -> list:
-        """Take the result of a gripper command (``success`` False: refused, jammed, failed)."""
+        """Take the answer to a gripper command.
+
+        ``success`` True means the command was accepted: the gripper is unscrewing or screwing,
+        and its reported state (:meth:`tick`) says when it is free or attached. False means it
+        was refused, failed, or jammed at once.
+        """
+        if self.stage not in ('unscrewing', 'screwing'):
+            raise SequencerError(f'unexpected gripper result in phase {self.phase.name} '
+                                 f'({self.stage or "no stage"})')
+        if success:
+            self._gripper_deadline = now + self._screw_allowance
+            return []
         if self.stage == 'unscrewing':
-            if not success:
-                return self._abort(f'unscrewing gripper {self._step.moving_gripper} failed: '
-                                   f'{message}', now)
-            self._grippers[self._step.moving_gripper] = 'free'
-            self.stage = 'lifting'
-            return [self._trajectory('extraction', self._targets.start, self._targets.above_from,
-                                     self._start_point(), self._targets.point_above_from)]
-        if self.stage == 'screwing':
-            if success:
-                return self._finish(now)
-            self._attempts += 1
-            if self._attempts >= self.parameters.max_insertion_attempts:
-                return self._abort(f'insertion jammed {self._attempts} times: {message}', now)
-            self.stage = 'retry_lift'
-            return [self._trajectory('retry_lift', self._theta, self._targets.above_to,
-                                     self._targets.point_to, self._targets.point_above_to)]
-        raise SequencerError(f'unexpected gripper result in phase {self.phase.name} '
-                             f'({self.stage or "no stage"})')
+            return self._abort(f'unscrewing gripper {self._step.moving_gripper} failed: '
+                               f'{message}', now)
+        return self._jammed(message, now)
+
+    def _unscrewed(self, now: float) -> list:
+        self.stage = 'lifting'
+        return [self._trajectory('extraction', self._targets.start, self._targets.above_from,
+                                 self._start_point(), self._targets.point_above_from)]
+
+    def _jammed(self, message: str, now: float) -> list:
+        self._attempts += 1
+        if self._attempts >= self.parameters.max_insertion_attempts:
+            return self._abort(f'insertion jammed {self._attempts} times: {message}', now)
+        self.stage = 'retry_lift'
+        return [self._trajectory('retry_lift', self._theta, self._targets.above_to,
+                                 self._targets.point_to, self._targets.point_above_to)]
 
     def trajectory_started(self, planned_duration: float, now: float) -> None:
         """Note that the requested trajectory is streaming and should take this long [s]."""
@@ -326,6 +346,8 @@ class StepSequencer:
         if now > self._deadline:
             return self._abort(f'{self.phase.name.lower()} overran its planned time '
                                f'({self.stage})', now)
+        if self.stage in ('unscrewing', 'screwing'):
+            return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
             return self._enter_fine(now, correction=False)
         if self.stage == 'settling' and self._settled(now, velocities):
@@ -337,7 +359,22 @@ class StepSequencer:
             if self.phase == Phase.INSERTION:
                 self.stage = 'screwing'
                 self._deadline = math.inf
+                self._gripper_deadline = now + self._screw_allowance
                 return [GripperRequest(self._step.moving_gripper, 'screw_in')]
+        return []
+
+    def _follow_gripper(self, now: float, state: str) -> list:
+        """Move on once the moving gripper reports free (unscrewed) or attached (screwed)."""
+        if self.stage == 'unscrewing' and state == 'free':
+            return self._unscrewed(now)
+        if self.stage == 'screwing' and state == 'attached':
+            return self._finish(now)
+        if self.stage == 'screwing' and state == 'jammed':
+            return self._jammed('the screw-in jammed', now)
+        if now > self._gripper_deadline:
+            action = 'unscrew' if self.stage == 'unscrewing' else 'screw in'
+            return self._abort(f'gripper {self._step.moving_gripper} did not {action} in time '
+                               f'(it reports {state or "nothing"})', now)
         return []
 
     def hold(self, reason: str, now: float) -> list:
@@ -365,7 +402,8 @@ class StepSequencer:
         return TrajectoryRequest(purpose, np.array(start, dtype=float),
                                  np.array(goal, dtype=float), np.array(start_point, dtype=float),
                                  np.array(goal_point, dtype=float), sweep,
-                                 self._step.base_gripper)
+                                 self._step.base_gripper,
+                                 'coarse' if purpose == 'coarse' else 'fine')
 
     def _enter(self, phase: Phase, now: float, stage: str) -> None:
         if self.phase not in (Phase.IDLE, Phase.SAFE_HOLD):
