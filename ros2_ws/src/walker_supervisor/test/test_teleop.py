@@ -292,3 +292,27 @@ def test_the_joints_settle_after_staying_still_long_enough():
     assert not detector.update(1.0, [0.0, 0.0, 0.03, 0.0, 0.0])  # moving again: start over
     assert not detector.update(1.5, [0.01] * 5)
     assert detector.update(2.5, [-0.01] * 5)
+
+
+# ---------------------------------------------------------------------------- corrections
+def test_a_correction_leads_every_joint_back_to_the_goal_of_the_jog():
+    jog = RULES.tip_jog(situation(LIFTED), [0.02, 0.0, 0.0], 0.0)
+    np.testing.assert_allclose(KIN.forward(jog.goal)[:3], jog.goal_point, atol=1e-9)
+    assert KIN.forward(jog.goal)[3] == pytest.approx(0.0, abs=1e-9)  # vertical
+    settled = jog.goal.copy()
+    settled[0] += 0.002  # J1 stopped 2 mrad off
+    settled[3] -= 0.02  # J4 stopped short: the gripper is tilted
+    correction = RULES.correction(roles_to_physical(settled, 'a'), jog)
+    np.testing.assert_allclose(correction.start, settled)
+    np.testing.assert_allclose(correction.goal, jog.goal)
+    assert correction.speed == TELEOP.joint_speed
+    joint = RULES.joint_jog(situation(), 'vertex_joint', -0.1, 0.0)
+    assert np.array_equal(RULES.correction(roles_to_physical(LIFTED, 'a'), joint).goal,
+                          joint.goal)
+
+
+def test_a_correction_into_the_truss_is_refused():
+    jog = RULES.tip_jog(situation(LIFTED), [0.0, 0.0, -0.05], 0.0)
+    beside = KIN.inverse([0.0, SPACING - 0.02, 0.0, 0.0, 0.0], reference=LIFTED)
+    refused(r'the correction would move gripper b', RULES.correction,
+            roles_to_physical(beside, 'a'), jog)

@@ -10,7 +10,9 @@ Interfaces (relative to the node's namespace):
 * actions ``step`` (walker_msgs/action/Step), ``walk_to`` (walker_msgs/action/WalkTo); a goal sent
   while a walk runs is refused (aborted at once with the reason); cancelling a walk lets the step
   under way finish, so the walker ends with both grippers attached;
-* services ``hold`` and ``resume`` (std_srvs/srv/Trigger);
+* services ``hold`` and ``resume`` (std_srvs/srv/Trigger); ``hold`` also stops a jog;
+* the teleoperation services ``jog_joint``, ``jog_tip`` and ``operate_gripper``
+  (:mod:`walker_supervisor.teleop_server`);
 * publishes ``phase`` (walker_msgs/StepPhase, latched), ``control_mode`` (latched) and
   ``step_reports`` (walker_msgs/StepReport, one per step, latched history).
 """
@@ -51,6 +53,7 @@ from walker_supervisor.core.sequencer import (
     StepSequencer, SupervisorParameters, TrajectoryRequest)
 from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
 from walker_supervisor.core.walk import VibrationMeter, Walk
+from walker_supervisor.teleop_server import TeleopServer
 from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['SupervisorNode', 'main']
@@ -85,8 +88,8 @@ _BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
 
 
-class SupervisorNode(Node):
-    """ROS front of the step sequencer and the walk."""
+class SupervisorNode(TeleopServer, Node):
+    """ROS front of the step sequencer, the walk and teleoperation."""
 
     def __init__(self, **kwargs) -> None:
         super().__init__('supervisor', **kwargs)
@@ -146,6 +149,7 @@ class SupervisorNode(Node):
             goal_callback=lambda _: GoalResponse.ACCEPT, cancel_callback=self._on_cancel)
         self.create_service(Trigger, 'hold', self._on_hold)
         self.create_service(Trigger, 'resume', self._on_resume)
+        self._init_teleop()
         self.create_timer(TICK_PERIOD, self._tick)
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
@@ -235,7 +239,12 @@ class SupervisorNode(Node):
             raise SequencerError('a walk starts only with both grippers attached (now: '
                                  + ', '.join(f'{g}: {self._grippers.get(g, "unknown")}'
                                              for g in ('a', 'b')) + ')')
-        return Stance(base, self._gripper_nodes[base], self._gripper_nodes[other])
+        stance = Stance(base, self._gripper_nodes[base], self._gripper_nodes[other])
+        if stance.other_node not in self.truss.neighbors(stance.base_node):
+            # an operator may have screwed a gripper in elsewhere
+            raise SequencerError(f'the grippers are in {stance.base_node} and '
+                                 f'{stance.other_node}, which are not neighbouring nodes')
+        return stance
 
     # ------------------------------------------------------------------ actions
     def _on_cancel(self, goal_handle) -> CancelResponse:
@@ -325,6 +334,7 @@ class SupervisorNode(Node):
                                  f'resume first')
         if self._positions is None:
             raise SequencerError('no joint states received from the plant yet')
+        self._teleop_check_idle()
         return self._current_stance()
 
     async def _run_walk(self, goal_handle, target: str, route: list[PlannedStep],
@@ -384,6 +394,8 @@ class SupervisorNode(Node):
                  if s.message != 'not heard from yet']
         faults = [f'{s.name}: {s.message}' for s in heard
                   if s.level == Level.ERROR or (self.sequencer.busy and s.level == Level.WARN)]
+        if faults:
+            self._teleop_stop('fault: ' + '; '.join(faults))
         if faults and (self.sequencer.busy or self.sequencer.phase == Phase.IDLE):
             reason = 'fault: ' + '; '.join(faults)
             self.get_logger().error(reason)
@@ -418,6 +430,7 @@ class SupervisorNode(Node):
     def _tick(self) -> None:
         now = self._now()
         self._sample_measurements()
+        self._teleop_tick(now)
         self._release_measurement_waiters()
         self._send_waiting_requests()
         if self._positions is not None:
@@ -672,6 +685,7 @@ class SupervisorNode(Node):
     # ------------------------------------------------------------------ hold / resume
     def _on_hold(self, request: Trigger.Request, response: Trigger.Response):
         self._execute(self.sequencer.hold('hold requested by an operator', self._now()))
+        self._teleop_stop('hold requested by an operator')
         response.success = True
         response.message = 'holding: trajectories stopped, controllers hold, grippers unchanged'
         return response

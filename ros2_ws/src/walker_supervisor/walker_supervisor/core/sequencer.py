@@ -123,7 +123,8 @@ class TrajectoryRequest:
     Attributes
     ----------
     purpose : str
-        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'.
+        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'
+        (a step's), 'jog_joint' or 'jog_tip' (an operator's, :mod:`.teleop`).
     start, goal : ndarray, shape (5,)
         Joint angles J1..J5 [rad] (role order of ``base_gripper``).
     start_point, goal_point : ndarray, shape (3,)
@@ -449,6 +450,21 @@ class StepSequencer:
         return [SetControlMode('fine', self._step.base_gripper),
                 self._trajectory('recover', self._theta, self._targets.above_to, tip,
                                  self._targets.point_above_to)]
+
+    def forget_step(self) -> None:
+        """Forget the last (or interrupted) step: an operator has changed the stance.
+
+        After a gripper was screwed in or out by hand, the step's targets no longer describe
+        the walker, so :meth:`resume` must not complete it.
+
+        Raises
+        ------
+        SequencerError
+            A step is under way.
+        """
+        if self.busy:
+            raise SequencerError(f'a step is under way (phase {self.phase.name})')
+        self._step, self._targets = None, None
 
     # ------------------------------------------------------------------ internals
     def _start_point(self) -> np.ndarray:

@@ -26,6 +26,9 @@ Rules
   tolerance), and wherever it has moved sideways by more than that tolerance it must be at least
   ``teleop.clearance`` above the surface: a gripper leaves and enters a hole straight along its
   axis, as the steps' extraction and insertion do.
+* A jog that settles farther from its goal than ``teleop.joint_tolerance`` (a joint jog) or
+  ``supervisor.insertion_alignment`` (a tip jog) gets a correction, a joint move from where it
+  settled to the jog's goal configuration, checked against the surface as the jog was.
 * Unscrewing needs the gripper attached (a jammed one may always be backed out) and the *other*
   gripper verified attached; unscrewing the base makes the other gripper the base. Screwing in
   needs the gripper free or jammed; the plant decides whether it is within the insertion
@@ -49,7 +52,7 @@ from walker_core.parameter_schema import ParameterError, parameter
 from walker_supervisor.core.sequencer import Phase
 
 __all__ = [
-    'TeleopParameters', 'TeleopRefusedError', 'Situation', 'JointJog', 'TipJog',
+    'TeleopParameters', 'TeleopRefusedError', 'Situation', 'JointJog', 'TipJog', 'Correction',
     'GripperOperation', 'TeleopRules', 'SettleDetector', 'busy_reason', 'tip_heading',
     'PATH_SAMPLES',
 ]
@@ -86,6 +89,10 @@ class TeleopParameters:
     clearance: float = parameter(
         'height above the truss surface the free gripper must have wherever a jog moves it '
         'sideways', 'm', 0.0, 0.2, read_only=False)
+    joint_tolerance: float = parameter(
+        'a joint jog that settles with a joint farther than this from its target gets a '
+        'correction move (a tip jog: farther than supervisor.insertion_alignment)', 'rad',
+        1e-4, 0.1, read_only=False)
     max_tilt: float = parameter(
         'largest tilt of the free gripper from vertical at which jog_tip accepts a command '
         '(the line starts with the gripper made vertical)', 'rad', 1e-4, 0.05, read_only=False)
@@ -177,6 +184,9 @@ class TipJog:
         The displacement as asked [m], in the free gripper's frame.
     speed : float
         Speed along the line [m/s].
+    goal : ndarray, shape (5,)
+        Joint angles J1..J5 [rad] at the end of the line (gripper vertical, the start's branch,
+        the tip yaw turned with the base yaw as the planner's lines do).
     """
 
     free_gripper: str
@@ -186,11 +196,32 @@ class TipJog:
     goal_point: np.ndarray
     delta: np.ndarray
     speed: float
+    goal: np.ndarray
 
     def describe(self) -> str:
         """Say what the jog does, for logs and answers."""
         mm = ', '.join(f'{v * 1e3:+.1f}' for v in self.delta)
         return f'tip jog of gripper {self.free_gripper} by ({mm}) mm in its frame'
+
+
+@dataclasses.dataclass(frozen=True)
+class Correction:
+    """A joint move back to a jog's goal configuration.
+
+    Attributes
+    ----------
+    base_gripper : str
+        The attached gripper.
+    start, goal : ndarray, shape (5,)
+        Joint angles J1..J5 [rad] now and at the jog's goal, role order of ``base_gripper``.
+    speed : float
+        Peak joint speed [rad/s] (``teleop.joint_speed``).
+    """
+
+    base_gripper: str
+    start: np.ndarray
+    goal: np.ndarray
+    speed: float
 
 
 @dataclasses.dataclass(frozen=True)
@@ -429,14 +460,41 @@ class TeleopRules:
         goal_point = start_point + delta_base
         path = start_point + np.linspace(0.0, 1.0, PATH_SAMPLES)[:, None] * delta_base
         self._check_surface(path, free, 'the jog')
-        self._check_reachable(path, start, base)
-        return TipJog(free, base, start, start_point, goal_point, delta, speed)
+        goal = self._check_reachable(path, start, base)
+        return TipJog(free, base, start, start_point, goal_point, delta, speed, goal)
 
-    def _check_reachable(self, path: np.ndarray, start: np.ndarray, base: str) -> None:
+    def correction(self, positions: np.ndarray, jog: JointJog | TipJog) -> Correction:
+        """Return the joint move from where a jog settled to its goal configuration.
+
+        A jog that settles too far from its target (a joint stuck in its friction short of it,
+        a stream the controllers stopped following while the graph stalled) gets one: a
+        minimum-jerk move of every joint to the jog's goal angles, which also levels the
+        gripper again. Its path is checked against the truss surface as a jog's is.
+
+        Parameters
+        ----------
+        positions : ndarray, shape (5,)
+            Measured joint angles in physical order [rad] now.
+        jog : JointJog or TipJog
+            The jog whose goal was not reached.
+
+        Raises
+        ------
+        TeleopRefusedError
+            When the move would break the surface rule.
+        """
+        start = physical_to_roles(np.asarray(positions, dtype=float), jog.base_gripper)
+        path = np.linspace(0.0, 1.0, PATH_SAMPLES)[:, None] * (jog.goal - start) + start
+        self._check_surface(np.array([self.kinematics.forward(q)[:3] for q in path]),
+                            other_gripper(jog.base_gripper), 'the correction')
+        return Correction(jog.base_gripper, start, jog.goal.copy(),
+                          self.parameters.joint_speed)
+
+    def _check_reachable(self, path: np.ndarray, start: np.ndarray, base: str) -> np.ndarray:
         """Refuse a line the arm cannot follow with the gripper vertical within its limits.
 
         The IK branch is the start's; the tip yaw J5 turns with the base yaw J1, as the
-        planner's Cartesian lines do.
+        planner's Cartesian lines do. Returns the joint angles J1..J5 [rad] at the end.
         """
         kin = self.kinematics
         t2, t3, t4 = start[1:4]
@@ -457,6 +515,7 @@ class TeleopRules:
                     f'{np.round(point, 4).tolist()} m in the base frame: {_named(error, base)}'
                 ) from None
             reference = theta
+        return reference
 
     # ------------------------------------------------------------------ gripper commands
     def gripper_operation(self, situation: Situation, gripper: str, action: str
