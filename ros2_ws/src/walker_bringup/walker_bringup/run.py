@@ -52,6 +52,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='seconds the walk may take (wall clock)')
     parser.add_argument('--no-walk', dest='walk', action='store_false',
                         help='bring the graph up, report it ready, and shut it down')
+    parser.add_argument('--serve', action='store_true',
+                        help='bring the graph up and keep it running, without walking, until '
+                             'Ctrl-C: for an operator with walkerctl or the ros2 tools')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     return parser.parse_args(argv)
 
@@ -140,6 +143,8 @@ def main(argv: list[str] | None = None) -> int:
                 key=len(r.ready)),
             should_stop=should_stop)
         progress.say(f'[walker] graph ready in {time.monotonic() - started:.1f} s')
+        if args.serve:
+            return _serve(args, should_stop, deaths)
         if not args.walk:
             return 0
         code = _walk(client, args, progress, should_stop, out)
@@ -165,6 +170,18 @@ def main(argv: list[str] | None = None) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     return code
+
+
+def _serve(args, should_stop, deaths: list) -> int:
+    """Keep the graph running until Ctrl-C (exit code 0) or a node dies."""
+    domain = os.environ.get('ROS_DOMAIN_ID', '0')
+    print(f'[walker] serving in namespace {args.namespace}, ROS_DOMAIN_ID={domain}: try '
+          f'scripts/walkerctl status; Ctrl-C shuts the graph down', flush=True)
+    while not should_stop():
+        time.sleep(0.2)
+    if deaths:
+        raise WalkInterruptedError('a node died')
+    return 0
 
 
 def _walk(client: GraphClient, args, progress: _Progress, should_stop, out: Path) -> int:
