@@ -47,12 +47,15 @@ from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler
 from walker_supervisor.core.health import HealthMonitor, Level
 from walker_supervisor.core.route import (
-    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps)
+    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
     CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode, StepOutcome,
     StepSequencer, SupervisorParameters, TrajectoryRequest)
-from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
+from walker_supervisor.core.step_geometry import (
+    BaseFrame, plan_step_targets, recovery_targets)
 from walker_supervisor.core.walk import VibrationMeter, Walk
+from walker_supervisor.step_state import (
+    clear_step_state, read_step_state, step_state_path, write_step_state)
 from walker_supervisor.teleop_server import TeleopServer
 from walker_supervisor.trajectory_requests import plan_request
 
@@ -124,6 +127,7 @@ class SupervisorNode(TeleopServer, Node):
         self._bounded: set[str] = set()
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
         self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
+        self._pending_adoption = False
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
@@ -138,6 +142,7 @@ class SupervisorNode(TeleopServer, Node):
         self.create_subscription(GripperStates, 'gripper_states', self._on_gripper_states,
                                  _LATCHED)
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, _LATCHED)
+        self._state_file = step_state_path(self.get_namespace())
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
@@ -207,9 +212,10 @@ class SupervisorNode(TeleopServer, Node):
             self._gripper_errors[state.name] = state.position_error
         free = sorted(g for g in ('a', 'b') if self._grippers.get(g) != 'attached')
         if first and free and self.sequencer.phase == Phase.IDLE:
-            # e.g. a supervisor restarted in the middle of a step: nothing may move by itself
+            # a supervisor restarted in the middle of a step: nothing may move by itself
             self._execute(self.sequencer.hold(
                 f'started with gripper {", ".join(free)} not attached', self._now()))
+            self._pending_adoption = True
 
     def _on_tip_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
@@ -228,6 +234,35 @@ class SupervisorNode(TeleopServer, Node):
     def _yaw_limits(self) -> tuple[float, float]:
         drive = self.params.robot.drive.yaw
         return drive.position_min, drive.position_max
+
+    def _adopt_interrupted_step(self) -> bool:
+        """Take up the step an earlier incarnation left unfinished, if its gripper is free."""
+        previous = read_step_state(self._state_file)
+        if previous is None or self._positions is None:
+            return False
+        base = previous.base_gripper
+        moving = 'b' if base == 'a' else 'a'
+        if self._grippers.get(base) != 'attached' or self._grippers.get(moving) == 'attached' \
+                or self._gripper_nodes.get(base) != previous.base_node:
+            return False  # not the situation the file describes
+        try:
+            sweep = step_sweep(self.truss, previous.base_node, previous.from_node,
+                               previous.to_node)
+            step = PlannedStep(base, previous.base_node, previous.from_node, previous.to_node,
+                               sweep)
+            frame = BaseFrame(self.truss.position(previous.base_node), previous.heading)
+            theta = physical_to_roles(self._positions, base)
+            targets = recovery_targets(self.kinematics, frame, step,
+                                       self.truss.position(step.from_node),
+                                       self.truss.position(step.to_node), theta,
+                                       self.params.gripper.approach_height)
+        except (ValueError, KinematicsError) as error:
+            self.get_logger().error(f'cannot take up the interrupted step: {error}')
+            return False
+        self.sequencer.adopt(step, targets, f'restarted in the middle of the step '
+                             f'{step.from_node} -> {step.to_node}: resume to complete it')
+        self.get_logger().warning(self.sequencer.reason)
+        return True
 
     def _theta_roles(self) -> np.ndarray:
         return physical_to_roles(self._positions, self.sequencer.base_gripper)
@@ -431,6 +466,9 @@ class SupervisorNode(TeleopServer, Node):
         now = self._now()
         self._sample_measurements()
         self._teleop_tick(now)
+        if self._pending_adoption and self._positions is not None:
+            self._pending_adoption = False
+            self._adopt_interrupted_step()
         self._release_measurement_waiters()
         self._send_waiting_requests()
         if self._positions is not None:
@@ -476,6 +514,7 @@ class SupervisorNode(TeleopServer, Node):
             self.get_logger().error(walk.outcomes[-1].message)
             return
         self._step_in_progress = True
+        write_step_state(self._state_file, step, frame.heading)
         self._step_bound = 2.0 * self.params.gripper.screw_time
         self._bounded: set[str] = set()
         self._true_insertion_error = math.nan
@@ -486,6 +525,8 @@ class SupervisorNode(TeleopServer, Node):
 
     def _record_outcome(self, walk: Walk, outcome: StepOutcome) -> None:
         self._step_in_progress = False
+        if outcome.success:
+            clear_step_state(self._state_file)
         walk.outcomes.append(outcome)
         step = walk.route[len(walk.outcomes) - 1]
         report = StepReport()
@@ -721,7 +762,7 @@ class SupervisorNode(TeleopServer, Node):
         walk = self.walk
         step = self.sequencer.step if self.sequencer.busy else None
         key = (self.sequencer.phase, self.sequencer.reason, self.sequencer.base_gripper,
-               walk.step_index if walk else 0, walk is not None)
+               walk.step_index if walk else 0, walk is not None, self.sequencer.step)
         if key == self._last_phase:
             return
         if self._last_phase is not None and key[0] != self._last_phase[0]:
@@ -738,8 +779,13 @@ class SupervisorNode(TeleopServer, Node):
         msg.header.stamp = self.get_clock().now().to_msg()
         if walk is not None:
             msg.step_index, msg.step_count = walk.step_index, len(walk.route)
-        if step is not None:
+        held = self.sequencer.phase == Phase.SAFE_HOLD and self.sequencer.step is not None \
+            and self._grippers.get(self.sequencer.step.moving_gripper) != 'attached'
+        if step is not None or held:
+            step = self.sequencer.step
             msg.from_node, msg.to_node = step.from_node, step.to_node
+            msg.base_node = step.base_node
+            msg.base_heading = float(self.sequencer.targets.frame.heading)
         self.phase_pub.publish(msg)
 
     def _publish_feedback(self, walk: Walk) -> None:

@@ -41,6 +41,7 @@ from walker_supervisor.core.sequencer import MAX_FINE_LINES, SequencerError, Tra
 from walker_supervisor.core.teleop import (
     JointJog, SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules,
     TipJog, busy_reason)
+from walker_supervisor.step_state import clear_step_state
 from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['TeleopServer']
@@ -76,8 +77,8 @@ class TeleopServer:
 
     The host node provides ``params``, ``settings``, ``kinematics``, ``sequencer``, ``walk``,
     the measurements (``_positions``, ``_velocities``, ``_grippers``, ``_gripper_nodes``), the
-    clients (``plan_client``, ``follow_client``, ``gripper_client``) and ``_when_ready``,
-    ``_publish_mode``, ``_now``.
+    clients (``plan_client``, ``follow_client``, ``gripper_client``), the step file
+    (``_state_file``) and ``_when_ready``, ``_publish_mode``, ``_release_interlock``, ``_now``.
     """
 
     # ------------------------------------------------------------------ set-up
@@ -375,8 +376,10 @@ class TeleopServer:
             GripperCommand.Request(gripper=gripper, command=command)), timeout)
         if answer is None:
             return _Outcome(False, f'{what}: no answer from the plant')
-        # the stance is changing: an interrupted step can no longer be completed by resume
+        # the stance is changing: an interrupted step can no longer be completed by resume,
+        # nor taken up by a restarted supervisor
         self.sequencer.forget_step()
+        clear_step_state(self._state_file)
         if not answer.success:
             return _Outcome(False, f'{what} failed: {answer.message}')
         if operation.base_after != self.sequencer.base_gripper:

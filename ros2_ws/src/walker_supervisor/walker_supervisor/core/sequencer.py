@@ -232,6 +232,23 @@ class StepSequencer:
         """The step under way (or the last one)."""
         return self._step
 
+    @property
+    def targets(self) -> StepTargets | None:
+        """The targets of the step under way (or of the last one)."""
+        return self._targets
+
+    def adopt(self, step: PlannedStep, targets: StepTargets, reason: str) -> None:
+        """Take over an interrupted step, in SAFE_HOLD, so that :meth:`resume` completes it.
+
+        Used by a supervisor restarted in the middle of a step; raises :class:`SequencerError`
+        if a step is under way here.
+        """
+        if self.busy:
+            raise SequencerError(f'a step is already under way (phase {self.phase.name})')
+        self._step, self._targets = step, targets
+        self.base_gripper = step.base_gripper
+        self.phase, self.stage, self.reason = Phase.SAFE_HOLD, '', reason
+
     def tip_error(self) -> float:
         """Distance [m] of the tip (forward kinematics) from the current phase's target point."""
         if self._targets is None:
