@@ -275,6 +275,21 @@ def _hold_during(world, phase):
     return step
 
 
+@pytest.mark.parametrize('accepted', [True, False])
+def test_a_gripper_answer_after_a_hold_is_ignored(accepted):
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    start = world.sequencer.start(step, targets, world.now, dict(world.grippers))
+    assert isinstance(start[-1], GripperRequest) and start[-1].action == 'unscrew'
+    world.execute(world.sequencer.hold('hold requested by an operator', world.now))
+    # the plant's answer to the unscrew sent before the hold comes in now
+    assert world.sequencer.gripper_done(accepted, '', world.now) == []
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.sequencer.reason == 'hold requested by an operator'
+
+
 @pytest.mark.parametrize('phase', [Phase.COARSE, Phase.FINE])
 def test_resume_mid_step_recovers_to_the_target_and_completes_the_step(phase):
     world = World()

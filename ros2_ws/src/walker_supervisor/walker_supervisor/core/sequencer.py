@@ -299,8 +299,12 @@ class StepSequencer:
 
         ``success`` True means the command was accepted: the gripper is unscrewing or screwing,
         and its reported state (:meth:`tick`) says when it is free or attached. False means it
-        was refused, failed, or jammed at once.
+        was refused, failed, or jammed at once. An answer that arrives after a hold is
+        ignored: the hold has stopped the step, and the gripper's reported state is what
+        :meth:`resume` goes by.
         """
+        if self.phase == Phase.SAFE_HOLD:
+            return []
         if self.stage not in ('unscrewing', 'screwing'):
             raise SequencerError(f'unexpected gripper result in phase {self.phase.name} '
                                  f'({self.stage or "no stage"})')
