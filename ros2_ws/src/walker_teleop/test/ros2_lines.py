@@ -32,7 +32,7 @@ def fill(message, values: dict):
         if hasattr(current, 'get_fields_and_field_types'):
             fill(current, value)
         else:
-            setattr(message, key, value)  # the generated setter checks the type and range
+            setattr(message, key, value)
     return message
 
 
@@ -43,11 +43,12 @@ def build(line: str):
     kind, name, type_name, rest = match.groups()
     values = yaml.safe_load(shlex.split(rest)[0]) if rest else {}
     cls = interface(type_name)
-    message = cls.Request() if kind == 'service call' else cls.Goal()
+    # check_fields: the generated setters check each value's type, size and range
+    message = (cls.Request if kind == 'service call' else cls.Goal)(check_fields=True)
     return kind.split()[0], name, fill(message, values)
 
 
 def lines_in(text: str) -> list[str]:
     """Every ``ros2 service call`` and ``ros2 action send_goal`` line of a text."""
-    return [line.strip().lstrip('$ ') for line in text.splitlines()
-            if 'ros2 service call' in line or 'ros2 action send_goal' in line]
+    return [line.strip() for line in text.splitlines()
+            if line.strip().startswith(('ros2 service call ', 'ros2 action send_goal '))]
