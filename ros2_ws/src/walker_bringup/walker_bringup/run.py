@@ -34,6 +34,7 @@ from walker_report.walk_report import written_text
 __all__ = ['main', 'parse_arguments', 'write_report']
 
 PHASE_NAMES = ('idle', 'extraction', 'coarse', 'fine', 'insertion', 'safe hold')
+SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -154,7 +155,7 @@ def main(argv: list[str] | None = None) -> int:
             should_stop=should_stop)
         progress.say(f'[walker] graph ready in {time.monotonic() - started:.1f} s')
         if args.serve:
-            return _serve(args, should_stop, deaths)
+            return _serve(client, args, should_stop, deaths)
         if not args.walk:
             return 0
         code = _walk(client, args, progress, should_stop, out)
@@ -186,13 +187,17 @@ def main(argv: list[str] | None = None) -> int:
     return code
 
 
-def _serve(args, should_stop, deaths: list) -> int:
-    """Keep the graph running until Ctrl-C (exit code 0) or a node dies."""
+def _serve(client: GraphClient, args, should_stop, deaths: list) -> int:
+    """Keep the graph running until Ctrl-C (exit code 0) or a node dies.
+
+    The client keeps spinning: a participant that stops taking its messages would hold up the
+    graph's reliable writers.
+    """
     domain = os.environ.get('ROS_DOMAIN_ID', '0')
     print(f'[walker] serving in namespace {args.namespace}, ROS_DOMAIN_ID={domain}: try '
           f'scripts/walkerctl status; Ctrl-C shuts the graph down', flush=True)
     while not should_stop():
-        time.sleep(0.2)
+        client.spin_for(SERVE_POLL)
     if deaths:
         raise WalkInterruptedError('a node died')
     return 0
