@@ -99,8 +99,11 @@ class TeleopClient:
         return True
 
     def _wait_interruptible(self, done: Callable[[], bool],
-                            on_interrupt: Callable[[], None] | None) -> None:
+                            on_interrupt: Callable[[], None] | None,
+                            timeout: float | None = None) -> bool:
         """Spin until ``done()``; the first Ctrl-C calls ``on_interrupt``, a second one stops.
+
+        Returns False when ``timeout`` [s] passed first (None: no time limit).
 
         Raises
         ------
@@ -108,10 +111,11 @@ class TeleopClient:
             On Ctrl-C without ``on_interrupt``, or on the second Ctrl-C.
         """
         interrupted = False
+        deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             try:
-                self.spin_until(done, None)
-                return
+                left = None if deadline is None else max(0.0, deadline - time.monotonic())
+                return self.spin_until(done, left)
             except KeyboardInterrupt:
                 if interrupted or on_interrupt is None:
                     raise CommandInterruptedError('interrupted') from None
@@ -126,27 +130,32 @@ class TeleopClient:
                 f'(waited {self.timeout:g} s): {self.where()}')
         return client
 
-    def call(self, name: str, request, on_interrupt: Callable[[], None] | None = None):
+    def call(self, name: str, request, on_interrupt: Callable[[], None] | None = None,
+             timeout: float | None = None):
         """Call a service and return its response.
 
-        Commands that move answer when the motion is over, so there is no time limit on the
-        answer; ``on_interrupt`` says what a Ctrl-C does meanwhile.
+        Commands that move answer when the motion is over, so they wait without a time limit
+        (``timeout`` None); ``on_interrupt`` says what a Ctrl-C does meanwhile.
 
         Raises
         ------
         GraphUnavailableError
-            The service is not discovered within the timeout.
+            The service is not discovered, or does not answer, within the timeout.
         CommandInterruptedError
             Ctrl-C (see :meth:`_wait_interruptible`).
         """
         future = self._service(name).call_async(request)
-        self._wait_interruptible(future.done, on_interrupt)
+        if not self._wait_interruptible(future.done, on_interrupt, timeout):
+            raise GraphUnavailableError(
+                f'no answer from {self.node.get_namespace().rstrip("/")}/{name} within '
+                f'{timeout:g} s; the command may still have been carried out: check with '
+                f'walkerctl status')
         return future.result()
 
     # ------------------------------------------------------------------ commands
     def trigger(self, name: str) -> Trigger.Response:
-        """Call ``hold`` or ``resume``."""
-        return self.call(name, Trigger.Request())
+        """Call ``hold`` or ``resume`` (they answer at once: waited for ``timeout`` s)."""
+        return self.call(name, Trigger.Request(), timeout=self.timeout)
 
     def hold_now(self) -> None:
         """Ask the supervisor to hold, without waiting for the answer (Ctrl-C of a jog)."""
@@ -189,7 +198,9 @@ class TeleopClient:
                 f'(waited {self.timeout:g} s): {self.where()}')
         goal = (WalkTo.Goal if action == 'walk_to' else Step.Goal)(target_node=target)
         sent = client.send_goal_async(goal, feedback_callback=lambda m: on_feedback(m.feedback))
-        self._wait_interruptible(sent.done, None)
+        if not self._wait_interruptible(sent.done, None, self.timeout):
+            raise GraphUnavailableError(f'the {action} goal was not answered within '
+                                        f'{self.timeout:g} s: check with walkerctl status')
         handle = sent.result()
         if handle is None or not handle.accepted:
             raise GraphUnavailableError(f'the {action} goal was rejected')
