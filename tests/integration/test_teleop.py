@@ -22,7 +22,9 @@ STARTUP_TIMEOUT = 120.0  # [s] wall, for the graph to come up on a loaded machin
 ANSWER_TIMEOUT = 60.0  # [s] wall, for a jog (a few seconds of sim time) to be answered
 STILL = 2e-3  # [rad] the joints of a walker that was told nothing move less than this
 B_YAW = 4  # index of b_yaw_joint in the physical order of joint_states
-PATIENT_WATCHDOG = 5.0  # [s] supervisor.watchdog_timeout of this test (the file's: 1 s)
+#: Timeouts [s] of this test's parameter file, and the file's own.
+PATIENT_TIMEOUTS = {'watchdog_timeout': 5.0, 'setpoint_timeout': 2.0, 'state_timeout': 2.0}
+DEFAULT_TIMEOUTS = {'watchdog_timeout': 1.0, 'setpoint_timeout': 0.5, 'state_timeout': 0.5}
 
 
 class Graph:
@@ -104,18 +106,21 @@ class Graph:
 
 
 def _patient_parameters(tmp):
-    """Write the parameter file with a watchdog that waits longer than a loaded machine stalls.
+    """Write the parameter file with timeouts longer than a loaded machine stalls.
 
-    The watchdog has tests of its own (a silent node stops the walker in safe hold, which also
-    stops a jog); here a controller delayed by a few other test runs must not end the jogs.
+    The watchdog and the controllers' stale inputs have tests of their own (they stop the
+    walker in safe hold, which also stops a jog); here a process delayed by other test runs
+    on the machine must not end the step or the jogs this test needs.
     """
     from walker_core.robot_parameters import default_parameter_file
 
     text = default_parameter_file().read_text()
-    line = 'watchdog_timeout: 1.0 '
-    assert text.count(line) == 1
+    for name, value in PATIENT_TIMEOUTS.items():
+        line = f'{name}: {DEFAULT_TIMEOUTS[name]} '
+        assert text.count(line) == 1, line
+        text = text.replace(line, f'{name}: {value} ')
     path = tmp / 'walker.yaml'
-    path.write_text(text.replace(line, f'watchdog_timeout: {PATIENT_WATCHDOG} '))
+    path.write_text(text)
     return path
 
 
