@@ -31,17 +31,27 @@ class Graph:
     """The running graph, a client node with the teleoperation clients, the states seen."""
 
     def __init__(self, tmp, domain: int) -> None:
+        from walker_bringup.graph import walker_graph
+        from walker_bringup.processes import ProcessGroup
+
+        self.env = ros_environment(domain)
+        self.nodes = walker_graph(_patient_parameters(tmp), sim_time=True)
+        self.group = ProcessGroup(tmp / 'logs', self.env)
+        self.context = self.client = None
+        try:
+            self._start(domain)
+        except BaseException:  # a graph that did not come up is stopped, not left running
+            self.close()
+            raise
+
+    def _start(self, domain: int) -> None:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
         from walker_msgs.msg import GripperStates
         from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
-        from walker_bringup.graph import walker_graph
         from walker_bringup.graph_client import GraphClient, init_context
-        from walker_bringup.processes import ProcessGroup
-        self.env = ros_environment(domain)
-        self.nodes = walker_graph(_patient_parameters(tmp), sim_time=True)
-        self.group = ProcessGroup(tmp / 'logs', self.env)
+
         for spec in self.nodes:
             self.group.start(spec)
         self.context = init_context(domain)
@@ -63,8 +73,10 @@ class Graph:
             assert service.wait_for_service(timeout_sec=30.0), service.srv_name
 
     def close(self) -> dict:
-        self.client.close()
-        self.context.try_shutdown()
+        if self.client is not None:
+            self.client.close()
+        if self.context is not None:
+            self.context.try_shutdown()
         return self.group.stop_all()
 
     def call(self, service, request, timeout: float = ANSWER_TIMEOUT):
