@@ -24,7 +24,7 @@ STILL = 2e-3  # [rad] the joints of a walker that was told nothing move less tha
 B_YAW = 4  # index of b_yaw_joint in the physical order of joint_states
 #: Timeouts [s] of this test's parameter file, and the file's own.
 PATIENT_TIMEOUTS = {'watchdog_timeout': 5.0, 'setpoint_timeout': 2.0, 'state_timeout': 2.0}
-DEFAULT_TIMEOUTS = {'watchdog_timeout': 1.0, 'setpoint_timeout': 0.5, 'state_timeout': 0.5}
+DEFAULT_TIMEOUTS = {'watchdog_timeout': 2.0, 'setpoint_timeout': 0.5, 'state_timeout': 0.5}
 
 
 class Graph:
