@@ -54,7 +54,9 @@ STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
 COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.VOLATILE)
-MODE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+# Depth 10: the HOLD that ends a step and the next step's mode (with the other base) are
+# published milliseconds apart; a reader keeping one could lose the HOLD and refuse the swap.
+MODE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                       reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _WATCHDOG_CHECKS_PER_TIMEOUT = 4

@@ -20,7 +20,8 @@ KIN = WalkerKinematics.from_parameters(PARAMS)
 TRUSS = Truss.from_parameters(PARAMS)
 SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
-                                  max_insertion_attempts=3, watchdog_timeout=1.0)
+                                  max_insertion_attempts=3, watchdog_timeout=1.0,
+                                  coarse_start_tolerance=0.02)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -30,8 +31,12 @@ class World:
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
-                 gripper_never=False):
+                 gripper_never=False, lift_lag=None):
         self.stance = stance
+        # (joint, lag [rad], time [s]): after the extraction line's stream ends, that joint is
+        # still ``lag`` short of the line's end, and catches up only ``time`` later
+        self.lift_lag = lift_lag
+        self.lagging = None
         self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
         self.now = 0.0
         base, other = TRUSS.position(stance.base_node), TRUSS.position(stance.other_node)
@@ -108,9 +113,18 @@ class World:
                 goal[0] -= self.coarse_miss * math.copysign(1.0, request.sweep)
             self.theta = request.start + fraction * (goal - request.start)
             velocities = (self.theta - previous) / DT
+            if fraction >= 1.0 and request.purpose == 'extraction' and self.lift_lag:
+                joint, lag, time_ = self.lift_lag
+                self.lagging = (joint, goal[joint], self.now + time_)
+                self.theta[joint] -= lag
+                self.lift_lag = None
             if fraction >= 1.0:
                 self.motion = None
                 self.execute(self.sequencer.trajectory_done(True, '', self.now))
+        if self.lagging is not None and self.motion is None:
+            joint, end, caught_up = self.lagging
+            if self.now >= caught_up:
+                self.theta[joint], self.lagging = end, None
         assert any(state == 'attached' for state in self.grippers.values())
         self.phases.append(self.sequencer.phase)
         self.execute(self.sequencer.tick(self.now, self.theta, velocities, dict(self.grippers)))
@@ -385,7 +399,7 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():
@@ -415,3 +429,37 @@ def test_a_coarse_motion_that_stops_outside_the_region_goes_on_in_fine_motion():
     assert lines and lines[0].mode == 'fine'
     assert np.linalg.norm(KIN.forward(lines[0].start)[:3] - lines[0].goal_point) > \
         SUPERVISOR.coarse_to_fine_region
+
+
+def test_the_coarse_motion_waits_for_a_joint_that_lags_the_extraction_line():
+    # Joint J4 is 0.1 rad short when the extraction stream ends (late efforts, friction): a
+    # coarse motion planned from the line's end would start that far from it (the planner
+    # refuses that); the step waits in EXTRACTION until the joint is there.
+    world = World(lift_lag=(3, 0.1, 0.5))
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta,
+                                PARAMS.gripper.approach_height)
+    world.execute(world.sequencer.start(step, targets, world.now, dict(world.grippers)))
+    coarse_start = None
+    while world.sequencer.busy and world.now < 60.0:
+        world.advance()
+        request = world.log[-1]
+        if coarse_start is None and isinstance(request, TrajectoryRequest) \
+                and request.purpose == 'coarse':
+            coarse_start = world.now
+            gap = np.max(np.abs(world.theta - targets.above_from))
+            assert gap <= SUPERVISOR.coarse_start_tolerance
+    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+    lifted = next(i for i, p in enumerate(world.phases) if p == Phase.COARSE)
+    # the joint caught up 0.5 s after the line ended: EXTRACTION lasted that much longer
+    assert world.sequencer.outcome.phase_durations['extraction'] > 1.0 + 0.45
+    assert coarse_start is not None and lifted > 0
+
+
+def test_a_joint_that_never_reaches_the_coarse_start_ends_the_step_in_safe_hold():
+    world = World(lift_lag=(3, 0.1, 1e9))
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert not outcome.success and 'extraction overran' in outcome.message
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.grippers[world.stance.base_gripper] == 'attached'

@@ -64,6 +64,11 @@ __all__ = ['SupervisorNode', 'main']
 _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
+# Every mode command must reach every controller in order (a step's final HOLD and the next
+# step's mode follow each other within milliseconds), so more than the newest is kept.
+_MODES = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                    history=HistoryPolicy.KEEP_LAST)
 _REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
@@ -129,7 +134,7 @@ class SupervisorNode(TeleopServer, Node):
         self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
         self._pending_adoption = False
 
-        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
+        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODES)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
         # The joint states (500 Hz) and the tip pose are sampled at the decision rate, not
@@ -245,7 +250,12 @@ class SupervisorNode(TeleopServer, Node):
         moving = 'b' if base == 'a' else 'a'
         if self._grippers.get(base) != 'attached' or self._grippers.get(moving) == 'attached' \
                 or self._gripper_nodes.get(base) != previous.base_node:
-            return False  # not the situation the file describes
+            # not the situation the file describes (another run's, or a step completed by
+            # hand): forget it, so that it cannot be taken up later by mistake
+            self.get_logger().info(f'step state file {self._state_file} does not describe the '
+                                   f'walker now: ignored and removed')
+            clear_step_state(self._state_file)
+            return False
         try:
             sweep = step_sweep(self.truss, previous.base_node, previous.from_node,
                                previous.to_node)
@@ -473,7 +483,7 @@ class SupervisorNode(TeleopServer, Node):
         now = self._now()
         self._sample_measurements()
         self._teleop_tick(now)
-        if self._pending_adoption and self._positions is not None:
+        if self._pending_adoption and self._positions is not None and len(self._grippers) == 2:
             self._pending_adoption = False
             self._adopt_interrupted_step()
         self._release_measurement_waiters()

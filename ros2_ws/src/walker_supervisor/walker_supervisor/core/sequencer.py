@@ -92,6 +92,11 @@ class SupervisorParameters:
         'the plant, its gripper heartbeat and each joint controller must be heard from this '
         'often (steady clock), or the walker goes to safe hold', 's', 0.05, 60.0,
         read_only=False)
+    coarse_start_tolerance: float = parameter(
+        'largest joint distance from the start of the coarse motion at which it may begin: '
+        'the lifted arm waits in EXTRACTION until it is there (keep it below '
+        'planner.stream.start_tolerance, which refuses a stream that starts farther)', 'rad',
+        1e-4, 0.5, read_only=False)
 
     def __post_init__(self) -> None:
         if self.insertion_alignment >= self.coarse_to_fine_region:
@@ -342,8 +347,10 @@ class StepSequencer:
         if not success:
             return self._abort(f'{self.stage or self.phase.name.lower()} trajectory failed: '
                                f'{message}', now)
-        if self.stage == 'lifting':
-            return self._enter_coarse(now)
+        if self.stage == 'lifting':  # the next tick, with fresh joints, starts the coarse motion
+            self.stage = 'lifted'
+            self._deadline = now + self.parameters.phase_timeout
+            return []
         if self.phase == Phase.COARSE:  # arrived before the region: wait for the error
             self.stage = 'arriving'
             self._settled_since = None
@@ -379,6 +386,8 @@ class StepSequencer:
                                f'({self.stage})', now)
         if self.stage in ('unscrewing', 'screwing'):
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
+        if self.stage == 'lifted':
+            return self._start_coarse_when_there(now)
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
             return self._enter_fine(now, correction=False)
         if self.phase == Phase.COARSE and self.stage == 'arriving' \
@@ -507,6 +516,17 @@ class StepSequencer:
             self._durations[name] = self._durations.get(name, 0.0) + now - self._phase_started
         self.phase, self.stage, self._phase_started = phase, stage, now
         self._settled_since = None
+
+    def _start_coarse_when_there(self, now: float) -> list:
+        """Enter COARSE once every joint is within ``coarse_start_tolerance`` of its start.
+
+        The extraction line's stream may end before a lagging joint (late efforts, friction)
+        has followed it; the planner refuses a coarse motion that starts far from the joints.
+        """
+        gap = float(np.max(np.abs(self._theta - self._targets.above_from)))
+        if gap <= self.parameters.coarse_start_tolerance:
+            return self._enter_coarse(now)
+        return []
 
     def _enter_coarse(self, now: float) -> list:
         self._enter(Phase.COARSE, now, 'moving')
