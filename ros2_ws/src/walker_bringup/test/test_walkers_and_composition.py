@@ -8,10 +8,11 @@ from walker_bringup.composition import (
     COMPONENTS, ComposedGraph, CompositionError, component_of, composed_command,
     graph_from_arguments, parse_arguments)
 from walker_bringup.graph import (
-    NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace)
+    NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
+    walker_targets)
 from walker_bringup.run import parse_arguments as run_arguments
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-from walker_core.truss import Truss
+from walker_core.truss import Truss, UnknownNodeError
 
 PARAMS = Path(default_parameter_file()).resolve()
 
@@ -62,6 +63,15 @@ def test_several_walkers_get_their_namespace_start_and_clock():
         assert f'sim.start.base_node:={start.base_node}' in command
         assert not any('sim.start' in arg for n in nodes if n is not plant
                        for arg in n.command('/bin/true'))
+
+
+def test_each_walker_walks_the_same_route_moved_with_its_start():
+    stances = start_stances(PARAMS, 4)  # rows 1, 2, 3, 0 from column 1
+    assert walker_targets(PARAMS, 'n3_1', stances) == ['n3_1', 'n3_2', 'n3_3', 'n3_0']
+    # where the moved target is off the truss, the target itself
+    assert walker_targets(PARAMS, 'n4_3', stances) == ['n4_3', 'n4_3', 'n4_3', 'n4_2']
+    with pytest.raises(UnknownNodeError):
+        walker_targets(PARAMS, 'n9_9', stances)
 
 
 def test_parameters_given_to_the_graph_reach_every_node():
@@ -164,7 +174,7 @@ def test_a_node_that_refuses_to_start_is_named_and_nothing_is_left(tmp_path):
         rclpy.init(context=context, domain_id=domain)
         try:
             with pytest.raises(CompositionError,
-                               match=r"/walker/controller_a_yaw refused to start: .*elbow_joint"):
+                               match=r'/walker/controller_a_yaw refused to start: .*elbow_joint'):
                 ComposedGraph(specs, context)
         finally:
             rclpy.try_shutdown(context=context)

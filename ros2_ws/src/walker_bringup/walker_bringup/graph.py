@@ -13,7 +13,8 @@ from pathlib import Path
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = ['NodeSpec', 'StartStance', 'walker_graph', 'walker_namespace', 'start_stances',
-           'several_walkers', 'executable_path', 'controller_node_name', 'RECORDED_TOPICS']
+           'several_walkers', 'walker_targets', 'executable_path', 'controller_node_name',
+           'RECORDED_TOPICS']
 
 #: What a walk's bag holds (relative to the robot's namespace): everything the walk report
 #: uses. The high-rate inner-loop topics (effort_commands, joint_accelerations, the setpoint
@@ -253,3 +254,31 @@ def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
             params_file, namespace, sim_time, record=record, bag_path=bag,
             start=start if index > 1 else None, clock_topic=clock, parameters=parameters)))
     return graphs
+
+
+def walker_targets(params_file: str | Path, target: str, stances: list[StartStance]
+                   ) -> list[str]:
+    """Return the node each walker walks to: ``target`` moved as its start is moved.
+
+    The first walker walks to ``target``; walker ``i`` to the node as far from its start as
+    ``target`` is from the first walker's start, so that every walker walks the same route on
+    its own part of the truss; where that node is off the truss, to ``target`` itself.
+
+    Raises
+    ------
+    walker_core.truss.UnknownNodeError
+        If ``target`` is not a node of the truss.
+    """
+    from walker_core.robot_parameters import load_walker_parameters
+    from walker_core.truss import Truss
+
+    truss = Truss.from_parameters(load_walker_parameters(params_file))
+    column, row = truss.index(target)
+    first_column, first_row = truss.index(stances[0].base_node)
+    targets = []
+    for stance in stances:
+        base_column, base_row = truss.index(stance.base_node)
+        moved = (column + base_column - first_column, row + base_row - first_row)
+        inside = 0 <= moved[0] < truss.columns and 0 <= moved[1] < truss.rows
+        targets.append(f'n{moved[0]}_{moved[1]}' if inside else target)
+    return targets

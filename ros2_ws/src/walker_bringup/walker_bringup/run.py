@@ -4,7 +4,8 @@ Every node runs as a separate process (:mod:`walker_bringup.processes`), or, wit
 ``--composed``, the whole graph runs in one process (:mod:`walker_bringup.composition`) under
 the same supervision. With ``--walkers N``, N graphs run side by side in the namespaces
 ``/walker``, ``/walker_2``, ..., each from its own start on the same truss layout and each
-walking to the target (their plants are separate physics worlds: they do not collide). A graph
+walking the same route moved with its start (their plants are separate physics worlds: they do
+not collide). A graph
 counts as up when every node is in the ROS graph and every server answers (not after a sleep).
 A child that dies is reported at once with the end of its log, the walk is stopped safely (the
 supervisor is told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does
@@ -24,7 +25,8 @@ import time
 from pathlib import Path
 
 from walker_bringup.composition import composed_command
-from walker_bringup.graph import NodeSpec, StartStance, several_walkers, walker_graph
+from walker_bringup.graph import (
+    NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
     GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.processes import ProcessGroup
@@ -65,7 +67,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                              'process per node')
     parser.add_argument('--walkers', type=_walker_count, default=1, metavar='N',
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
-                             'each walking to the target (default: 1)')
+                             'each from its own start, walking the same route moved with it '
+                             '(default: 1)')
     return parser.parse_args(argv)
 
 
@@ -123,6 +126,7 @@ class _Walker:
     start: StartStance | None
     nodes: list[NodeSpec]
     group: ProcessGroup
+    target: str = ''
     client: GraphClient | None = None
     code: int = 1
 
@@ -137,18 +141,21 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
     Raises
     ------
     ValueError
-        If the truss has no room for that many walkers.
+        If the truss has no room for that many walkers, or the target is not a node.
     """
     if args.walkers == 1:
         nodes = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                              record=args.record, bag_path=out / 'bag')
-        return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env))]
+        return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
+                        args.target)]
+    graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out)
+    targets = walker_targets(params_file, args.target, [start for _, start, _ in graphs])
     walkers = []
-    for index, (namespace, start, nodes) in enumerate(several_walkers(
-            params_file, args.walkers, args.sim_time, args.record, out)):
+    for index, ((namespace, start, nodes), target) in enumerate(zip(graphs, targets,
+                                                                     strict=True)):
         logs = out / 'logs' if index == 0 else out / 'logs' / namespace.strip('/')
         walkers.append(_Walker(namespace, start if index else None, nodes,
-                               ProcessGroup(logs, env)))
+                               ProcessGroup(logs, env), target))
     return walkers
 
 
@@ -240,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
         if not args.walk:
             return 0
         if len(walkers) == 1:
-            code = _walk(walkers[0].client, args, progress, should_stop, out)
+            code = _walk(walkers[0].client, args.target, args, progress, should_stop, out)
         else:
             code = _walk_several(walkers, args, progress, should_stop, out)
     except GraphNotReadyError as error:
@@ -273,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     return code
 
 
-def _walk(client: GraphClient, args, progress: _Progress, should_stop, out: Path,
+def _walk(client: GraphClient, target: str, args, progress: _Progress, should_stop, out: Path,
           label: str = '', summary_name: str = 'summary.json') -> int:
     started = time.monotonic()
     prefix = f'{label}: ' if label else ''
@@ -287,8 +294,8 @@ def _walk(client: GraphClient, args, progress: _Progress, should_stop, out: Path
             f'({time.monotonic() - started:.0f} s)',
             key=(label, feedback.step_index, feedback.phase))
 
-    progress.say(f'[walker] {prefix}walking to {args.target}')
-    status, result = client.walk_to(args.target, args.walk_timeout, on_feedback, should_stop)
+    progress.say(f'[walker] {prefix}walking to {target}')
+    status, result = client.walk_to(target, args.walk_timeout, on_feedback, should_stop)
     client.spin_for(0.5)  # the last step report
     rows = rows_from_reports(client.reports)
     with _OUTPUT:
@@ -297,15 +304,15 @@ def _walk(client: GraphClient, args, progress: _Progress, should_stop, out: Path
             print(f'[walker] {label}:')
         print(format_table(rows) if rows else '[walker] no step was taken')
         write_json(rows, out / summary_name,
-                   {'target': args.target, 'reached': bool(result.success),
+                   {'target': target, 'reached': bool(result.success),
                     'message': result.message, 'path': list(result.path),
                     'wall_time': time.monotonic() - started,
                     **({'namespace': client.namespace} if label else {})})
         if result.success:
-            print(f'[walker] {prefix}reached {args.target} in {result.steps_taken} steps, '
+            print(f'[walker] {prefix}reached {target} in {result.steps_taken} steps, '
                   f'{result.duration:.1f} s of walking; summary in {out / summary_name}')
             return 0
-        print(f'[walker] {prefix}the walk to {args.target} did not reach it: {result.message}')
+        print(f'[walker] {prefix}the walk to {target} did not reach it: {result.message}')
     return 1
 
 
@@ -314,14 +321,14 @@ _OUTPUT = threading.Lock()
 
 def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop,
                   out: Path) -> int:
-    """Walk every walker to the target at once, one thread each; the first error stops all."""
+    """Walk every walker to its target at once, one thread each; the first error stops all."""
     errors: list[BaseException] = []
 
     def walk(walker: _Walker) -> None:
         name = 'summary.json' if walker.namespace == '/walker' else \
             f'summary_{walker.label}.json'
         try:
-            walker.code = _walk(walker.client, args, progress,
+            walker.code = _walk(walker.client, walker.target, args, progress,
                                 lambda: bool(errors) or should_stop(), out, walker.label, name)
         except BaseException as error:  # re-raised in the main thread
             errors.append(error)
