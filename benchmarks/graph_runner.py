@@ -1,0 +1,225 @@
+"""Walker graphs brought up for a benchmark: one or several walkers, processes or composed.
+
+:class:`GraphRun` starts what ``run_all.py`` starts (the same :mod:`walker_bringup` graph
+descriptions and process supervision), in a ROS domain of its own with discovery on loopback,
+with each plant run through :mod:`loop_probe` so that the loop is timed inside the plant, and
+waits until every graph is ready. :class:`Walking` keeps every walker walking back and forth
+while a window is measured.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+from bench_support import REPO, load_events
+
+PROBE = Path(__file__).resolve().parent / 'loop_probe.py'
+STARTUP_TIMEOUT = 180.0  # [s] several walkers on a loaded 2-core machine start slowly
+
+__all__ = ['GraphRun', 'Walking', 'back_and_forth_targets']
+
+
+class GraphRun:
+    """Bring walker graphs up for a measurement; a context manager.
+
+    Parameters
+    ----------
+    scratch : Path
+        Directory for logs and probe files.
+    walkers : int
+        Number of walkers (namespaces ``/walker``, ``/walker_2``, ...).
+    composed : bool
+        Each walker's graph in one process (composition) instead of a process per node.
+    sim_time : bool
+        Lock-stepped sim time, or real time.
+    parameters : tuple of (str, str)
+        Overrides for every node (e.g. the control rate).
+    record : bool
+        Also run each walker's recorder.
+    """
+
+    def __init__(self, scratch: Path, walkers: int = 1, composed: bool = False,
+                 sim_time: bool = True, parameters: tuple[tuple[str, str], ...] = (),
+                 record: bool = False) -> None:
+        self.scratch = Path(scratch)
+        self.count = walkers
+        self.composed = composed
+        self.sim_time = sim_time
+        self.parameters = tuple(parameters)
+        self.record = record
+        self.graphs = []          # (namespace, start, nodes)
+        self.groups = []          # one ProcessGroup per walker
+        self.clients = []         # one GraphClient per walker
+        self.context = None
+        self._stack = contextlib.ExitStack()
+        self._events: dict[str, dict] = {}
+
+    # ------------------------------------------------------------------ lifetime
+    def __enter__(self) -> 'GraphRun':
+        try:
+            self._start()
+        except BaseException:
+            self.__exit__(*sys.exc_info())
+            raise
+        return self
+
+    def _start(self) -> None:
+        sys.path.insert(0, str(REPO / 'tests'))
+        from ros_test_support import isolated_domain, ros_environment
+        from walker_bringup.composition import composed_command
+        from walker_bringup.graph import NodeSpec, several_walkers
+        from walker_bringup.graph_client import GraphClient, init_context
+        from walker_bringup.processes import ProcessGroup
+        from walker_core.robot_parameters import default_parameter_file
+
+        self.scratch.mkdir(parents=True, exist_ok=True)
+        domain = self._stack.enter_context(isolated_domain())
+        params_file = Path(default_parameter_file()).resolve()
+        self.graphs = several_walkers(params_file, self.count, self.sim_time, self.record,
+                                      self.scratch, self.parameters)
+        for namespace, start, nodes in self.graphs:
+            label = namespace.strip('/')
+            env = ros_environment(domain)
+            env['WALKER_LOOP_EVENTS'] = str(self.scratch / f'events_{label}.npz')
+            group = ProcessGroup(self.scratch / 'logs' / label, env)
+            self.groups.append(group)
+            plant = next(n for n in nodes if n.executable == 'plant_node')
+            if self.composed:
+                recorder = next((n for n in nodes if n.executable == 'recorder_node'), None)
+                bag = None
+                if recorder is not None:
+                    values = dict(recorder.parameters)
+                    bag = Path(values['recorder.directory']) / values['recorder.bag_name']
+                command = composed_command(
+                    params_file, namespace, self.sim_time, recorder is not None, bag,
+                    start if namespace != '/walker' else None,
+                    dict(plant.remaps).get('/clock'), self.parameters)
+                group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', namespace,
+                                     str(params_file)),
+                            [sys.executable, str(PROBE), 'composed', *command[1:]])
+                continue
+            for spec in nodes:
+                command = ([sys.executable, str(PROBE), 'plant', *spec.ros_arguments()]
+                           if spec is plant else None)
+                group.start(spec, command)
+        self.context = init_context(domain)
+        deadline = time.monotonic() + STARTUP_TIMEOUT
+        for namespace, _, nodes in self.graphs:
+            client = GraphClient(namespace, self.context)
+            self.clients.append(client)
+            client.wait_until_ready([n.full_name for n in nodes],
+                                    max(1.0, deadline - time.monotonic()),
+                                    should_stop=self.died)
+
+    def died(self) -> bool:
+        """Say whether a process of the run has exited (reported on stderr once)."""
+        dead = [p for g in self.groups for p in g.poll_deaths()]
+        for process in dead:
+            print(f'[benchmark] {process.spec.full_name} exited with code '
+                  f'{process.popen.returncode}:\n{process.log_tail()}', file=sys.stderr)
+        return bool(dead)
+
+    def __exit__(self, *exc_info) -> None:
+        for client in self.clients:
+            with contextlib.suppress(Exception):
+                client.close()
+        if self.context is not None:
+            self.context.try_shutdown()
+        for group in self.groups:
+            group.stop_all()
+        for namespace, _, _ in self.graphs:
+            path = self.scratch / f'events_{namespace.strip("/")}.npz'
+            if path.exists():
+                self._events[namespace] = load_events(path)
+        self._stack.close()
+
+    # ------------------------------------------------------------------ what runs
+    def pids(self, index: int | None = None) -> dict[str, int]:
+        """Process name -> pid, of one walker (0-based) or of all (names with namespaces)."""
+        groups = self.groups if index is None else [self.groups[index]]
+        return {process.spec.full_name: process.popen.pid
+                for group in groups for process in group.processes}
+
+    def events(self, index: int) -> dict:
+        """Return the probe arrays of walker ``index`` (available after the run has ended)."""
+        return self._events[self.graphs[index][0]]
+
+    @property
+    def period_ns(self) -> int:
+        """The control period [ns] (the parameter file's rate, or the override)."""
+        from walker_core.robot_parameters import load_walker_parameters
+
+        rate = dict(self.parameters).get('timing.control_rate')
+        rate = float(rate) if rate else load_walker_parameters().timing.control_rate
+        return int(round(1e9 / rate))
+
+
+def back_and_forth_targets(start) -> tuple[str, str]:
+    """Two nodes a walker starting at ``start`` walks between: two columns on, and back."""
+    column, row = (int(x) for x in start.base_node[1:].split('_'))
+    return f'n{column + 2}_{row}', start.base_node
+
+
+class Walking:
+    """Keep every walker of a run walking between two nodes, one thread each.
+
+    Parameters
+    ----------
+    run : GraphRun
+    targets : list of (str, str)
+        Each walker's two targets, walked to in turn.
+    timeout : float
+        Longest a walk may take [s].
+    """
+
+    def __init__(self, run: GraphRun, targets: list[tuple[str, str]],
+                 timeout: float = 1800.0) -> None:
+        self.run = run
+        self.targets = targets
+        self.timeout = timeout
+        self.stop = threading.Event()
+        self.results: list[list] = [[] for _ in targets]
+        self.errors: list[str] = []
+        self._threads = [threading.Thread(target=self._walk, args=(i,), daemon=True)
+                         for i in range(len(targets))]
+
+    def __enter__(self) -> 'Walking':
+        for thread in self._threads:
+            thread.start()
+        return self
+
+    def _walk(self, index: int) -> None:
+        from walker_bringup.graph_client import WalkInterruptedError
+
+        client = self.run.clients[index]
+        legs = 0
+        while not self.stop.is_set():
+            target = self.targets[index][legs % 2]
+            try:
+                _, result = client.walk_to(target, self.timeout, None, self.stop.is_set)
+            except WalkInterruptedError:
+                return
+            except Exception as error:  # reported with the results
+                self.errors.append(f'{client.namespace}: {error}')
+                return
+            self.results[index].append(result)
+            if not result.success:
+                self.errors.append(f'{client.namespace}: walk to {target} failed: '
+                                   f'{result.message}')
+                return
+            legs += 1
+
+    def __exit__(self, *exc_info) -> None:
+        self.stop.set()
+        for thread in self._threads:
+            thread.join(timeout=30.0)
+
+
+def environment_note() -> str:
+    """Name the executor in use (``WALKER_EXECUTOR``), for the results."""
+    return os.environ.get('WALKER_EXECUTOR', 'events')
