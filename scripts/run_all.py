@@ -5,8 +5,9 @@ Usage: ``python3 scripts/run_all.py`` (no arguments needed); ``--help`` lists th
 
 It brings the plant, the five joint controllers, the planner, the step-phase supervisor and the
 recorder up as separate processes, waits until the graph is ready, walks the robot across the
-default truss to a target node, records the walk as a rosbag2 bag, prints a summary per step
-and shuts everything down, leaving no process behind.
+default truss to a target node, records the walk as a rosbag2 bag, prints a summary per step,
+shuts everything down, leaving no process behind, and writes the walk report (figures and an
+animation) from the bag.
 """
 
 import os

@@ -50,6 +50,8 @@ def ros_environment(domain_id: int) -> dict[str, str]:
     env = dict(os.environ)
     env['ROS_DOMAIN_ID'] = str(domain_id)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    # ROS logs and the supervisor's step file of this run stay apart from other runs'
+    env['ROS_HOME'] = str(Path(tempfile.gettempdir()) / f'walker-ros-home-{domain_id}')
     env['PYTHONUNBUFFERED'] = '1'
     return env
 

@@ -72,3 +72,13 @@ def test_a_bag_without_definitions_decodes_with_the_installed_walker_types(tmp_p
                                                          type_name)), 1)
     (message,) = read_messages(path)
     assert index_of(type_name, message.message) == 4
+
+
+def test_every_walker_message_type_is_in_the_fallback_typestore():
+    """Bags without stored definitions decode every walker_msgs message, step reports too."""
+    from walker_bag.core.message_definitions import interface_prefixes
+
+    installed = {f'walker_msgs/msg/{path.stem}' for prefix in interface_prefixes()
+                 for path in (prefix / 'share' / 'walker_msgs' / 'msg').glob('*.msg')}
+    assert installed, 'walker_msgs is not installed'
+    assert installed <= set(walker_typestore().types)

@@ -46,7 +46,10 @@ def build_message(typestore, type_name: str, i: int):
     if type_name == 'sensor_msgs/msg/JointState':
         return t[type_name](header, JOINTS, np.full(5, float(i)), np.zeros(5), np.zeros(5))
     if type_name == 'walker_msgs/msg/StepPhase':
-        return t[type_name](header, 2, 'a', i, 3, 'n0_0', 'n1_0', 0.5, f'phase {i}')
+        return t[type_name](header=header, phase=2, base_gripper='a', step_index=i,
+                            step_count=3, from_node='n0_0', to_node='n1_0',
+                            base_node='n1_1', base_heading=0.0, phase_progress=0.5,
+                            reason=f'phase {i}')
     if type_name == 'walker_msgs/msg/GripperStates':
         gripper = t['walker_msgs/msg/GripperState']
         return t[type_name](header, [gripper('a', 2, 'n0_0', 0.0, 0.0, ''),

@@ -107,3 +107,22 @@ def test_summary_table_and_json(tmp_path):
     data = json.loads((tmp_path / 's.json').read_text())
     assert data['target'] == 'n0_1' and data['steps'][1]['bound_ratio'] is None
     assert data['steps'][0]['phase_durations']['coarse'] == 3.0
+
+
+def test_the_walk_report_is_made_unless_skipped():
+    from walker_bringup.run import parse_arguments
+
+    assert parse_arguments([]).report is True
+    assert parse_arguments(['--no-report']).report is False
+
+
+def test_a_report_that_cannot_be_made_is_said_and_leaves_nothing(tmp_path, capsys):
+    from walker_bringup.run import write_report
+
+    cut = tmp_path / 'bag'
+    cut.mkdir()
+    (cut / 'bag_0.mcap').write_bytes(b'\x89MCAP0\r\n' + b'\0' * 64)  # no footer
+    assert write_report(cut, tmp_path / 'report', None, quiet=True) is False
+    printed = capsys.readouterr().out
+    assert '[walker] error: no walk report:' in printed and '--recover' in printed
+    assert not (tmp_path / 'report').exists()

@@ -1,4 +1,4 @@
-"""The main job: bring the graph up, walk to a target node, record, summarise, shut down.
+"""The main job: bring the graph up, walk to a target node, record, summarise, shut down, report.
 
 Every node runs as a separate process (:mod:`walker_bringup.processes`), or, with
 ``--composed``, the whole graph runs in one process (:mod:`walker_bringup.composition`) under
@@ -10,6 +10,11 @@ counts as up when every node is in the ROS graph and every server answers (not a
 A child that dies is reported at once with the end of its log, the walk is stopped safely (the
 supervisor is told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does
 the same. Nothing is left running: each child is interrupted, then terminated, then killed.
+
+Once the graph is down (and with it the recorder, which closes the bag), the walk report is
+made from the bag (:mod:`walker_report`) into ``<out>/report``, unless ``--no-report``; it is
+made after a failed walk too, not after Ctrl-C. With several walkers, the report is the first
+walker's (its bag is ``<out>/bag``; the others' bags are beside it).
 """
 
 from __future__ import annotations
@@ -31,8 +36,12 @@ from walker_bringup.graph_client import (
     GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
+from walker_report.core.errors import ReportError
+from walker_report.core.report import make_report
+from walker_report.progress import ProgressLine
+from walker_report.walk_report import written_text
 
-__all__ = ['main', 'parse_arguments']
+__all__ = ['main', 'parse_arguments', 'write_report']
 
 PHASE_NAMES = ('idle', 'extraction', 'coarse', 'fine', 'insertion', 'safe hold')
 
@@ -51,7 +60,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='run on the plant clock, lock-stepped, as fast as the graph allows '
                              '(default: real time, like hardware)')
     parser.add_argument('--no-record', dest='record', action='store_false',
-                        help='do not record a rosbag2 bag of the walk')
+                        help='do not record a rosbag2 bag of the walk (and so no report)')
+    parser.add_argument('--no-report', dest='report', action='store_false',
+                        help='do not write the walk report (figures, animation) from the bag')
     parser.add_argument('--out', default=None,
                         help='output directory (default: runs/<date-time>)')
     parser.add_argument('--namespace', default='/walker', help='robot namespace')
@@ -277,7 +288,34 @@ def main(argv: list[str] | None = None) -> int:
                          'stopped (' + ', '.join(f'{n}: {c}' for n, c in codes.items()) + ')')
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+    walked = args.walk and code not in (3, 130)  # the graph came up and nobody hit Ctrl-C
+    if args.record and args.report and walked and (out / 'bag').is_dir():
+        if not write_report(out / 'bag', out / 'report', params_file, args.quiet):
+            code = code or 6
     return code
+
+
+def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) -> bool:
+    """Make the walk report of ``bag`` into ``report_dir`` and say where it is.
+
+    Returns False (having said why) when the report could not be made; the walk's own
+    outcome stands.
+    """
+    progress = ProgressLine(quiet, prefix='[walker] report:')
+    try:
+        result = make_report(bag, report_dir, params_file, progress=progress)
+    except (ReportError, ValueError) as error:
+        progress.close()
+        print(f'[walker] error: no walk report: {error}', flush=True)
+        return False
+    progress.close()
+    if quiet:
+        print(f'[walker] report: {result.markdown}', flush=True)
+    else:
+        for line in written_text(result).splitlines():
+            print(f'[walker] {line}', flush=True)
+        print(f'[walker] report made in {result.seconds:.1f} s', flush=True)
+    return True
 
 
 def _walk(client: GraphClient, target: str, args, progress: _Progress, should_stop, out: Path,

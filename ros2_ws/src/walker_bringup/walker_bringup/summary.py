@@ -1,98 +1,11 @@
-"""The walk summary: one row per step, printed at the end of a walk and saved as JSON."""
+"""The walk summary table; it lives in :mod:`walker_report.core.steps`, re-exported here.
 
-from __future__ import annotations
+The walk report prints the same table, and walker_bringup calls the report at the end of a
+walk: the table lives in the report's core so that neither package imports the other in a
+cycle (walker_bringup -> walker_report, never back).
+"""
 
-import dataclasses
-import json
-import math
-from pathlib import Path
+from walker_report.core.steps import (
+    PHASES, StepRow, format_table, rows_from_reports, write_json)
 
-__all__ = ['StepRow', 'rows_from_reports', 'format_table', 'write_json']
-
-PHASES = ('extraction', 'coarse', 'fine', 'insertion')
-
-
-@dataclasses.dataclass(frozen=True)
-class StepRow:
-    """Figures of one step (SI units: s, m, rad)."""
-
-    index: int
-    gripper: str
-    from_node: str
-    to_node: str
-    sweep: float
-    success: bool
-    phase_durations: dict[str, float]
-    duration: float
-    bound: float
-    insertion_error: float
-    insertion_error_estimated: float
-    residual_vibration: float
-    attempts: int
-    message: str
-
-    @property
-    def bound_ratio(self) -> float:
-        """Step time over the time-optimal bound (NaN when the bound is unknown)."""
-        return self.duration / self.bound if self.bound > 0 else math.nan
-
-
-def rows_from_reports(reports) -> list[StepRow]:
-    """Rows from ``walker_msgs/StepReport`` messages (or objects with the same fields)."""
-    rows = []
-    for r in reports:
-        rows.append(StepRow(
-            index=int(r.step_index), gripper=r.moving_gripper, from_node=r.from_node,
-            to_node=r.to_node, sweep=float(r.sweep), success=bool(r.success),
-            phase_durations=dict(zip(r.phase_names, (float(v) for v in r.phase_durations),
-                                     strict=False)),
-            duration=float(r.duration), bound=float(r.time_optimal_bound),
-            insertion_error=float(r.insertion_error),
-            insertion_error_estimated=float(r.insertion_error_estimated),
-            residual_vibration=float(r.residual_vibration),
-            attempts=int(r.insertion_attempts), message=r.message))
-    return rows
-
-
-def _number(value: float, scale: float = 1.0, digits: int = 2) -> str:
-    return '-' if not math.isfinite(value) else f'{value * scale:.{digits}f}'
-
-
-def format_table(rows: list[StepRow]) -> str:
-    """Format the per-step table as aligned text, with a totals line."""
-    header = (['step', 'gripper', 'from -> to', 'sweep'] + [p[:6] for p in PHASES]
-              + ['total s', 'bound s', 'ratio', 'ins. err mm', 'vib. mm', 'tries', 'ok'])
-    body = []
-    for row in rows:
-        body.append([
-            str(row.index + 1), row.gripper, f'{row.from_node} -> {row.to_node}',
-            f'{math.degrees(row.sweep):+.0f}',
-            *(_number(row.phase_durations.get(p, math.nan)) for p in PHASES),
-            _number(row.duration), _number(row.bound), _number(row.bound_ratio),
-            _number(row.insertion_error, 1e3), _number(row.residual_vibration, 1e3),
-            str(row.attempts), 'yes' if row.success else 'NO'])
-    if rows:
-        total = sum(r.duration for r in rows)
-        bound = sum(r.bound for r in rows)
-        body.append(['all', '', '', '', '', '', '', '', _number(total),
-                     _number(bound) if bound > 0 else '-',
-                     _number(total / bound) if bound > 0 else '-', '', '', '', ''])
-    widths = [max(len(h), *(len(line[i]) for line in body)) if body else len(h)
-              for i, h in enumerate(header)]
-    lines = ['  '.join(h.rjust(w) for h, w in zip(header, widths, strict=True))]
-    lines.append('  '.join('-' * w for w in widths))
-    lines += ['  '.join(c.rjust(w) for c, w in zip(line, widths, strict=True)) for line in body]
-    failures = [f'step {r.index + 1}: {r.message}' for r in rows if not r.success]
-    return '\n'.join(lines + failures)
-
-
-def write_json(rows: list[StepRow], path: Path, extra: dict | None = None) -> None:
-    """Save the rows (and any extra figures) as JSON."""
-    def clean(value):
-        return None if isinstance(value, float) and not math.isfinite(value) else value
-
-    data = {'steps': [{k: clean(v) for k, v in {**dataclasses.asdict(r),
-                                                  'bound_ratio': r.bound_ratio}.items()}
-                      for r in rows]}
-    data.update(extra or {})
-    Path(path).write_text(json.dumps(data, indent=1))
+__all__ = ['PHASES', 'StepRow', 'rows_from_reports', 'format_table', 'write_json']

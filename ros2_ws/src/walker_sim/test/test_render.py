@@ -30,6 +30,18 @@ def test_the_robot_is_in_the_picture(make_plant, params):
     assert changed.mean() > 0.01
 
 
+def test_without_shadows_the_same_scene_is_drawn_only_lighter_where_they_fell(make_plant,
+                                                                            params):
+    state = make_plant().state()
+    pose = state.poses['a']
+    with TrussScene(params) as scene:
+        scene.pose_robot(state.position, pose.position, pose.orientation)
+        shaded = scene.render(None, 240, 160).astype(int).sum(axis=2)
+        plain = scene.render(None, 240, 160, shadow=False).astype(int).sum(axis=2)
+    assert np.any(plain > shaded + 3)  # the shadows are gone ...
+    assert not np.any(plain < shaded - 3)  # ... and nothing else changed
+
+
 def test_tiny_images_are_refused(params):
     with TrussScene(params) as scene, pytest.raises(ValueError, match='at least 16x16'):
         scene.render(width=8, height=8)

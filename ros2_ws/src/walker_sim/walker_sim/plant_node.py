@@ -5,8 +5,9 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
 ``/walker``), as docs/architecture.md specifies:
 
 * publishes ``joint_accelerations`` then ``joint_states`` every control period; ``tip_pose``,
-  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame) at ``sim.pose_rate``; ``gripper_states``
-  (on change and at ``sim.gripper_state_rate``); ``robot_description`` (once, latched);
+  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame) at ``sim.pose_rate``;
+  ``gripper_states`` (on change, and at ``sim.gripper_state_rate`` on the steady clock: a
+  liveness heartbeat); ``robot_description`` (once, latched);
   ``/clock`` (sim time, at ``sim.clock_rate``);
   ``/diagnostics`` (1 Hz, wall clock: missed commands, refused and clamped torques);
 * subscribes to ``effort_commands`` (``sensor_msgs/JointState``: joint names and efforts,
@@ -105,7 +106,6 @@ class PlantNode(Node):
         self._description.publish(String(data=description_urdf(self.params)))
         self._counts = {'refused': 0, 'saturated': 0, 'expired': 0, 'overruns': 0}
         self._gripper_key: tuple | None = None
-        self._gripper_sent = -math.inf
         self._last_tick = math.nan
         self._started = not self.sim_time
         self._last_sent = self._steady_now()
@@ -113,6 +113,8 @@ class PlantNode(Node):
         self._stamp = 0 if self.sim_time else self._system.now().nanoseconds
         self._publish(self.plant.state())
         self.create_timer(_REPORT_PERIOD, self._report, clock=self._steady)
+        self.create_timer(1.0 / self.sim.gripper_state_rate, self._heartbeat,
+                          clock=self._steady)
         if self.sim_time:
             self.create_timer(_WATCH_PERIOD, self._watch, clock=self._steady)
         else:
@@ -223,11 +225,17 @@ class PlantNode(Node):
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
         key = (state.base, *((s.mode, s.node, s.message) for s in state.statuses.values()))
-        due = state.time - self._gripper_sent >= 1.0 / self.sim.gripper_state_rate
-        if force or due or key != self._gripper_key:
+        if force or key != self._gripper_key:
             self._grippers.publish(gripper_states_msg(state, self._stamp))
             self._gripper_key = key
-            self._gripper_sent = state.time
+
+    def _heartbeat(self) -> None:
+        """Publish the gripper states on the steady clock: the plant's liveness heartbeat.
+
+        It keeps coming while sim time stands still (waiting for a controller), so that a
+        watchdog can tell a waiting plant from a dead one.
+        """
+        self._publish_grippers(self.plant.state(), force=True)
 
     def _report(self) -> None:
         """Publish /diagnostics: missed, expired, refused and clamped commands."""

@@ -20,7 +20,7 @@ KIN = WalkerKinematics.from_parameters(PARAMS)
 TRUSS = Truss.from_parameters(PARAMS)
 SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
-                                  max_insertion_attempts=3)
+                                  max_insertion_attempts=3, watchdog_timeout=1.0)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -247,16 +247,80 @@ def test_steps_are_refused_unless_both_grippers_are_attached_and_idle():
         fresh.start(wrong_base, targets, 0.0, dict(world.grippers))
 
 
-def test_hold_then_clear_needs_both_grippers():
+def test_resume_with_both_grippers_attached_returns_to_idle():
     world = World()
     world.sequencer.hold('operator', 0.0)
     assert world.sequencer.phase == Phase.SAFE_HOLD
-    world.sequencer.tick(0.0, world.theta, np.zeros(5), {'a': 'attached', 'b': 'free'})
-    with pytest.raises(SequencerError, match='not attached'):
-        world.sequencer.clear_hold()
-    world.sequencer.tick(0.1, world.theta, np.zeros(5), dict(world.grippers))
-    world.sequencer.clear_hold()
-    assert world.sequencer.phase == Phase.IDLE
+    commands = world.sequencer.resume(0.1, world.theta, dict(world.grippers),
+                                      {'a': 'n1_1', 'b': 'n2_1'})
+    assert world.sequencer.phase == Phase.IDLE and commands == [SetControlMode('hold', 'a')]
+    with pytest.raises(SequencerError, match='not in SAFE_HOLD'):
+        world.sequencer.resume(0.2, world.theta, dict(world.grippers), {})
+
+
+def _hold_during(world, phase):
+    """Run a step until ``phase``, then hold (an operator's hold, or a fault)."""
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    world.targets = targets
+    world.execute(world.sequencer.start(step, targets, world.now, dict(world.grippers)))
+    while world.sequencer.phase != phase:
+        world.advance()
+    for _ in range(20):
+        world.advance()
+    world.execute(world.sequencer.hold('a fault', world.now))
+    world.motion = None  # the stream stops where the arm is
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    return step
+
+
+@pytest.mark.parametrize('phase', [Phase.COARSE, Phase.FINE])
+def test_resume_mid_step_recovers_to_the_target_and_completes_the_step(phase):
+    world = World()
+    step = _hold_during(world, phase)
+    assert world.grippers[step.moving_gripper] == 'free'
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    recover = [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+    assert recover.purpose == 'recover' and recover.mode == 'fine'
+    np.testing.assert_allclose(recover.goal_point, world.targets.point_above_to)
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+    assert world.grippers == {'a': 'attached', 'b': 'attached'}
+    assert world.sequencer.base_gripper == 'b'
+
+
+def test_resume_in_the_hole_lifts_out_first():
+    world = World()
+    _hold_during(world, Phase.EXTRACTION)
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    assert [c for c in world.log if isinstance(c, TrajectoryRequest)][-1].purpose == \
+        'extraction'
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success
+
+
+@pytest.mark.parametrize('grippers, words', [
+    ({'a': 'free', 'b': 'attached'}, 'base gripper a is not attached'),
+    ({'a': 'attached', 'b': 'unscrewing'}, 'still unscrewing'),
+])
+def test_resume_refuses_what_is_not_safe(grippers, words):
+    world = World()
+    _hold_during(world, Phase.COARSE)
+    with pytest.raises(SequencerError, match=words):
+        world.sequencer.resume(world.now, world.theta, grippers, {})
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+
+
+def test_resume_without_a_step_to_complete_is_refused():
+    world = World()
+    world.sequencer.hold('operator', 0.0)
+    with pytest.raises(SequencerError, match='no step to complete'):
+        world.sequencer.resume(0.1, world.theta, {'a': 'attached', 'b': 'free'}, {})
 
 
 def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
@@ -284,7 +348,7 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():
@@ -304,3 +368,13 @@ def test_a_gripper_that_never_completes_aborts_the_step_with_the_base_attached()
     assert not outcome.success and 'did not unscrew in time' in outcome.message
     assert not any(isinstance(c, TrajectoryRequest) for c in world.log)
     assert world.grippers['a'] == 'attached'
+
+
+def test_a_coarse_motion_that_stops_outside_the_region_goes_on_in_fine_motion():
+    world = World(coarse_miss=0.06)  # 54 mm short at 0.9 m, outside the 30 mm region
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    lines = [c for c in world.log if isinstance(c, TrajectoryRequest) and c.purpose == 'fine']
+    assert lines and lines[0].mode == 'fine'
+    assert np.linalg.norm(KIN.forward(lines[0].start)[:3] - lines[0].goal_point) > \
+        SUPERVISOR.coarse_to_fine_region

@@ -30,7 +30,10 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import FollowTrajectory, Step, WalkTo
-from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase, StepReport
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
+from walker_msgs.msg import (
+    ControllerState, ControlMode, GripperState, GripperStates, StepPhase, StepReport)
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
@@ -40,13 +43,17 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler
+from walker_supervisor.core.health import HealthMonitor, Level
 from walker_supervisor.core.route import (
-    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps)
+    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
     CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode, StepOutcome,
     StepSequencer, SupervisorParameters, TrajectoryRequest)
-from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
+from walker_supervisor.core.step_geometry import (
+    BaseFrame, plan_step_targets, recovery_targets)
 from walker_supervisor.core.walk import VibrationMeter, Walk
+from walker_supervisor.step_state import (
+    clear_step_state, read_step_state, step_state_path, write_step_state)
 from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['SupervisorNode', 'main']
@@ -71,6 +78,11 @@ _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMod
 TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
 _FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
 _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
+_WATCHDOG_PERIOD = 0.1  # [s] steady clock
+_DIAGNOSTICS_PERIOD = 1.0  # [s] steady clock
+_CONTROLLER_STATES = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
+                                durability=DurabilityPolicy.VOLATILE,
+                                history=HistoryPolicy.KEEP_LAST)
 #: The motions whose planner bounds make up a step's time-optimal bound.
 _BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
@@ -112,6 +124,7 @@ class SupervisorNode(Node):
         self._bounded: set[str] = set()
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
         self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
+        self._pending_adoption = False
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _LATCHED)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
@@ -126,6 +139,7 @@ class SupervisorNode(Node):
         self.create_subscription(GripperStates, 'gripper_states', self._on_gripper_states,
                                  _LATCHED)
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, _LATCHED)
+        self._state_file = step_state_path(self.get_namespace())
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
@@ -138,6 +152,20 @@ class SupervisorNode(Node):
         self.create_service(Trigger, 'hold', self._on_hold)
         self.create_service(Trigger, 'resume', self._on_resume)
         self.create_timer(TICK_PERIOD, self._tick)
+        # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
+        timeout = self.settings.watchdog_timeout
+        self._controller_states = {
+            joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
+                                           _CONTROLLER_STATES)
+            for joint in PHYSICAL_JOINT_NAMES}
+        self.health = HealthMonitor({'plant joint states': timeout,
+                                     'plant gripper states': timeout,
+                                     **{f'controller {j}': timeout
+                                        for j in PHYSICAL_JOINT_NAMES}})
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.create_timer(_WATCHDOG_PERIOD, self._watch, clock=self._steady)
+        self.create_timer(_DIAGNOSTICS_PERIOD, self._publish_diagnostics, clock=self._steady)
         self._publish_phase()
 
     # ------------------------------------------------------------------ parameters
@@ -168,11 +196,22 @@ class SupervisorNode(Node):
         if len(msg.velocity) == len(msg.name):
             self._velocities = np.array([msg.velocity[i] for i in order])
 
+    def _steady_now(self) -> float:
+        return self._steady.now().nanoseconds * 1e-9
+
     def _on_gripper_states(self, msg: GripperStates) -> None:
+        self.health.seen('plant gripper states', self._steady_now())
+        first = not self._grippers
         for state in msg.grippers:
             self._grippers[state.name] = _GRIPPER_STATES.get(state.state, 'unknown')
             self._gripper_nodes[state.name] = state.node
             self._gripper_errors[state.name] = state.position_error
+        free = sorted(g for g in ('a', 'b') if self._grippers.get(g) != 'attached')
+        if first and free and self.sequencer.phase == Phase.IDLE:
+            # a supervisor restarted in the middle of a step: nothing may move by itself
+            self._execute(self.sequencer.hold(
+                f'started with gripper {", ".join(free)} not attached', self._now()))
+            self._pending_adoption = True
 
     def _on_tip_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
@@ -191,6 +230,35 @@ class SupervisorNode(Node):
     def _yaw_limits(self) -> tuple[float, float]:
         drive = self.params.robot.drive.yaw
         return drive.position_min, drive.position_max
+
+    def _adopt_interrupted_step(self) -> bool:
+        """Take up the step an earlier incarnation left unfinished, if its gripper is free."""
+        previous = read_step_state(self._state_file)
+        if previous is None or self._positions is None:
+            return False
+        base = previous.base_gripper
+        moving = 'b' if base == 'a' else 'a'
+        if self._grippers.get(base) != 'attached' or self._grippers.get(moving) == 'attached' \
+                or self._gripper_nodes.get(base) != previous.base_node:
+            return False  # not the situation the file describes
+        try:
+            sweep = step_sweep(self.truss, previous.base_node, previous.from_node,
+                               previous.to_node)
+            step = PlannedStep(base, previous.base_node, previous.from_node, previous.to_node,
+                               sweep)
+            frame = BaseFrame(self.truss.position(previous.base_node), previous.heading)
+            theta = physical_to_roles(self._positions, base)
+            targets = recovery_targets(self.kinematics, frame, step,
+                                       self.truss.position(step.from_node),
+                                       self.truss.position(step.to_node), theta,
+                                       self.params.gripper.approach_height)
+        except (ValueError, KinematicsError) as error:
+            self.get_logger().error(f'cannot take up the interrupted step: {error}')
+            return False
+        self.sequencer.adopt(step, targets, f'restarted in the middle of the step '
+                             f'{step.from_node} -> {step.to_node}: resume to complete it')
+        self.get_logger().warning(self.sequencer.reason)
+        return True
 
     def _theta_roles(self) -> np.ndarray:
         return physical_to_roles(self._positions, self.sequencer.base_gripper)
@@ -324,11 +392,58 @@ class SupervisorNode(Node):
 
     # ------------------------------------------------------------------ the decision loop
     def _sample_measurements(self) -> None:
+        now = self._steady_now()
         states = self._sampler.take(self._joint_states)
         if states:
+            self.health.seen('plant joint states', now)
             self._on_joint_states(states[-1])
         for pose in self._sampler.take(self._tip_poses):
             self._on_tip_pose(pose)
+        for joint, subscription in self._controller_states.items():
+            reports = self._sampler.take(subscription)
+            if reports:
+                stale = reports[-1].stale
+                self.health.seen(f'controller {joint}', now,
+                                 'holding: its inputs are stale' if stale else '')
+
+    # ------------------------------------------------------------------ health
+    def _faults(self) -> list[str]:
+        """Faults now: a silent source, or a controller holding on stale inputs in a step."""
+        now = self._steady_now()
+        return self.health.faults(now, include_trouble=self.sequencer.busy)
+
+    def _watch(self) -> None:
+        """Steady-clock watchdog: a source that falls silent stops the walker in safe hold."""
+        self._sample_measurements()
+        heard = [s for s in self.health.status(self._steady_now())
+                 if s.message != 'not heard from yet']
+        faults = [f'{s.name}: {s.message}' for s in heard
+                  if s.level == Level.ERROR or (self.sequencer.busy and s.level == Level.WARN)]
+        if faults and (self.sequencer.busy or self.sequencer.phase == Phase.IDLE):
+            reason = 'fault: ' + '; '.join(faults)
+            self.get_logger().error(reason)
+            self._execute(self.sequencer.hold(reason, self._now()))
+            self._publish_phase()
+
+    def _publish_diagnostics(self) -> None:
+        message = DiagnosticArray()
+        message.header.stamp = self.get_clock().now().to_msg()
+        overall = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: walker',
+                                   hardware_id=self.get_namespace())
+        statuses = self.health.status(self._steady_now())
+        if self.sequencer.phase == Phase.SAFE_HOLD:
+            level = Level.ERROR
+            overall.message = f'safe hold: {self.sequencer.reason}'
+        else:
+            level = max((s.level for s in statuses), default=Level.OK)
+            overall.message = f'phase {self.sequencer.phase.name}'
+        overall.level = bytes([int(level)])  # a one-byte field in rclpy
+        overall.values = [KeyValue(key='phase', value=self.sequencer.phase.name),
+                          KeyValue(key='base gripper', value=self.sequencer.base_gripper)]
+        overall.values += [KeyValue(key=s.name, value=f'{s.level.name}: {s.message}')
+                           for s in statuses]
+        message.status = [overall]
+        self._diagnostics.publish(message)
 
     def destroy_node(self) -> None:
         """Destroy the node and its sampler."""
@@ -338,6 +453,9 @@ class SupervisorNode(Node):
     def _tick(self) -> None:
         now = self._now()
         self._sample_measurements()
+        if self._pending_adoption and self._positions is not None:
+            self._pending_adoption = False
+            self._adopt_interrupted_step()
         self._release_measurement_waiters()
         self._send_waiting_requests()
         if self._positions is not None:
@@ -383,6 +501,7 @@ class SupervisorNode(Node):
             self.get_logger().error(walk.outcomes[-1].message)
             return
         self._step_in_progress = True
+        write_step_state(self._state_file, step, frame.heading)
         self._step_bound = 2.0 * self.params.gripper.screw_time
         self._bounded: set[str] = set()
         self._true_insertion_error = math.nan
@@ -393,6 +512,8 @@ class SupervisorNode(Node):
 
     def _record_outcome(self, walk: Walk, outcome: StepOutcome) -> None:
         self._step_in_progress = False
+        if outcome.success:
+            clear_step_state(self._state_file)
         walk.outcomes.append(outcome)
         step = walk.route[len(walk.outcomes) - 1]
         report = StepReport()
@@ -453,7 +574,31 @@ class SupervisorNode(Node):
                              False, 'the plant gripper_command service is not available',
                              self._now())))
 
+    def _release_interlock(self, gripper: str) -> str:
+        """Why releasing ``gripper`` is unsafe now ('' when it is not).
+
+        Independent of the sequencer's rules (it starts a step only with both grippers
+        attached) and of the plant's own interlock: the other gripper must be reported
+        attached in a gripper state heard within the watchdog timeout.
+        """
+        other = 'b' if gripper == 'a' else 'a'
+        fresh = not any(f.startswith('plant gripper states')
+                        for f in self.health.faults(self._steady_now(), False))
+        if not fresh:
+            return 'interlock: the gripper states are not fresh'
+        if self._grippers.get(other) != 'attached':
+            return (f'interlock: gripper {other} is {self._grippers.get(other, "unknown")}, '
+                    f'not attached')
+        return ''
+
     def _send_gripper_request(self, request: GripperRequest) -> None:
+        if request.action == 'unscrew':
+            refusal = self._release_interlock(request.gripper)
+            if refusal:
+                self.get_logger().error(f'unscrewing gripper {request.gripper} refused: '
+                                        f'{refusal}')
+                self._execute(self.sequencer.gripper_done(False, refusal, self._now()))
+                return
         call = GripperCommand.Request(
             gripper=request.gripper,
             command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
@@ -573,14 +718,29 @@ class SupervisorNode(Node):
         return response
 
     def _on_resume(self, request: Trigger.Request, response: Trigger.Response):
+        """Leave safe hold: the request and a healthy graph, two independent conditions."""
+        self._sample_measurements()
+        faults = self.health.faults(self._steady_now(), include_trouble=False)
+        if faults:
+            response.success = False
+            response.message = 'cannot resume while ' + '; '.join(faults)
+            return response
+        if self._positions is None:
+            response.success, response.message = False, 'no joint states from the plant'
+            return response
         try:
-            self.sequencer.clear_hold()
+            commands = self.sequencer.resume(self._now(), self._theta_roles(),
+                                             dict(self._grippers), dict(self._gripper_nodes))
         except SequencerError as error:
             response.success = False
             response.message = str(error)
             return response
+        self._step_in_progress = self.sequencer.busy
+        self._execute(commands)
         response.success = True
-        response.message = 'resumed: ready for a step or a walk'
+        response.message = ('resumed: completing the step to '
+                            f'{self.sequencer.step.to_node}' if self.sequencer.busy else
+                            'resumed: ready for a step or a walk')
         return response
 
     # ------------------------------------------------------------------ publishing
@@ -588,7 +748,7 @@ class SupervisorNode(Node):
         walk = self.walk
         step = self.sequencer.step if self.sequencer.busy else None
         key = (self.sequencer.phase, self.sequencer.reason, self.sequencer.base_gripper,
-               walk.step_index if walk else 0, walk is not None)
+               walk.step_index if walk else 0, walk is not None, self.sequencer.step)
         if key == self._last_phase:
             return
         if self._last_phase is not None and key[0] != self._last_phase[0]:
@@ -605,8 +765,13 @@ class SupervisorNode(Node):
         msg.header.stamp = self.get_clock().now().to_msg()
         if walk is not None:
             msg.step_index, msg.step_count = walk.step_index, len(walk.route)
-        if step is not None:
+        held = self.sequencer.phase == Phase.SAFE_HOLD and self.sequencer.step is not None \
+            and self._grippers.get(self.sequencer.step.moving_gripper) != 'attached'
+        if step is not None or held:
+            step = self.sequencer.step
             msg.from_node, msg.to_node = step.from_node, step.to_node
+            msg.base_node = step.base_node
+            msg.base_heading = float(self.sequencer.targets.frame.heading)
         self.phase_pub.publish(msg)
 
     def _publish_feedback(self, walk: Walk) -> None:

@@ -2,7 +2,8 @@
 
 Which of the planner's named trajectory types serves each purpose of a step (paper section 5):
 extraction and insertion are straight lines along the hole axis, the coarse motion is the
-bang-bang node-to-node trajectory, the fine motion a constant-velocity Cartesian line.
+bang-bang node-to-node trajectory, the fine motion a constant-velocity Cartesian line; a step
+resumed after a safe hold recovers to the point above its target with a Cartesian blend.
 """
 
 from __future__ import annotations
@@ -25,9 +26,10 @@ TRAJECTORY_TYPES = {
     'coarse': ('bang_bang_node', True),
     'fine': ('cartesian_line', True),
     'insertion': ('insertion_line', True),
+    'recover': ('cartesian_parabolic_accel', True),
 }
 #: Motions that start where the joints are now (the others start at a planned point).
-_FROM_MEASURED = frozenset({'fine', 'insertion', 'retry_lift'})
+_FROM_MEASURED = frozenset({'fine', 'insertion', 'retry_lift', 'recover'})
 
 
 def _vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:

@@ -32,7 +32,7 @@ _WALKER_MESSAGE_TYPES = (
     'walker_msgs/msg/ControlMode', 'walker_msgs/msg/ControllerState',
     'walker_msgs/msg/GripperState', 'walker_msgs/msg/GripperStates',
     'walker_msgs/msg/JointAccelerations', 'walker_msgs/msg/JointCommand',
-    'walker_msgs/msg/StepPhase')
+    'walker_msgs/msg/StepPhase', 'walker_msgs/msg/StepReport')
 
 
 @dataclasses.dataclass(frozen=True)

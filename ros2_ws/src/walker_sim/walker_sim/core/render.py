@@ -160,9 +160,12 @@ class TrussScene:
         for joint, angle in zip(self._bends, bending, strict=True):
             pybullet.resetJointState(self.body, joint, float(angle), physicsClientId=client)
 
-    def render(self, camera: Camera | None = None, width: int = 960, height: int = 640
-               ) -> np.ndarray:
+    def render(self, camera: Camera | None = None, width: int = 960, height: int = 640,
+               shadow: bool = True) -> np.ndarray:
         """Draw the scene with the software renderer (no display needed).
+
+        ``shadow=False`` leaves out the cast shadows, which take more than half of the
+        renderer's time (animations drawing hundreds of frames use it).
 
         Returns
         -------
@@ -178,8 +181,9 @@ class TrussScene:
         projection = pybullet.computeProjectionMatrixFOV(camera.fov, width / height, 0.02, 50.0,
                                                          physicsClientId=self.client)
         _, _, rgba, _, _ = pybullet.getCameraImage(
-            width, height, view, projection, shadow=1, lightDirection=[1.0, 1.0, 2.0],
-            renderer=pybullet.ER_TINY_RENDERER, physicsClientId=self.client)
+            width, height, view, projection, shadow=int(bool(shadow)),
+            lightDirection=[1.0, 1.0, 2.0], renderer=pybullet.ER_TINY_RENDERER,
+            physicsClientId=self.client)
         return np.reshape(np.asarray(rgba, dtype=np.uint8), (height, width, 4))[:, :, :3]
 
 

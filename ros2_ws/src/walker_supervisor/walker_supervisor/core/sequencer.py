@@ -22,7 +22,11 @@ Rules it enforces:
 * insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
   ``max_insertion_attempts`` times, then the step is aborted to SAFE_HOLD;
 * any failure or a phase that overruns its planned time by ``phase_timeout`` ends in SAFE_HOLD:
-  trajectories cancelled, controllers holding, grippers untouched (the base stays attached).
+  trajectories cancelled, controllers holding, grippers untouched (the base stays attached);
+* :meth:`StepSequencer.resume` leaves SAFE_HOLD: with both grippers attached it returns to IDLE;
+  with the moving gripper free it completes the interrupted step from where the arm is (out of
+  the hole it was leaving if it is still in it, then to the point above the target, settling,
+  insertion).
 """
 
 from __future__ import annotations
@@ -83,6 +87,10 @@ class SupervisorParameters:
         0.1, 600.0, read_only=False)
     max_insertion_attempts: int = parameter(
         'screw-in attempts before a jammed insertion aborts the step', '', 1, 10,
+        read_only=False)
+    watchdog_timeout: float = parameter(
+        'the plant, its gripper heartbeat and each joint controller must be heard from this '
+        'often (steady clock), or the walker goes to safe hold', 's', 0.05, 60.0,
         read_only=False)
 
     def __post_init__(self) -> None:
@@ -223,6 +231,23 @@ class StepSequencer:
         """The step under way (or the last one)."""
         return self._step
 
+    @property
+    def targets(self) -> StepTargets | None:
+        """The targets of the step under way (or of the last one)."""
+        return self._targets
+
+    def adopt(self, step: PlannedStep, targets: StepTargets, reason: str) -> None:
+        """Take over an interrupted step, in SAFE_HOLD, so that :meth:`resume` completes it.
+
+        Used by a supervisor restarted in the middle of a step; raises :class:`SequencerError`
+        if a step is under way here.
+        """
+        if self.busy:
+            raise SequencerError(f'a step is already under way (phase {self.phase.name})')
+        self._step, self._targets = step, targets
+        self.base_gripper = step.base_gripper
+        self.phase, self.stage, self.reason = Phase.SAFE_HOLD, '', reason
+
     def tip_error(self) -> float:
         """Distance [m] of the tip (forward kinematics) from the current phase's target point."""
         if self._targets is None:
@@ -316,6 +341,7 @@ class StepSequencer:
             return self._enter_coarse(now)
         if self.phase == Phase.COARSE:  # arrived before the region: wait for the error
             self.stage = 'arriving'
+            self._settled_since = None
             self._deadline = now + self.parameters.phase_timeout
             return []
         if self.phase == Phase.FINE:  # the coarse motion or a fine line ended: settle
@@ -350,6 +376,11 @@ class StepSequencer:
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
             return self._enter_fine(now, correction=False)
+        if self.phase == Phase.COARSE and self.stage == 'arriving' \
+                and self._settled(now, velocities):
+            # the coarse motion ended and the arm came to rest outside the region (friction,
+            # overshoot): fine motion, with its higher gains and a fine line, takes it there
+            return self._enter_fine(now, correction=True)
         if self.stage == 'settling' and self._settled(now, velocities):
             if self.phase == Phase.FINE:
                 if self.tip_error() <= self.parameters.insertion_alignment \
@@ -381,15 +412,60 @@ class StepSequencer:
         """Abort to SAFE_HOLD at once (an operator's hold, or a fault reported elsewhere)."""
         return self._abort(reason, now)
 
-    def clear_hold(self) -> None:
-        """Leave SAFE_HOLD for IDLE once the cause is dealt with (both grippers attached)."""
+    def resume(self, now: float, theta_roles: np.ndarray, grippers: dict[str, str],
+               nodes: dict[str, str]) -> list:
+        """Leave SAFE_HOLD: back to IDLE, or on with the interrupted step.
+
+        Parameters
+        ----------
+        theta_roles : ndarray, shape (5,)
+            Joint angles now, role order of the base before the hold [rad].
+        grippers, nodes : dict of str to str
+            Each gripper's state ('free', 'attached', ...) and node ('' when free).
+
+        Raises
+        ------
+        SequencerError
+            Not in SAFE_HOLD; the base gripper is not attached; a gripper is still screwing or
+            unscrewing; or the moving gripper is free with no step to complete.
+        """
         if self.phase != Phase.SAFE_HOLD:
             raise SequencerError(f'not in SAFE_HOLD (phase {self.phase.name})')
-        detached = sorted(g for g in ('a', 'b') if self._grippers.get(g) != 'attached')
-        if detached:
-            raise SequencerError(f'gripper {", ".join(detached)} is not attached: finish or '
-                                 f'redo the step instead')
-        self.phase, self.stage, self.reason = Phase.IDLE, '', ''
+        self._theta = np.asarray(theta_roles, dtype=float)
+        self._grippers = dict(grippers)
+        busy = sorted(g for g, s in grippers.items() if s in ('screwing', 'unscrewing'))
+        if busy:
+            raise SequencerError(f'gripper {", ".join(busy)} is still {grippers[busy[0]]}: '
+                                 f'resume once it has finished')
+        if all(grippers.get(g) == 'attached' for g in ('a', 'b')):
+            step = self._step
+            if step is not None and nodes.get(step.moving_gripper) == step.to_node:
+                self.base_gripper = step.moving_gripper  # the step got as far as screwing in
+            self.phase, self.stage, self.reason = Phase.IDLE, '', ''
+            return [SetControlMode('hold', self.base_gripper)]
+        if grippers.get(self.base_gripper) != 'attached':
+            raise SequencerError(f'the base gripper {self.base_gripper} is not attached: '
+                                 f'nothing can move safely')
+        if self._step is None or self._targets is None:
+            raise SequencerError('the free gripper has no step to complete: jog it over a node '
+                                 'and screw it in')
+        self.reason = ''
+        self._fine_lines = 0
+        self._attempts = 0
+        self._step_started = now
+        self._durations = {}
+        tip = self.kinematics.forward(self._theta)[:3]
+        in_hole = (tip[2] < 0.5 * self._targets.point_above_from[2] and np.linalg.norm(
+            tip[:2] - self._targets.point_above_from[:2]) < self.parameters.coarse_to_fine_region)
+        if in_hole:  # still in (or at) the hole it was leaving: out along the axis first
+            self._enter(Phase.EXTRACTION, now, 'lifting')
+            return [SetControlMode('fine', self._step.base_gripper),
+                    self._trajectory('extraction', self._theta, self._targets.above_from, tip,
+                                     self._targets.point_above_from)]
+        self._enter(Phase.FINE, now, 'moving')
+        return [SetControlMode('fine', self._step.base_gripper),
+                self._trajectory('recover', self._theta, self._targets.above_to, tip,
+                                 self._targets.point_above_to)]
 
     # ------------------------------------------------------------------ internals
     def _start_point(self) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
-__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets']
+__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'recovery_targets']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -133,4 +133,23 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     above_to = kinematics.inverse([*(point_to + lift), 0.0, reference[4]], reference=reference)
     at_to = kinematics.inverse([*point_to, 0.0, reference[4]], reference=above_to)
     return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
+                       point_from + lift, point_to + lift, point_to)
+
+
+def recovery_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: PlannedStep,
+                     from_position: np.ndarray, to_position: np.ndarray,
+                     theta_roles: np.ndarray, approach_height: float) -> StepTargets:
+    """Targets of a step taken up again from where the arm is now (a restarted supervisor).
+
+    As :func:`plan_step_targets`, but every joint target is the IK solution nearest the joints
+    now (the sweep may be partly done): what matters to complete the step are the points.
+    """
+    theta = np.asarray(theta_roles, dtype=float)
+    lift = np.array([0.0, 0.0, approach_height])
+    point_from = frame.to_base(from_position)
+    point_to = frame.to_base(to_position)
+    above_from = kinematics.inverse([*(point_from + lift), 0.0, theta[4]], reference=theta)
+    above_to = kinematics.inverse([*(point_to + lift), 0.0, theta[4]], reference=theta)
+    at_to = kinematics.inverse([*point_to, 0.0, theta[4]], reference=above_to)
+    return StepTargets(frame, step.sweep, theta, above_from, above_to, at_to,
                        point_from + lift, point_to + lift, point_to)

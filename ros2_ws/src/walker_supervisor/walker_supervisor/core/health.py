@@ -1,0 +1,87 @@
+"""Health of the graph as the supervisor sees it: who is alive, who reports trouble.
+
+Each source (the plant's joint states, its gripper heartbeat, each joint controller's state)
+is expected at least every ``timeout`` seconds of the *steady* clock: a dead or frozen publisher
+is noticed even when the simulation clock has stopped with it. A controller that reports its
+inputs stale (it is holding because its setpoint or state stream stopped) is a fault while the
+walker is moving. The monitor only keeps time and counts; the sequencer decides what a fault
+means for the step.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+
+__all__ = ['Level', 'SourceStatus', 'HealthMonitor']
+
+
+class Level(enum.IntEnum):
+    """Severity, as ``diagnostic_msgs/DiagnosticStatus`` levels."""
+
+    OK = 0
+    WARN = 1
+    ERROR = 2
+
+
+@dataclasses.dataclass(frozen=True)
+class SourceStatus:
+    """One monitored source now."""
+
+    name: str
+    level: Level
+    message: str
+
+
+class HealthMonitor:
+    """Freshness and reported trouble of named sources.
+
+    Parameters
+    ----------
+    sources : dict of str to float
+        Source name -> timeout [s] (steady clock) after which silence is a fault.
+    """
+
+    def __init__(self, sources: dict[str, float]) -> None:
+        for name, timeout in sources.items():
+            if not timeout > 0:
+                raise ValueError(f'timeout of {name!r} must be positive, got {timeout}')
+        self._timeouts = dict(sources)
+        self._last_seen: dict[str, float] = {}
+        self._trouble: dict[str, str] = {}
+
+    @property
+    def names(self) -> list[str]:
+        """The monitored sources."""
+        return list(self._timeouts)
+
+    def seen(self, name: str, now: float, trouble: str = '') -> None:
+        """Record that ``name`` was heard from at steady time ``now`` [s].
+
+        ``trouble`` is what the source itself reports as wrong ('' when nothing).
+        """
+        if name not in self._timeouts:
+            raise KeyError(f'unknown source {name!r}')
+        self._last_seen[name] = now
+        self._trouble[name] = trouble
+
+    def status(self, now: float) -> list[SourceStatus]:
+        """Every source's status at steady time ``now`` [s]."""
+        statuses = []
+        for name, timeout in self._timeouts.items():
+            last = self._last_seen.get(name)
+            if last is None:
+                statuses.append(SourceStatus(name, Level.ERROR, 'not heard from yet'))
+            elif now - last > timeout:
+                statuses.append(SourceStatus(
+                    name, Level.ERROR, f'silent for {now - last:.2f} s (timeout {timeout:g} s)'))
+            elif self._trouble.get(name):
+                statuses.append(SourceStatus(name, Level.WARN, self._trouble[name]))
+            else:
+                statuses.append(SourceStatus(name, Level.OK, 'alive'))
+        return statuses
+
+    def faults(self, now: float, include_trouble: bool) -> list[str]:
+        """Faults now, one sentence each: silent sources, and reported trouble if asked."""
+        return [f'{s.name}: {s.message}' for s in self.status(now)
+                if s.level == Level.ERROR or (include_trouble and s.level == Level.WARN)]

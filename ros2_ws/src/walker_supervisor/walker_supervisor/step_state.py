@@ -1,0 +1,68 @@
+"""The step under way, kept in a file so that a restarted supervisor can complete it.
+
+The supervisor writes the step (its nodes, its base gripper and the heading of the base frame)
+when the step starts and removes the file when it completes. A supervisor that starts with a
+gripper free reads it back; it takes the step up (in safe hold, for an operator's resume) only
+if the grippers are as the file says: the base attached in the base node, the other free.
+The file lives under ``$ROS_HOME`` (default ``~/.ros``) like ROS 2's own logs, one per robot
+namespace.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import yaml
+
+from walker_supervisor.core.route import PlannedStep
+
+__all__ = ['StepState', 'step_state_path', 'write_step_state', 'read_step_state',
+           'clear_step_state']
+
+
+@dataclasses.dataclass(frozen=True)
+class StepState:
+    """What is needed to complete an interrupted step."""
+
+    base_gripper: str
+    base_node: str
+    from_node: str
+    to_node: str
+    heading: float  # [rad] of the base frame in the truss frame
+
+
+def step_state_path(namespace: str) -> Path:
+    """File of the step under way for a robot namespace."""
+    home = Path(os.environ.get('ROS_HOME', Path.home() / '.ros'))
+    name = namespace.strip('/').replace('/', '_') or 'root'
+    return home / 'walker' / f'{name}_step.yaml'
+
+
+def write_step_state(path: Path, step: PlannedStep, heading: float) -> None:
+    """Record the step under way (atomically: a crash leaves the old file or the new one)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    data = {'base_gripper': step.base_gripper, 'base_node': step.base_node,
+            'from_node': step.from_node, 'to_node': step.to_node, 'heading': float(heading)}
+    temporary = path.with_suffix('.tmp')
+    temporary.write_text(yaml.safe_dump(data))
+    os.replace(temporary, path)
+
+
+def read_step_state(path: Path) -> StepState | None:
+    """Read the recorded step; None when there is none or the file is not one of ours."""
+    try:
+        data = yaml.safe_load(path.read_text())
+        return StepState(str(data['base_gripper']), str(data['base_node']),
+                         str(data['from_node']), str(data['to_node']), float(data['heading']))
+    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError):
+        return None
+
+
+def clear_step_state(path: Path) -> None:
+    """Forget the step (it completed)."""
+    try:
+        path.unlink()
+    except FileNotFoundError:
+        pass

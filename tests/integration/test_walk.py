@@ -1,0 +1,189 @@
+"""The walk end to end over real DDS, in sim time: the whole graph as separate processes.
+
+One graph serves the module (bringing it up takes seconds, a step tens of seconds of wall time).
+Every ``gripper_states`` message the plant publishes during the module is checked: at least one
+gripper is attached at every published state, whatever the test does.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from ros_test_support import REPO_ROOT, isolated_domain, ros_environment
+
+pytestmark = pytest.mark.integration
+
+WALK_TIMEOUT = 600.0  # [s] of wall time for a walk on a loaded 2-core machine
+
+
+class Graph:
+    """The running graph, a client, and every gripper state seen."""
+
+    def __init__(self, tmp: Path, domain: int) -> None:
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+        from walker_msgs.msg import GripperStates
+
+        from walker_bringup.graph import walker_graph
+        from walker_bringup.graph_client import GraphClient, init_context
+        from walker_bringup.processes import ProcessGroup
+        from walker_core.robot_parameters import default_parameter_file
+
+        env = ros_environment(domain)
+        self.nodes = walker_graph(default_parameter_file(), sim_time=True)
+        self.group = ProcessGroup(tmp / 'logs', env)
+        for spec in self.nodes:
+            self.group.start(spec)
+        self.context = init_context(domain)
+        self.client = GraphClient('/walker', self.context)
+        self.gripper_states = []
+        self.joint_states = []
+        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.client.node.create_subscription(GripperStates, 'gripper_states',
+                                             self.gripper_states.append, qos)
+        self.client.node.create_subscription(
+            JointState, 'joint_states', lambda m: self.joint_states.append(list(m.position)),
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+        self.client.wait_until_ready([n.full_name for n in self.nodes], 120.0,
+                                     should_stop=lambda: bool(self.group.poll_deaths()))
+
+    def close(self) -> dict:
+        self.client.close()
+        self.context.try_shutdown()
+        return self.group.stop_all()
+
+    def attached_nodes(self) -> dict:
+        """Gripper -> node of the newest gripper states (attached grippers only)."""
+        from walker_msgs.msg import GripperState
+
+        newest = self.gripper_states[-1]
+        return {g.name: g.node for g in newest.grippers if g.state == GripperState.ATTACHED}
+
+    def latest_positions(self):
+        self.client.spin_for(0.3)
+        return self.joint_states[-1]
+
+
+@pytest.fixture(scope='module')
+def graph(tmp_path_factory):
+    with isolated_domain() as domain:
+        running = Graph(tmp_path_factory.mktemp('walk'), domain)
+        try:
+            yield running
+        finally:
+            codes = running.close()
+        assert all(code == 0 for code in codes.values()), codes
+        _assert_always_attached(running.gripper_states)
+
+
+def _assert_always_attached(states):
+    from walker_msgs.msg import GripperState
+
+    assert states, 'no gripper state was received'
+    for message in states:
+        attached = [g.name for g in message.grippers if g.state == GripperState.ATTACHED]
+        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
+        assert attached, f'no gripper attached at t = {stamp:.3f} s'
+
+
+@pytest.mark.parametrize('action, target, words', [
+    ('walk_to', 'n9_9', 'not on the truss'),
+    ('walk_to', 'node7', 'not a node name'),
+    ('step', 'n4_3', 'not one step away'),
+])
+def test_unknown_and_unreachable_targets_are_refused_before_anything_moves(graph, action,
+                                                                          target, words):
+    from action_msgs.msg import GoalStatus
+
+    before = graph.latest_positions()
+    send = graph.client.walk_to if action == 'walk_to' else graph.client.step
+    status, result = send(target, 30.0)
+    assert status == GoalStatus.STATUS_ABORTED
+    assert not result.success and words in result.message
+    after = graph.latest_positions()
+    assert max(abs(a - b) for a, b in zip(before, after, strict=True)) < 1e-4, 'the arm moved'
+    assert set(graph.attached_nodes()) == {'a', 'b'}
+
+
+def test_a_three_step_walk_with_quarter_and_half_turns_reaches_its_target(graph):
+    import math
+
+    reports_before = len(graph.client.reports)
+    # From the start stance (gripper a in n1_1, b in n2_1, J1 at -pi/2) three steps reach
+    # n3_2: two quarter turns and a half turn (other routes would wind the yaws too far).
+    status, result = graph.client.walk_to('n3_2', WALK_TIMEOUT)
+    graph.client.spin_for(1.0)
+    assert result.success, result.message
+    assert result.steps_taken == 3 and list(result.path) == ['n1_2', 'n2_2', 'n3_2']
+    reports = graph.client.reports[reports_before:]
+    assert [r.success for r in reports] == [True, True, True]
+    sweeps = sorted(abs(round(math.degrees(r.sweep))) for r in reports)
+    assert sweeps == [90, 90, 180]
+    tolerance = 0.002  # gripper.insertion_position_tolerance of the parameter file [m]
+    assert all(r.insertion_error < tolerance for r in reports)
+    assert all(r.time_optimal_bound > 0 and r.duration > r.time_optimal_bound for r in reports)
+    assert 'n3_2' in graph.attached_nodes().values()
+    assert set(graph.attached_nodes()) == {'a', 'b'}
+
+
+def test_a_cancelled_walk_finishes_its_step_and_ends_attached(graph):
+    from action_msgs.msg import GoalStatus
+    from walker_msgs.action import WalkTo
+    from walker_msgs.msg import StepPhase
+
+    client = graph.client
+    handle = client._wait(client.walk_client.send_goal_async(WalkTo.Goal(target_node='n0_0')),
+                          30.0, None, 'the walk goal')
+    assert handle.accepted
+    deadline = time.monotonic() + WALK_TIMEOUT
+    while not (client.phase is not None and client.phase.phase == StepPhase.COARSE):
+        assert time.monotonic() < deadline, 'the walk never reached its coarse motion'
+        client.spin_for(0.1)
+    client._wait(handle.cancel_goal_async(), 30.0, None, 'the cancel request')
+    wrapped = client._wait(handle.get_result_async(), WALK_TIMEOUT, None, 'the cancelled walk')
+    assert wrapped.status == GoalStatus.STATUS_CANCELED
+    assert wrapped.result.steps_taken == 1, 'the step under way finishes, no other starts'
+    client.spin_for(1.0)
+    assert set(graph.attached_nodes()) == {'a', 'b'}
+    assert client.phase.phase == StepPhase.IDLE
+
+
+def _processes_with(marker: str) -> list[int]:
+    found = []
+    for cmdline in Path('/proc').glob('[0-9]*/cmdline'):
+        try:
+            if marker in cmdline.read_bytes().decode(errors='replace'):
+                found.append(int(cmdline.parent.name))
+        except OSError:
+            continue
+    return [pid for pid in found if pid != os.getpid()]
+
+
+@pytest.mark.parametrize('interrupt', [False, True])
+def test_run_all_leaves_no_process_behind(tmp_path, interrupt):
+    namespace = f'/walker_leak_check_{os.getpid()}_{int(interrupt)}'
+    with isolated_domain() as domain:
+        env = ros_environment(domain)
+        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
+                '--namespace', namespace, '--out', str(tmp_path / 'run'), '--no-record']
+        args += ['--target', 'n1_2'] if interrupt else ['--no-walk']
+        run = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True, cwd=REPO_ROOT)
+        output = []
+        if interrupt:  # Ctrl-C once the walk has started
+            for line in run.stdout:
+                output.append(line)
+                if 'walking to' in line:
+                    run.send_signal(signal.SIGINT)
+                    break
+        output.append(run.communicate(timeout=180)[0])
+        text = ''.join(output)
+        assert run.returncode == (130 if interrupt else 0), text
+        assert 'all node processes stopped' in text
+        assert _processes_with(namespace) == [], text
