@@ -21,7 +21,10 @@ from bench_support import REPO, load_events
 PROBE = Path(__file__).resolve().parent / 'loop_probe.py'
 STARTUP_TIMEOUT = 180.0  # [s] several walkers on a loaded 2-core machine start slowly
 
-__all__ = ['GraphRun', 'Walking', 'back_and_forth_targets']
+__all__ = ['GraphRun', 'Walking', 'back_and_forth_targets', 'walk_resuming']
+
+#: Safe holds a walk is resumed from before it counts as failed.
+MAX_RESUMES = 3
 
 
 class GraphRun:
@@ -165,6 +168,43 @@ def back_and_forth_targets(start) -> tuple[str, str]:
     return f'n{column + 2}_{row}', start.base_node
 
 
+def walk_resuming(client, target: str, timeout: float, should_stop=None,
+                  resumes: int = MAX_RESUMES) -> tuple[object, list[str]]:
+    """Walk to ``target``; after a safe hold, resume (as an operator would) and walk on.
+
+    The supervisor's watchdogs hold the walker when a source falls silent or a controller
+    holds on stale inputs, which a loaded machine can cause in sim time (the plant waits for
+    the controllers, not for the planner). Each hold is returned, so that the benchmark
+    reports it instead of hiding it; after ``resumes`` holds the walk counts as failed.
+
+    Returns
+    -------
+    (WalkTo.Result, list of str)
+        The last walk's result and the reason of every safe hold met on the way.
+    """
+    from walker_msgs.msg import StepPhase
+
+    holds: list[str] = []
+    while True:
+        _, result = client.walk_to(target, timeout, None, should_stop)
+        held = 'safe hold' in result.message or 'fault' in result.message
+        if result.success or not held or len(holds) >= resumes:
+            return result, holds
+        holds.append(result.message)
+        client.spin_for(1.5)  # let the silent source be heard again before resuming
+        answer = client.call_trigger('resume')
+        if not answer.success:
+            holds.append(f'resume refused: {answer.message}')
+            return result, holds
+        # A hold in the middle of a step: the supervisor completes that step first.
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not (should_stop and should_stop()):
+            client.spin_for(0.2)
+            phase = getattr(client, 'phase', None)
+            if phase is not None and phase.phase in (StepPhase.IDLE, StepPhase.SAFE_HOLD):
+                break
+
+
 class Walking:
     """Keep every walker of a run walking between two nodes, one thread each.
 
@@ -184,6 +224,7 @@ class Walking:
         self.timeout = timeout
         self.stop = threading.Event()
         self.results: list[list] = [[] for _ in targets]
+        self.holds: list[list[str]] = [[] for _ in targets]
         self.errors: list[str] = []
         self._threads = [threading.Thread(target=self._walk, args=(i,), daemon=True)
                          for i in range(len(targets))]
@@ -201,13 +242,14 @@ class Walking:
         while not self.stop.is_set():
             target = self.targets[index][legs % 2]
             try:
-                _, result = client.walk_to(target, self.timeout, None, self.stop.is_set)
+                result, holds = walk_resuming(client, target, self.timeout, self.stop.is_set)
             except WalkInterruptedError:
                 return
             except Exception as error:  # reported with the results
                 self.errors.append(f'{client.namespace}: {error}')
                 return
             self.results[index].append(result)
+            self.holds[index] += holds
             if not result.success:
                 self.errors.append(f'{client.namespace}: walk to {target} failed: '
                                    f'{result.message}')

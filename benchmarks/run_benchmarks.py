@@ -173,7 +173,8 @@ class Suite:
                                                if sim > 0 else None),
                 'peak_rss_bytes': peak,
                 'walks_completed': (len(walking_context.results[index])
-                                    if walking_context else 0)})
+                                    if walking_context else 0),
+                'safe_holds': walking_context.holds[index] if walking_context else []})
         result = {'walkers': walkers, 'composed': composed, 'sim_time': sim_time,
                   'rate_hz': rate or 1e9 / period_ns, 'walking': walking,
                   'startup_s': round(startup, 2), 'window_s': seconds,
@@ -273,7 +274,7 @@ def part_scaling(suite: Suite) -> dict:
 
 def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True) -> dict:
     from bench_support import CpuMeter, loop_statistics
-    from graph_runner import GraphRun
+    from graph_runner import GraphRun, walk_resuming
     from walker_bringup.summary import rows_from_reports
 
     suite._runs += 1
@@ -285,7 +286,7 @@ def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True) -
         meter = CpuMeter(run.pids())
         meter.start()
         start_ns = time.monotonic_ns()
-        _, result = client.walk_to(target, 1800.0, None, run.died)
+        result, holds = walk_resuming(client, target, 1800.0, run.died)
         end_ns = time.monotonic_ns()
         usage = meter.stop()
         client.spin_for(0.5)
@@ -306,7 +307,8 @@ def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True) -
                       'attempts': row.attempts})
     wall = (end_ns - start_ns) / 1e9
     return {'target': target, 'sim_time': sim_time, 'reached': bool(result.success),
-            'message': result.message, 'steps': steps, 'startup_s': round(startup, 2),
+            'message': result.message, 'safe_holds': holds, 'steps': steps,
+            'startup_s': round(startup, 2),
             'walking_s': walking, 'wall_s': round(wall, 2),
             'nodes_per_minute_walking': round(60 * len(rows) / walking, 3) if walking else None,
             'nodes_per_minute_wall': round(60 * len(rows) / wall, 3) if wall else None,
@@ -329,6 +331,8 @@ def _report_walk(suite: Suite, walk: dict) -> None:
                   f'{step["duration_s"]:.2f} s = {step["bound_ratio"]:.2f} x bound, insertion '
                   f'error {1e3 * step["insertion_error_m"]:.2f} mm, vibration '
                   f'{1e3 * step["residual_vibration_m"]:.2f} mm')
+    for hold in walk['safe_holds']:
+        suite.say(f'  safe hold, resumed: {hold}')
     suite.say(f'  reached: {walk["reached"]} {walk["message"]}; CPU '
               f'{100 * walk["usage"]["cpu_fraction_total"]:.0f} %, peak memory '
               f'{walk["usage"]["peak_rss_bytes_total"] / 2**20:.0f} MiB')
@@ -339,7 +343,7 @@ def part_soak(suite: Suite) -> dict:
     import numpy as np
 
     from bench_support import fastdds_shm_files, process_stats
-    from graph_runner import GraphRun
+    from graph_runner import GraphRun, walk_resuming
     from walker_bringup.summary import rows_from_reports
 
     minutes = suite.soak_minutes or 10.0
@@ -365,12 +369,13 @@ def part_soak(suite: Suite) -> dict:
         while walked < 60.0 * minutes:
             target = targets[len(legs) % 2]
             count = len(client.reports)
-            _, result = client.walk_to(target, 3600.0, None, run.died)
+            result, holds = walk_resuming(client, target, 3600.0, run.died)
             client.spin_for(0.5)
             rows = rows_from_reports(client.reports[count:])
             walked += sum(r.duration for r in rows)
             legs.append({'target': target, 'reached': bool(result.success),
-                         'message': result.message, 'steps': len(rows)})
+                         'message': result.message, 'steps': len(rows),
+                         'safe_holds': holds})
             sample()
             suite.say(f'  leg {len(legs)} to {target}: {"reached" if result.success else "FAILED"}'
                       f', {walked / 60:.1f} of {minutes:g} min walked')
@@ -398,6 +403,7 @@ def part_soak(suite: Suite) -> dict:
     return {'minutes_walked': round(walked / 60, 2), 'wall_minutes':
             round((time.monotonic() - began) / 60, 2), 'legs': legs, 'steps': len(rows),
             'failed_steps': sum(1 for r in rows if not r.success),
+            'safe_holds': sum(len(leg['safe_holds']) for leg in legs),
             'samples': samples,
             'rss_growth_after_first_leg_bytes': growth,
             'open_files_change_after_first_leg': files,
@@ -530,6 +536,10 @@ def figures(results: dict) -> list[dict]:
             data = walk[kind]
             steps = [s for s in data['steps'] if s['success']]
             label = 'walk (sim time)' if kind == 'sim_time' else 'one step (real time)'
+            holds = data.get('safe_holds', [])
+            add(f'{label}: reached {data["target"]}; safe holds resumed from (watchdogs)',
+                f'{"yes" if data["reached"] else "no"}; {len(holds)}', 'reached; 0 holds',
+                data['reached'] and not holds)
             if not steps:
                 add(f'{label}: steps', f'none succeeded: {data["message"]}', '', False)
                 continue
@@ -587,7 +597,8 @@ def figures(results: dict) -> list[dict]:
         growth = max(soak['rss_growth_after_first_leg_bytes'].values(), default=0)
         files = max(soak['open_files_change_after_first_leg'].values(), default=0)
         add(f'soak: {soak["minutes_walked"]:g} min walked ({soak["steps"]} steps, '
-            f'{soak["failed_steps"]} failed): largest RSS growth after the first leg; '
+            f'{soak["failed_steps"]} failed, {soak.get("safe_holds", 0)} safe holds resumed '
+            'from): largest RSS growth after the first leg; '
             'open files change', f'{growth / 2**20:.1f} MiB; {files:+d}',
             'no leak', growth < 20 * 2**20 and files <= 0)
         duration = soak['drift']['duration_s']
@@ -618,6 +629,22 @@ def format_table(rows: list[dict]) -> str:
 
 
 # ----------------------------------------------------------------------------- main
+def summary_document(machine: dict, quick: bool, status: dict, rows: list[dict]) -> dict:
+    """Return what ``summary.json`` holds: the machine and its load, the parts, the figures."""
+    from bench_support import NOISE_NOTE
+
+    return {'suite': 'walker benchmarks (benchmarks/run_benchmarks.py)',
+            'machine': machine, 'note': NOISE_NOTE, 'quick': quick,
+            'executor': os.environ.get('WALKER_EXECUTOR', 'events'),
+            'parts': status, 'figures': rows,
+            'targets': {'step_time_bound_ratio': TARGET_BOUND_RATIO,
+                        'tip_error_m': TARGET_TIP_ERROR,
+                        'p99_round_trip': 'within one control period at 500 Hz with five '
+                                          'separate controller processes',
+                        'sim_time_real_time_factor': TARGET_REAL_TIME_FACTOR,
+                        'per_walker_cost': 'growing no worse than linearly'}}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the selected parts, print the table, write the JSON files."""
     argv = sys.argv[1:] if argv is None else argv
@@ -656,16 +683,7 @@ def main(argv: list[str] | None = None) -> int:
     for name, state in status.items():
         if not state['ok']:
             print(f'part {name} FAILED: {state["error"]}')
-    summary = {'suite': 'walker benchmarks (benchmarks/run_benchmarks.py)',
-               'machine': machine, 'note': NOISE_NOTE, 'quick': args.quick,
-               'executor': os.environ.get('WALKER_EXECUTOR', 'events'),
-               'parts': status, 'figures': rows,
-               'targets': {'step_time_bound_ratio': TARGET_BOUND_RATIO,
-                           'tip_error_m': TARGET_TIP_ERROR,
-                           'p99_round_trip': 'within one control period at 500 Hz with five '
-                                             'separate controller processes',
-                           'sim_time_real_time_factor': TARGET_REAL_TIME_FACTOR,
-                           'per_walker_cost': 'growing no worse than linearly'}}
+    summary = summary_document(machine, args.quick, status, rows)
     if set(args.parts) >= set(PARTS):
         write_json(args.output / 'summary.json', summary)
         print(f'written: {args.output / "summary.json"} and {args.output / "suite"}/*.json')
