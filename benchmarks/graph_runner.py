@@ -192,17 +192,24 @@ def walk_resuming(client, target: str, timeout: float, should_stop=None,
             return result, holds
         holds.append(result.message)
         client.spin_for(1.5)  # let the silent source be heard again before resuming
+        reports = len(client.reports)
         answer = client.call_trigger('resume')
         if not answer.success:
             holds.append(f'resume refused: {answer.message}')
             return result, holds
-        # A hold in the middle of a step: the supervisor completes that step first.
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not (should_stop and should_stop()):
-            client.spin_for(0.2)
-            phase = getattr(client, 'phase', None)
-            if phase is not None and phase.phase in (StepPhase.IDLE, StepPhase.SAFE_HOLD):
-                break
+        if 'completing' in answer.message:
+            # A hold in the middle of a step: the supervisor completes that step first; the
+            # walk goes on from where it ends (its report arrives, or it holds again).
+            deadline = time.monotonic() + timeout
+            busy = False
+            while time.monotonic() < deadline and not (should_stop and should_stop()):
+                client.spin_for(0.2)
+                phase = client.phase.phase if client.phase is not None else None
+                if phase not in (StepPhase.IDLE, StepPhase.SAFE_HOLD):
+                    busy = True
+                elif busy or len(client.reports) > reports:
+                    break
+            client.spin_for(0.5)
 
 
 class Walking:

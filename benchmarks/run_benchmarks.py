@@ -42,6 +42,7 @@ the load average is recorded beside them.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
@@ -365,7 +366,7 @@ def part_soak(suite: Suite) -> dict:
                             'fastdds_shm_files': fastdds_shm_files()})
 
         sample()
-        walked = 0.0
+        walked, failures = 0.0, 0
         while walked < 60.0 * minutes:
             target = targets[len(legs) % 2]
             count = len(client.reports)
@@ -379,8 +380,17 @@ def part_soak(suite: Suite) -> dict:
             sample()
             suite.say(f'  leg {len(legs)} to {target}: {"reached" if result.success else "FAILED"}'
                       f', {walked / 60:.1f} of {minutes:g} min walked')
-            if not result.success:
+            if result.success:
+                failures = 0
+                continue
+            # A failed leg is counted; the soak goes on from where the walker stands unless
+            # three legs in a row fail.
+            failures += 1
+            if failures >= 3:
                 break
+            with contextlib.suppress(Exception):
+                client.call_trigger('resume')
+            client.spin_for(1.0)
         rows = rows_from_reports(client.reports)
     first, last = samples[1] if len(samples) > 2 else samples[0], samples[-1]
     growth = {n: last['rss_bytes'].get(n, 0) - first['rss_bytes'].get(n, 0)

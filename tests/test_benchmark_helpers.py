@@ -155,3 +155,45 @@ def test_a_soak_of_no_time_is_refused(capsys):
     with pytest.raises(SystemExit):
         run_benchmarks._arguments(['--soak', '0'])
     assert 'positive number of minutes' in capsys.readouterr().err
+
+
+class _FakeClient:
+    """Answers walk goals from a list; resume always succeeds (between steps)."""
+
+    def __init__(self, outcomes):
+        from types import SimpleNamespace
+
+        self._outcomes = [SimpleNamespace(success=s, message=m) for s, m in outcomes]
+        self._answer = SimpleNamespace(success=True, message='resumed: ready for a step')
+        self.reports, self.phase, self.resumes = [], None, 0
+
+    def walk_to(self, target, timeout, feedback, should_stop):
+        return 4, self._outcomes.pop(0)
+
+    def call_trigger(self, which):
+        self.resumes += 1
+        return self._answer
+
+    def spin_for(self, seconds):
+        pass
+
+
+def test_a_walk_held_by_a_watchdog_is_resumed_and_the_hold_reported():
+    import graph_runner
+
+    client = _FakeClient([(False, 'fault: plant joint states: silent for 1.2 s'), (True, '')])
+    result, holds = graph_runner.walk_resuming(client, 'n3_1', 10.0)
+    assert result.success and client.resumes == 1
+    assert holds == ['fault: plant joint states: silent for 1.2 s']
+
+
+def test_a_walk_that_keeps_failing_or_fails_otherwise_is_not_resumed_forever():
+    import graph_runner
+
+    held = [(False, 'the walker is in safe hold (fault: x): call resume first')] * 5
+    client = _FakeClient(held)
+    result, holds = graph_runner.walk_resuming(client, 'n3_1', 10.0, resumes=2)
+    assert not result.success and len(holds) == 2 and client.resumes == 2
+    client = _FakeClient([(False, 'no route to n9_9')])
+    result, holds = graph_runner.walk_resuming(client, 'n9_9', 10.0)
+    assert not result.success and holds == [] and client.resumes == 0
