@@ -25,6 +25,8 @@ __all__ = ['GraphRun', 'Walking', 'back_and_forth_targets', 'walk_resuming']
 
 #: Safe holds a walk is resumed from before it counts as failed.
 MAX_RESUMES = 3
+#: Longest wait for the supervisor to answer a resume [s] (wall clock, loaded machine).
+RESUME_TIMEOUT = 20.0
 
 
 class GraphRun:
@@ -193,7 +195,11 @@ def walk_resuming(client, target: str, timeout: float, should_stop=None,
         holds.append(result.message)
         client.spin_for(1.5)  # let the silent source be heard again before resuming
         reports = len(client.reports)
-        answer = client.call_trigger('resume')
+        try:
+            answer = client.call_trigger('resume', RESUME_TIMEOUT)
+        except TimeoutError as error:  # a starved supervisor: counted, the walk failed
+            holds.append(f'resume unanswered: {error}')
+            return result, holds
         if not answer.success:
             holds.append(f'resume refused: {answer.message}')
             return result, holds

@@ -378,8 +378,10 @@ def part_soak(suite: Suite) -> dict:
                          'message': result.message, 'steps': len(rows),
                          'safe_holds': holds})
             sample()
-            suite.say(f'  leg {len(legs)} to {target}: {"reached" if result.success else "FAILED"}'
-                      f', {walked / 60:.1f} of {minutes:g} min walked')
+            suite.say(f'  leg {len(legs)} to {target}: '
+                      f'{"reached" if result.success else "FAILED: " + result.message}'
+                      f', {walked / 60:.1f} of {minutes:g} min walked'
+                      + (f', {len(holds)} safe holds resumed from' if holds else ''))
             if result.success:
                 failures = 0
                 continue

@@ -170,7 +170,7 @@ class _FakeClient:
     def walk_to(self, target, timeout, feedback, should_stop):
         return 4, self._outcomes.pop(0)
 
-    def call_trigger(self, which):
+    def call_trigger(self, which, timeout=5.0):
         self.resumes += 1
         return self._answer
 
