@@ -641,6 +641,31 @@ def format_table(rows: list[dict]) -> str:
 
 
 # ----------------------------------------------------------------------------- main
+def earlier_results(directory: Path, names: list[str], quick: bool) -> dict:
+    """Return the last results of parts not run now: name -> (result, status).
+
+    Only results of the same kind of run (``--quick`` or not) are taken; each status says
+    when, on which commit and under which load the part ran.
+    """
+    import json
+
+    found = {}
+    for name in names:
+        path = directory / f'{name}.json'
+        try:
+            document = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        if document.get('quick') != quick or name not in document:
+            continue
+        machine = document.get('machine', {})
+        found[name] = (document[name], {
+            'ok': True, 'earlier_run': machine.get('date'), 'commit': machine.get('commit'),
+            'load_average_before_run': machine.get('load_average_1_5_15'),
+            'load_average_after': document.get('load_average_after_part')})
+    return found
+
+
 def summary_document(machine: dict, quick: bool, status: dict, rows: list[dict]) -> dict:
     """Return what ``summary.json`` holds: the machine and its load, the parts, the figures."""
     from bench_support import NOISE_NOTE
@@ -682,10 +707,18 @@ def main(argv: list[str] | None = None) -> int:
                 traceback.print_exc()
                 status[name] = {'ok': False, 'error': f'{type(error).__name__}: {error}'}
             status[name]['seconds'] = round(time.monotonic() - began, 1)
+            status[name]['load_average_after'] = [round(x, 2) for x in os.getloadavg()]
             if name in results:
                 write_json(args.output / 'suite' / f'{name}.json',
-                           {'machine': machine, 'quick': args.quick, name: results[name]})
+                           {'machine': machine, 'quick': args.quick,
+                            'load_average_after_part': status[name]['load_average_after'],
+                            name: results[name]})
     machine['load_average_after_1_5_15'] = [round(x, 2) for x in os.getloadavg()]
+    for name, (result, state) in earlier_results(args.output / 'suite',
+                                                 [p for p in (*PARTS, 'soak')
+                                                  if p not in args.parts],
+                                                 args.quick).items():
+        results[name], status[name] = result, state
     rows = figures(results)
     print()
     print(format_table(rows))
@@ -696,12 +729,13 @@ def main(argv: list[str] | None = None) -> int:
         if not state['ok']:
             print(f'part {name} FAILED: {state["error"]}')
     summary = summary_document(machine, args.quick, status, rows)
-    if set(args.parts) >= set(PARTS):
+    if set(status) >= set(PARTS):
         write_json(args.output / 'summary.json', summary)
         print(f'written: {args.output / "summary.json"} and {args.output / "suite"}/*.json')
     else:
         write_json(args.output / 'suite' / 'last_partial_summary.json', summary)
-        print(f'written: {args.output / "suite"}/*.json (summary.json only from a full run)')
+        print(f'written: {args.output / "suite"}/*.json (summary.json once every part has '
+              'been run)')
     return 0 if all(s['ok'] for s in status.values()) else 1
 
 

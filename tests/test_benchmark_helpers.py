@@ -197,3 +197,21 @@ def test_a_walk_that_keeps_failing_or_fails_otherwise_is_not_resumed_forever():
     client = _FakeClient([(False, 'no route to n9_9')])
     result, holds = graph_runner.walk_resuming(client, 'n9_9', 10.0)
     assert not result.success and holds == [] and client.resumes == 0
+
+
+def test_parts_not_run_now_come_from_the_last_run_of_the_same_kind(tmp_path):
+    machine = {'date': '2026-11-21T06:00:00+00:00', 'commit': 'abc1234',
+               'load_average_1_5_15': [2.0, 2.0, 2.0]}
+    bench_support.write_json(tmp_path / 'plant.json', {'machine': machine, 'quick': False,
+                                                       'load_average_after_part': [3.0, 2, 2],
+                                                       'plant': {'x': 1}})
+    bench_support.write_json(tmp_path / 'walk.json', {'machine': machine, 'quick': True,
+                                                      'walk': {'x': 2}})
+    (tmp_path / 'scaling.json').write_text('{not json')
+    found = run_benchmarks.earlier_results(tmp_path, ['plant', 'walk', 'scaling', 'soak'],
+                                           quick=False)
+    assert list(found) == ['plant']
+    result, status = found['plant']
+    assert result == {'x': 1}
+    assert status['ok'] and status['earlier_run'] == machine['date']
+    assert status['load_average_after'] == [3.0, 2, 2]
