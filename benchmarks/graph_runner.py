@@ -20,6 +20,8 @@ from bench_support import REPO, load_events
 
 PROBE = Path(__file__).resolve().parent / 'loop_probe.py'
 STARTUP_TIMEOUT = 180.0  # [s] several walkers on a loaded 2-core machine start slowly
+STOP_TIMEOUT = 20.0  # [s] for the processes to end on their interrupt (the plant then writes
+#                       its probe file); dozens of them on two loaded cores take seconds
 
 __all__ = ['GraphRun', 'Walking', 'back_and_forth_targets', 'walk_resuming']
 
@@ -136,7 +138,7 @@ class GraphRun:
         if self.context is not None:
             self.context.try_shutdown()
         for group in self.groups:
-            group.stop_all()
+            group.stop_all(STOP_TIMEOUT)
         for namespace, _, _ in self.graphs:
             path = self.scratch / f'events_{namespace.strip("/")}.npz'
             if path.exists():
@@ -150,9 +152,13 @@ class GraphRun:
         return {process.spec.full_name: process.popen.pid
                 for group in groups for process in group.processes}
 
-    def events(self, index: int) -> dict:
-        """Return the probe arrays of walker ``index`` (available after the run has ended)."""
-        return self._events[self.graphs[index][0]]
+    def events(self, index: int) -> dict | None:
+        """Return the probe arrays of walker ``index`` (after the run has ended).
+
+        None when its plant did not write them: it did not end on its interrupt (a starved
+        machine: it was terminated or killed before it could).
+        """
+        return self._events.get(self.graphs[index][0])
 
     @property
     def period_ns(self) -> int:

@@ -159,7 +159,9 @@ class Suite:
             graphs = list(run.graphs)
         per_walker = []
         for index, (namespace, start, _) in enumerate(graphs):
-            loop = loop_statistics(run.events(index), start_ns, end_ns, period_ns)
+            events = run.events(index)
+            loop = (loop_statistics(events, start_ns, end_ns, period_ns) if events is not None
+                    else {'error': 'no loop probe: the plant did not end on its interrupt'})
             mine = {n: c for n, c in usage['cpu_fraction'].items()
                     if n.startswith(namespace + '/')}
             cpu = sum(mine.values())
@@ -182,7 +184,9 @@ class Suite:
                   'load_average': [round(x, 2) for x in os.getloadavg()],
                   'per_walker': per_walker, 'usage': usage,
                   'errors': (walking_context.errors if walking_context else [])
-                  + (['a process exited during the window'] if died else [])}
+                  + (['a process exited during the window'] if died else [])
+                  + [f'{w["namespace"]}: {w["loop"]["error"]}' for w in per_walker
+                     if 'error' in w['loop']]}
         self._windows[key] = result
         self._report_window(what, result)
         return result
@@ -293,7 +297,9 @@ def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True) -
         client.spin_for(0.5)
         reports = list(client.reports)
         period_ns = run.period_ns
-    loop = loop_statistics(run.events(0), start_ns, end_ns, period_ns)
+    events = run.events(0)
+    loop = (loop_statistics(events, start_ns, end_ns, period_ns) if events is not None
+            else {'error': 'no loop probe: the plant did not end on its interrupt'})
     rows = rows_from_reports(reports)
     walking = sum(r.duration for r in rows)
     steps = []
@@ -595,8 +601,10 @@ def figures(results: dict) -> list[dict]:
                 'p99; CPU per simulated second (x one walker)',
                 f'{_fmt(growth["real_time_factor_per_walker"])}; {_fmt(p99)} ms; '
                 f'{_fmt(growth["cpu_seconds_per_sim_second_per_walker"])} s '
-                f'({_fmt(relative)} x)', 'per-walker cost <= linear',
-                relative is not None and relative <= 1.25)
+                f'({_fmt(relative)} x)'
+                + (f'; {len(window["errors"])} errors' if window['errors'] else ''),
+                'per-walker cost <= linear',
+                relative is not None and relative <= 1.25 and not window['errors'])
         for n, window in scaling['real_time_holding'].items():
             missed = _mean([w['loop'].get('missed_fraction') for w in window['per_walker']])
             p99 = _mean([w['loop'].get('all_five_latency', {}).get('p99_ms')
