@@ -92,6 +92,10 @@ class GraphRun:
         for namespace, start, nodes in self.graphs:
             label = namespace.strip('/')
             env = ros_environment(domain)
+            # A ROS home of the run's own: the supervisor keeps the step under way in it, and a
+            # window that ends in the middle of a step must not hand that step to the next
+            # graph started in the same domain (it would take a step up from another stance).
+            env['ROS_HOME'] = str(self.scratch / 'ros_home')
             env['WALKER_LOOP_EVENTS'] = str(self.scratch / f'events_{label}.npz')
             group = ProcessGroup(self.scratch / 'logs' / label, env)
             self.groups.append(group)
