@@ -50,8 +50,12 @@ class Graph:
         self.client.node.create_subscription(
             JointState, 'joint_states', lambda m: self.joint_states.append(list(m.position)),
             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
-        self.client.wait_until_ready([n.full_name for n in self.nodes], 120.0,
-                                     should_stop=lambda: bool(self.group.poll_deaths()))
+        try:
+            self.client.wait_until_ready([n.full_name for n in self.nodes], 120.0,
+                                         should_stop=lambda: bool(self.group.poll_deaths()))
+        except BaseException:
+            self.close()  # a graph that never came up leaves no process behind
+            raise
 
     def close(self) -> dict:
         self.client.close()

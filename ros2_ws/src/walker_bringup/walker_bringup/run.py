@@ -44,6 +44,7 @@ from walker_report.walk_report import written_text
 __all__ = ['main', 'parse_arguments', 'write_report']
 
 PHASE_NAMES = ('idle', 'extraction', 'coarse', 'fine', 'insertion', 'safe hold')
+SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -66,12 +67,15 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--out', default=None,
                         help='output directory (default: runs/<date-time>)')
     parser.add_argument('--namespace', default='/walker', help='robot namespace')
-    parser.add_argument('--startup-timeout', type=float, default=60.0,
+    parser.add_argument('--startup-timeout', type=float, default=120.0,
                         help='seconds to wait for the graph to come up')
     parser.add_argument('--walk-timeout', type=float, default=600.0,
                         help='seconds the walk may take (wall clock)')
     parser.add_argument('--no-walk', dest='walk', action='store_false',
                         help='bring the graph up, report it ready, and shut it down')
+    parser.add_argument('--serve', action='store_true',
+                        help='bring the graph up and keep it running, without walking, until '
+                             'Ctrl-C: for an operator with walkerctl or the ros2 tools')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
@@ -205,6 +209,10 @@ def main(argv: list[str] | None = None) -> int:
         progress.say('[walker] error: --walkers names the namespaces itself (/walker, '
                      '/walker_2, ...): leave --namespace out')
         return 2
+    if args.walkers > 1 and args.serve:
+        progress.say('[walker] error: --serve keeps one walker up for walkerctl: leave --walkers '
+                     'out')
+        return 2
     try:
         walkers = _describe_walkers(args, params_file, out, env)
     except ValueError as error:
@@ -255,6 +263,8 @@ def main(argv: list[str] | None = None) -> int:
                 should_stop=should_stop)
         progress.say(f'[walker] graph{"s" if len(walkers) > 1 else ""} ready in '
                      f'{time.monotonic() - started:.1f} s')
+        if args.serve:
+            return _serve(walkers[0].client, args, should_stop, deaths)
         if not args.walk:
             return 0
         if len(walkers) == 1:
@@ -293,6 +303,22 @@ def main(argv: list[str] | None = None) -> int:
         if not write_report(out / 'bag', out / 'report', params_file, args.quiet):
             code = code or 6
     return code
+
+
+def _serve(client: GraphClient, args, should_stop, deaths: list) -> int:
+    """Keep the graph running until Ctrl-C (exit code 0) or a node dies.
+
+    The client keeps spinning: a participant that stops taking its messages would hold up the
+    graph's reliable writers.
+    """
+    domain = os.environ.get('ROS_DOMAIN_ID', '0')
+    print(f'[walker] serving in namespace {args.namespace}, ROS_DOMAIN_ID={domain}: try '
+          f'scripts/walkerctl status; Ctrl-C shuts the graph down', flush=True)
+    while not should_stop():
+        client.spin_for(SERVE_POLL)
+    if deaths:
+        raise WalkInterruptedError('a node died')
+    return 0
 
 
 def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) -> bool:

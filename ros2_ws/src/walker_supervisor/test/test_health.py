@@ -27,3 +27,24 @@ def test_bad_sources_and_timeouts_are_refused():
         HealthMonitor({'plant': 0.0})
     with pytest.raises(KeyError, match='unknown source'):
         HealthMonitor({'plant': 1.0}).seen('planner', 0.0)
+
+
+def test_trouble_is_a_fault_only_once_it_has_lasted_the_grace_without_a_break():
+    monitor = HealthMonitor({'controller': 1.0}, trouble_grace=0.5)
+    monitor.seen('controller', 10.0, 'holding: its inputs are stale')
+    monitor.seen('controller', 10.3, 'holding: its inputs are stale')
+    # reported, but not yet long enough: a step that just started may still clear it
+    assert monitor.faults(10.3, include_trouble=True) == []
+    assert monitor.status(10.3)[0].level == Level.WARN
+    monitor.seen('controller', 10.4, '')  # cleared: the clock starts again
+    monitor.seen('controller', 10.6, 'holding: its inputs are stale')
+    assert monitor.faults(11.0, include_trouble=True) == []
+    monitor.seen('controller', 11.1, 'holding: its inputs are stale')
+    assert monitor.faults(11.1, include_trouble=True) == [
+        'controller: holding: its inputs are stale']
+    assert monitor.faults(11.1, include_trouble=False) == []
+
+
+def test_a_negative_grace_is_refused():
+    with pytest.raises(ValueError, match='trouble_grace'):
+        HealthMonitor({'plant': 1.0}, trouble_grace=-0.1)
