@@ -97,27 +97,38 @@ def _time(function, runs: int) -> list[float]:
     return samples
 
 
+def measure(runs: int, report=print) -> list[dict]:
+    """Time every case; return ``{'case', 'median_ms', 'p99_ms', 'runs'}`` per case.
+
+    Solves and joint-space plans run ``runs`` times, Cartesian plans a tenth as often (at
+    least 10). ``report`` receives one line per case (None: silent).
+    """
+    import numpy as np
+
+    results = []
+    if report:
+        report(f'{"case":<72} {"median":>9} {"p99":>9} {"runs":>5}')
+    for name, function in _cases().items():
+        count = runs if name.startswith('solve') or 'joint' in name else max(10, runs // 10)
+        samples = np.array(_time(function, count)) * 1e3
+        median, p99 = float(np.median(samples)), float(np.percentile(samples, 99))
+        results.append({'case': name, 'median_ms': round(median, 4), 'p99_ms': round(p99, 4),
+                        'runs': count})
+        if report:
+            report(f'{name:<72} {median:8.3f}ms {p99:8.3f}ms {count:5d}')
+    return results
+
+
 def main() -> int:
     """Time every case, print the table, write the JSON."""
     walker_env.reexec_in_environment(os.path.abspath(__file__), sys.argv[1:], quiet=True)
-    import numpy as np
-
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--runs', type=int, default=300,
                         help='runs per solve case (plans of Cartesian types get a tenth)')
     parser.add_argument('--out', type=Path, default=REPO / 'benchmarks' / 'results'
                         / 'planner.json')
     args = parser.parse_args()
-    results = []
-    print(f'{"case":<72} {"median":>9} {"p99":>9} {"runs":>5}')
-    for name, function in _cases().items():
-        runs = args.runs if name.startswith('solve') or 'joint' in name else \
-            max(10, args.runs // 10)
-        samples = np.array(_time(function, runs)) * 1e3
-        median, p99 = float(np.median(samples)), float(np.percentile(samples, 99))
-        results.append({'case': name, 'median_ms': round(median, 4), 'p99_ms': round(p99, 4),
-                        'runs': runs})
-        print(f'{name:<72} {median:8.3f}ms {p99:8.3f}ms {runs:5d}')
+    results = measure(args.runs)
     machine = {'cpus': os.cpu_count(), 'load_average': [round(x, 2) for x in os.getloadavg()],
                'python': platform.python_version(), 'machine': platform.machine()}
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -18,5 +18,7 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='Bring the walker node graph up as processes, walk, shut down cleanly.',
     license='Apache-2.0',
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': [
+        'composed_graph = walker_bringup.composition:main',
+    ]},
 )

@@ -66,12 +66,16 @@ def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
                 'signal.signal(signal.SIGTERM, signal.SIG_IGN)\n'
                 'print("ready", flush=True)\n'
                 'time.sleep(60)\n')
-    polite = 'import time\ntry:\n    time.sleep(60)\nexcept KeyboardInterrupt:\n    pass\n'
+    polite = ('import time\ntry:\n    print("ready", flush=True)\n    time.sleep(60)\n'
+              'except KeyboardInterrupt:\n    pass\n')
     group = ProcessGroup(tmp_path, ENV)
     a = group.start(NodeSpec('p', 'e', 'stubborn', '/w', 'f'), python_child(stubborn))
     b = group.start(NodeSpec('p', 'e', 'polite', '/w', 'f'), python_child(polite))
-    time.sleep(0.5)
-    codes = group.stop_all(timeout=1.0)
+    # Signal only once both handle signals as they mean to (start-up is slow on a loaded machine)
+    deadline = time.monotonic() + 30.0
+    while not all('ready' in p.log_tail() for p in (a, b)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    codes = group.stop_all(timeout=2.0)
     assert not a.alive and not b.alive
     assert codes['polite'] == 0
     assert codes['stubborn'] == -9

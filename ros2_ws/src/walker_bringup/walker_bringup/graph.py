@@ -12,7 +12,8 @@ from pathlib import Path
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
-__all__ = ['NodeSpec', 'walker_graph', 'executable_path', 'controller_node_name',
+__all__ = ['NodeSpec', 'StartStance', 'walker_graph', 'walker_namespace', 'start_stances',
+           'several_walkers', 'walker_targets', 'executable_path', 'controller_node_name',
            'RECORDED_TOPICS']
 
 #: What a walk's bag holds (relative to the robot's namespace): everything the walk report
@@ -42,6 +43,8 @@ class NodeSpec:
         The parameter file, passed with ``--params-file``.
     parameters : tuple of (str, str)
         Extra ``-p name:=value`` overrides, values already in ROS YAML syntax.
+    remaps : tuple of (str, str)
+        Extra ``-r from:=to`` remappings (e.g. ``/clock`` for one walker among several).
     """
 
     package: str
@@ -50,20 +53,51 @@ class NodeSpec:
     namespace: str
     params_file: str
     parameters: tuple[tuple[str, str], ...] = ()
+    remaps: tuple[tuple[str, str], ...] = ()
 
     @property
     def full_name(self) -> str:
         """Fully qualified node name, e.g. ``/walker/plant``."""
         return f'{self.namespace.rstrip("/")}/{self.name}'
 
-    def command(self, executable: str | None = None) -> list[str]:
-        """Command line of the process; ``executable`` overrides the installed path."""
-        args = [executable or str(executable_path(self.package, self.executable)),
-                '--ros-args', '-r', f'__node:={self.name}', '-r', f'__ns:={self.namespace}',
-                '--params-file', self.params_file]
+    def ros_arguments(self) -> list[str]:
+        """Return the node's ``--ros-args ...`` arguments.
+
+        What its process gets after the executable, and what the composed graph gives the
+        node (``Node(cli_args=...)``).
+        """
+        args = ['--ros-args', '-r', f'__node:={self.name}', '-r', f'__ns:={self.namespace}']
+        for source, target in self.remaps:
+            args += ['-r', f'{source}:={target}']
+        args += ['--params-file', self.params_file]
         for name, value in self.parameters:
             args += ['-p', f'{name}:={value}']
         return args
+
+    def command(self, executable: str | None = None) -> list[str]:
+        """Command line of the process; ``executable`` overrides the installed path."""
+        return [executable or str(executable_path(self.package, self.executable)),
+                *self.ros_arguments()]
+
+
+@dataclasses.dataclass(frozen=True)
+class StartStance:
+    """Where a walker's plant starts: both grippers screwed into neighbouring nodes.
+
+    The plant's ``sim.start.base_gripper``, ``sim.start.base_node`` and
+    ``sim.start.other_node``; the other gripper starts attached.
+    """
+
+    base_gripper: str
+    base_node: str
+    other_node: str
+
+    def parameters(self) -> tuple[tuple[str, str], ...]:
+        """Return the plant's parameter overrides for this start."""
+        return (('sim.start.base_gripper', self.base_gripper),
+                ('sim.start.base_node', self.base_node),
+                ('sim.start.other_node', self.other_node),
+                ('sim.start.other_attached', 'true'), ('sim.start.other_height', '0.0'))
 
 
 def executable_path(package: str, executable: str) -> Path:
@@ -82,8 +116,17 @@ def controller_node_name(joint_name: str) -> str:
     return 'controller_' + joint_name.removesuffix('_joint')
 
 
+def walker_namespace(index: int) -> str:
+    """Namespace of the walker number ``index`` (1-based): ``/walker``, ``/walker_2``, ..."""
+    if isinstance(index, bool) or not isinstance(index, int) or index < 1:
+        raise ValueError(f'walker index must be an integer from 1, got {index!r}')
+    return '/walker' if index == 1 else f'/walker_{index}'
+
+
 def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: bool = False,
-                 record: bool = False, bag_path: str | Path | None = None) -> list[NodeSpec]:
+                 record: bool = False, bag_path: str | Path | None = None,
+                 start: StartStance | None = None, clock_topic: str | None = None,
+                 parameters: tuple[tuple[str, str], ...] = ()) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, five controllers, planner, supervisor.
 
     Parameters
@@ -99,9 +142,19 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         Also start the rosbag2 recorder, first, so it sees every topic from its start.
     bag_path : str or Path, optional
         Output directory of the bag (the recorder's default when omitted).
+    start : StartStance, optional
+        Where the plant starts (the parameter file's ``sim.start.*`` when omitted).
+    clock_topic : str, optional
+        Remap ``/clock`` to this topic in every node of the graph: each walker of several has
+        a plant, and so a simulated clock, of its own.
+    parameters : tuple of (str, str)
+        Overrides given to every node, after its own (e.g. ``('timing.control_rate',
+        '1000.0')``); values in ROS YAML syntax.
     """
     params_file = str(params_file)
+    parameters = tuple(parameters)
     common = (('use_sim_time', 'true' if sim_time else 'false'),)
+    remaps = (('/clock', clock_topic),) if clock_topic else ()
     nodes = []
     if record:
         bag = Path(bag_path) if bag_path else None
@@ -110,17 +163,122 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         topics = '[' + ', '.join(f"'{t}'" for t in RECORDED_TOPICS) + ']'
         extra += (('recorder.topics', topics),)
         nodes.append(NodeSpec('walker_bag', 'recorder_node', 'recorder', namespace,
-                              params_file, common + extra))
+                              params_file, common + extra + parameters, remaps))
+    plant = common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)
+    if start is not None:
+        plant += start.parameters()
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
-                          common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)))
+                          plant + parameters, remaps))
     for joint in PHYSICAL_JOINT_NAMES:
         # The controllers run on the plant's state stream and its stamps (watchdogs on the
         # steady clock): use_sim_time would only add a /clock subscription every period.
         nodes.append(NodeSpec('walker_control', 'joint_controller_node',
                               controller_node_name(joint), namespace, params_file,
-                              (('joint_name', joint),)))
+                              (('joint_name', joint),) + parameters, remaps))
     nodes.append(NodeSpec('walker_planner', 'planner_node', 'planner', namespace, params_file,
-                          common))
+                          common + parameters, remaps))
     nodes.append(NodeSpec('walker_supervisor', 'supervisor_node', 'supervisor', namespace,
-                          params_file, common))
+                          params_file, common + parameters, remaps))
     return nodes
+
+
+def start_stances(params_file: str | Path, count: int) -> list[StartStance]:
+    """Distinct start stances for ``count`` walkers on the truss of a parameter file.
+
+    The first is the file's own ``sim.start.*``; the others are the same pair of neighbouring
+    nodes moved to other rows (and then by two columns at a time), so that no two walkers
+    start on a common node. The walkers' plants are separate physics worlds: walkers on one
+    truss layout do not collide, however close they come.
+
+    Raises
+    ------
+    ValueError
+        If ``count`` is not a positive integer, the file's start is not two neighbouring
+        nodes, or the truss has too few nodes for ``count`` distinct stances.
+    """
+    from walker_core.parameter_schema import load_parameter_file
+    from walker_core.robot_parameters import load_walker_parameters
+    from walker_core.truss import Truss
+
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise ValueError(f'the number of walkers must be a positive integer, got {count!r}')
+    flat = load_parameter_file(params_file)
+    truss = Truss.from_parameters(load_walker_parameters(params_file))
+    gripper = flat.get('sim.start.base_gripper', 'a')
+    base, other = flat.get('sim.start.base_node'), flat.get('sim.start.other_node')
+    if other not in truss.neighbors(base):
+        raise ValueError(f'sim.start.base_node {base!r} and other_node {other!r} are not '
+                         'neighbouring truss nodes')
+    (bc, br), (oc, orow) = truss.index(base), truss.index(other)
+    shifts = [(dc, dr) for dc in sorted(range(-truss.columns + 1, truss.columns),
+                                        key=lambda c: (abs(c), c < 0)) if dc % 2 == 0
+              for dr in [(r - br) for r in (*range(br, truss.rows), *range(br))]]
+    stances: list[StartStance] = []
+    used: set[str] = set()
+    for dc, dr in shifts:
+        nodes = ((bc + dc, br + dr), (oc + dc, orow + dr))
+        if not all(0 <= c < truss.columns and 0 <= r < truss.rows for c, r in nodes):
+            continue
+        names = [f'n{c}_{r}' for c, r in nodes]
+        if used.intersection(names):
+            continue
+        used.update(names)
+        stances.append(StartStance(gripper, *names))
+        if len(stances) == count:
+            return stances
+    raise ValueError(f'the {truss.columns} x {truss.rows} truss has room for '
+                     f'{len(stances)} walkers starting on distinct nodes, not {count}')
+
+
+def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
+                    record: bool = False, bag_dir: str | Path | None = None,
+                    parameters: tuple[tuple[str, str], ...] = ()
+                    ) -> list[tuple[str, StartStance, list[NodeSpec]]]:
+    """List the graphs of ``count`` walkers on one truss: ``(namespace, start, nodes)`` each.
+
+    Walker ``i`` runs in the namespace :func:`walker_namespace` ``(i)`` from its own start
+    (:func:`start_stances`). Each has its own plant, so in sim time each has its own clock:
+    ``/clock`` is remapped into the walker's namespace (``/walker_2/clock``), except for the
+    first walker, whose graph is exactly the single walker's. With ``record``, each walker's
+    recorder writes ``<bag_dir>/bag`` (the first) or ``<bag_dir>/bag_walker_<i>``;
+    ``parameters`` go to every node (see :func:`walker_graph`).
+    """
+    graphs = []
+    for index, start in enumerate(start_stances(params_file, count), start=1):
+        namespace = walker_namespace(index)
+        clock = f'{namespace}/clock' if index > 1 else None
+        bag = None
+        if record and bag_dir is not None:
+            bag = Path(bag_dir) / ('bag' if index == 1 else f'bag_{namespace.strip("/")}')
+        graphs.append((namespace, start, walker_graph(
+            params_file, namespace, sim_time, record=record, bag_path=bag,
+            start=start if index > 1 else None, clock_topic=clock, parameters=parameters)))
+    return graphs
+
+
+def walker_targets(params_file: str | Path, target: str, stances: list[StartStance]
+                   ) -> list[str]:
+    """Return the node each walker walks to: ``target`` moved as its start is moved.
+
+    The first walker walks to ``target``; walker ``i`` to the node as far from its start as
+    ``target`` is from the first walker's start, so that every walker walks the same route on
+    its own part of the truss; where that node is off the truss, to ``target`` itself.
+
+    Raises
+    ------
+    walker_core.truss.UnknownNodeError
+        If ``target`` is not a node of the truss.
+    """
+    from walker_core.robot_parameters import load_walker_parameters
+    from walker_core.truss import Truss
+
+    truss = Truss.from_parameters(load_walker_parameters(params_file))
+    column, row = truss.index(target)
+    first_column, first_row = truss.index(stances[0].base_node)
+    targets = []
+    for stance in stances:
+        base_column, base_row = truss.index(stance.base_node)
+        moved = (column + base_column - first_column, row + base_row - first_row)
+        inside = 0 <= moved[0] < truss.columns and 0 <= moved[1] < truss.rows
+        targets.append(f'n{moved[0]}_{moved[1]}' if inside else target)
+    return targets

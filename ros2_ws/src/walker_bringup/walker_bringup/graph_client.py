@@ -22,6 +22,8 @@ from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
+from walker_core.spinning import TopicSampler
+
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
            'init_context']
 
@@ -79,12 +81,15 @@ class GraphClient:
         self.phase: StepPhase | None = None
         self.grippers: GripperStates | None = None
         self.joint_stamps: list[int] = []  # [ns] stamps of the last joint states received
+        # The 500 Hz joint states are only looked at to see the loop closed: sampled on demand
+        # (a callback per message would cost this process a good part of a core).
+        self._sampler = TopicSampler('walker_graph_client_sampler', namespace, context)
+        self._joint_states = self._sampler.subscribe(JointState, 'joint_states',
+                                                     qos_profile_sensor_data)
         self.node.create_subscription(StepReport, 'step_reports', self.reports.append, _REPORTS)
         self.node.create_subscription(StepPhase, 'phase', self._on_phase, _LATCHED)
         self.node.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
                                       _LATCHED)
-        self.node.create_subscription(JointState, 'joint_states', self._on_joint_states,
-                                      qos_profile_sensor_data)
 
     def _on_phase(self, msg: StepPhase) -> None:
         self.phase = msg
@@ -92,13 +97,12 @@ class GraphClient:
     def _on_grippers(self, msg: GripperStates) -> None:
         self.grippers = msg
 
-    def _on_joint_states(self, msg: JointState) -> None:
-        self.joint_stamps = (self.joint_stamps + [msg.header.stamp.sec * 10**9
-                                                  + msg.header.stamp.nanosec])[-10:]
-
     @property
     def plant_stepping(self) -> bool:
         """True once joint states arrive with advancing stamps (the control loop is closed)."""
+        taken = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
+                 for m in self._sampler.take(self._joint_states)]
+        self.joint_stamps = (self.joint_stamps + taken)[-10:]
         stamps = self.joint_stamps
         return len(stamps) >= 2 and stamps[-1] > stamps[0]
 
@@ -106,6 +110,7 @@ class GraphClient:
         """Destroy the client node."""
         self.executor.remove_node(self.node)
         self.node.destroy_node()
+        self._sampler.destroy()
 
     # ------------------------------------------------------------------ waiting
     def spin_for(self, seconds: float) -> None:

@@ -1,27 +1,37 @@
 """The main job: bring the graph up, walk to a target node, record, summarise, shut down, report.
 
-Every node runs as a separate process (:mod:`walker_bringup.processes`); the graph counts as up
-when every node is in the ROS graph and every server answers (not after a sleep). A child that
-dies is reported at once with the end of its log, the walk is stopped safely (the supervisor is
-told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does the same.
-Nothing is left running: each child is interrupted, then terminated, then killed.
+Every node runs as a separate process (:mod:`walker_bringup.processes`), or, with
+``--composed``, the whole graph runs in one process (:mod:`walker_bringup.composition`) under
+the same supervision. With ``--walkers N``, N graphs run side by side in the namespaces
+``/walker``, ``/walker_2``, ..., each from its own start on the same truss layout and each
+walking the same route moved with its start (their plants are separate physics worlds: they do
+not collide). A graph
+counts as up when every node is in the ROS graph and every server answers (not after a sleep).
+A child that dies is reported at once with the end of its log, the walk is stopped safely (the
+supervisor is told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does
+the same. Nothing is left running: each child is interrupted, then terminated, then killed.
 
 Once the graph is down (and with it the recorder, which closes the bag), the walk report is
 made from the bag (:mod:`walker_report`) into ``<out>/report``, unless ``--no-report``; it is
-made after a failed walk too, not after Ctrl-C.
+made after a failed walk too, not after Ctrl-C. With several walkers, the report is the first
+walker's (its bag is ``<out>/bag``; the others' bags are beside it).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime
 import os
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
-from walker_bringup.graph import walker_graph
+from walker_bringup.composition import composed_command
+from walker_bringup.graph import (
+    NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
     GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.processes import ProcessGroup
@@ -67,7 +77,24 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='bring the graph up and keep it running, without walking, until '
                              'Ctrl-C: for an operator with walkerctl or the ros2 tools')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
+    parser.add_argument('--composed', action='store_true',
+                        help='run each graph in one process (composition) instead of one '
+                             'process per node')
+    parser.add_argument('--walkers', type=_walker_count, default=1, metavar='N',
+                        help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
+                             'each from its own start, walking the same route moved with it '
+                             '(default: 1)')
     return parser.parse_args(argv)
+
+
+def _walker_count(text: str) -> int:
+    try:
+        count = int(text)
+    except ValueError:
+        count = 0
+    if count < 1:
+        raise argparse.ArgumentTypeError(f'expected a positive number of walkers, got {text!r}')
+    return count
 
 
 class _Progress:
@@ -106,8 +133,68 @@ class _Progress:
             print(text, flush=True)
 
 
+@dataclasses.dataclass
+class _Walker:
+    """One walker's graph in a run: its nodes, its processes, its client, its outcome."""
+
+    namespace: str
+    start: StartStance | None
+    nodes: list[NodeSpec]
+    group: ProcessGroup
+    target: str = ''
+    client: GraphClient | None = None
+    code: int = 1
+
+    @property
+    def label(self) -> str:
+        return self.namespace.strip('/')
+
+
+def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Walker]:
+    """Each walker's graph and process group (nothing started yet).
+
+    Raises
+    ------
+    ValueError
+        If the truss has no room for that many walkers, or the target is not a node.
+    """
+    if args.walkers == 1:
+        nodes = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
+                             record=args.record, bag_path=out / 'bag')
+        return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
+                        args.target)]
+    graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out)
+    targets = walker_targets(params_file, args.target, [start for _, start, _ in graphs])
+    walkers = []
+    for index, ((namespace, start, nodes), target) in enumerate(zip(graphs, targets,
+                                                                     strict=True)):
+        logs = out / 'logs' if index == 0 else out / 'logs' / namespace.strip('/')
+        walkers.append(_Walker(namespace, start if index else None, nodes,
+                               ProcessGroup(logs, env), target))
+    return walkers
+
+
+def _launch(walker: _Walker, args, params_file: Path) -> None:
+    """Start a walker's graph: one process per node, or one composed process."""
+    if not args.composed:
+        for spec in walker.nodes:
+            walker.group.start(spec)
+        return
+    plant = next(n for n in walker.nodes if n.executable == 'plant_node')
+    recorder = next((n for n in walker.nodes if n.executable == 'recorder_node'), None)
+    bag = None
+    if recorder is not None:
+        params = dict(recorder.parameters)
+        bag = Path(params['recorder.directory']) / params['recorder.bag_name']
+    command = composed_command(params_file, walker.namespace, args.sim_time,
+                               recorder is not None, bag, walker.start,
+                               dict(plant.remaps).get('/clock'))
+    walker.group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', walker.namespace,
+                                str(params_file)), command)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the main job; return the exit code (0 when the walk reached its target)."""
+    """Run the main job; return the exit code (0 when every walk reached its target)."""
     args = parse_arguments(argv)
     from walker_core.robot_parameters import default_parameter_file
 
@@ -118,12 +205,28 @@ def main(argv: list[str] | None = None) -> int:
     progress = _Progress(args.quiet)
     env = dict(os.environ)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    graph = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
-                         record=args.record, bag_path=out / 'bag')
+    if args.walkers > 1 and args.namespace != '/walker':
+        progress.say('[walker] error: --walkers names the namespaces itself (/walker, '
+                     '/walker_2, ...): leave --namespace out')
+        return 2
+    if args.walkers > 1 and args.serve:
+        progress.say('[walker] error: --serve keeps one walker up for walkerctl: leave --walkers '
+                     'out')
+        return 2
+    try:
+        walkers = _describe_walkers(args, params_file, out, env)
+    except ValueError as error:
+        progress.say(f'[walker] error: {error}')
+        return 2
+    count = sum(len(w.nodes) for w in walkers)
     progress.say(f'[walker] output in {out}')
-    progress.say(f'[walker] starting {len(graph)} node processes '
-                 f'({"sim time" if args.sim_time else "real time"}): '
-                 + ', '.join(n.name for n in graph))
+    progress.say(
+        f'[walker] starting {count} nodes '
+        + (f'in {len(walkers)} composed process{"es" if len(walkers) > 1 else ""}'
+           if args.composed else 'as separate processes')
+        + f' ({"sim time" if args.sim_time else "real time"}'
+        + (f', {len(walkers)} walkers' if len(walkers) > 1 else '') + '): '
+        + ', '.join(n.name for n in walkers[0].nodes))
 
     interrupted = {'signal': None}
 
@@ -131,53 +234,68 @@ def main(argv: list[str] | None = None) -> int:
         interrupted['signal'] = signum
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    group = ProcessGroup(out / 'logs', env)
-    context = client = None
+    context = None
     deaths: list = []
+    lock = threading.Lock()
 
     def should_stop() -> bool:
-        deaths.extend(group.poll_deaths())
+        with lock:
+            for walker in walkers:
+                deaths.extend(walker.group.poll_deaths())
         return bool(deaths) or interrupted['signal'] is not None
 
     code = 1
     try:
-        for spec in graph:
-            group.start(spec)
+        for walker in walkers:
+            _launch(walker, args, params_file)
         context = init_context()
-        client = GraphClient(args.namespace, context)
         started = time.monotonic()
-        client.wait_until_ready(
-            [n.full_name for n in graph], args.startup_timeout,
-            progress=lambda r: progress.update(
-                f'[walker] bringing the graph up: {len(r.ready)}/{len(r.ready) + len(r.missing)}'
-                f' ready' + (f' (waiting for {", ".join(r.missing[:3])})' if r.missing else ''),
-                key=len(r.ready)),
-            should_stop=should_stop)
-        progress.say(f'[walker] graph ready in {time.monotonic() - started:.1f} s')
+        for walker in walkers:
+            walker.client = GraphClient(walker.namespace, context)
+            prefix = f'{walker.label}: ' if len(walkers) > 1 else ''
+            walker.client.wait_until_ready(
+                [n.full_name for n in walker.nodes], args.startup_timeout,
+                progress=lambda r, p=prefix: progress.update(
+                    f'[walker] {p}bringing the graph up: {len(r.ready)}/'
+                    f'{len(r.ready) + len(r.missing)} ready'
+                    + (f' (waiting for {", ".join(r.missing[:3])})' if r.missing else ''),
+                    key=(p, len(r.ready))),
+                should_stop=should_stop)
+        progress.say(f'[walker] graph{"s" if len(walkers) > 1 else ""} ready in '
+                     f'{time.monotonic() - started:.1f} s')
         if args.serve:
-            return _serve(client, args, should_stop, deaths)
+            return _serve(walkers[0].client, args, should_stop, deaths)
         if not args.walk:
             return 0
-        code = _walk(client, args, progress, should_stop, out)
+        if len(walkers) == 1:
+            code = _walk(walkers[0].client, args.target, args, progress, should_stop, out)
+        else:
+            code = _walk_several(walkers, args, progress, should_stop, out)
     except GraphNotReadyError as error:
         progress.say(f'[walker] error: {error}')
         code = 3
     except WalkInterruptedError:
-        code = _report_interruption(client, deaths, interrupted['signal'], progress)
+        code = _report_interruption([w.client for w in walkers if w.client is not None],
+                                    deaths, interrupted['signal'], progress)
     finally:
-        if client is not None:
-            client.close()
+        for walker in walkers:
+            if walker.client is not None:
+                walker.client.close()
         if context is not None:
             context.try_shutdown()
         progress.say('[walker] shutting the graph down')
-        codes = group.stop_all()
-        left = [p.spec.name for p in group.processes if p.alive]
+        codes: dict[str, int | None] = {}
+        left = []
+        for walker in walkers:
+            prefix = f'{walker.label}/' if len(walkers) > 1 else ''
+            codes.update({prefix + n: c for n, c in walker.group.stop_all().items()})
+            left += [prefix + p.spec.name for p in walker.group.processes if p.alive]
         if left:
             progress.say(f'[walker] error: still running after shutdown: {", ".join(left)}')
             code = code or 4
         elif not args.quiet:
-            progress.say('[walker] all node processes stopped ('
-                         + ', '.join(f'{n}: {c}' for n, c in codes.items()) + ')')
+            progress.say(f'[walker] all {"processes" if args.composed else "node processes"} '
+                         'stopped (' + ', '.join(f'{n}: {c}' for n, c in codes.items()) + ')')
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     walked = args.walk and code not in (3, 130)  # the graph came up and nobody hit Ctrl-C
@@ -226,46 +344,81 @@ def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) ->
     return True
 
 
-def _walk(client: GraphClient, args, progress: _Progress, should_stop, out: Path) -> int:
+def _walk(client: GraphClient, target: str, args, progress: _Progress, should_stop, out: Path,
+          label: str = '', summary_name: str = 'summary.json') -> int:
     started = time.monotonic()
+    prefix = f'{label}: ' if label else ''
 
     def on_feedback(feedback) -> None:
         progress.update(
-            f'[walker] step {feedback.step_index + 1}/{feedback.step_count} '
+            f'[walker] {prefix}step {feedback.step_index + 1}/{feedback.step_count} '
             f'{feedback.from_node} -> {feedback.to_node}: '
             f'{PHASE_NAMES[feedback.phase] if feedback.phase < len(PHASE_NAMES) else "?"}, '
             f'tip error {feedback.tip_position_error * 1e3:.1f} mm '
-            f'({time.monotonic() - started:.0f} s)', key=(feedback.step_index, feedback.phase))
+            f'({time.monotonic() - started:.0f} s)',
+            key=(label, feedback.step_index, feedback.phase))
 
-    progress.say(f'[walker] walking to {args.target}')
-    status, result = client.walk_to(args.target, args.walk_timeout, on_feedback, should_stop)
+    progress.say(f'[walker] {prefix}walking to {target}')
+    status, result = client.walk_to(target, args.walk_timeout, on_feedback, should_stop)
     client.spin_for(0.5)  # the last step report
     rows = rows_from_reports(client.reports)
-    progress.say('')
-    print(format_table(rows) if rows else '[walker] no step was taken')
-    write_json(rows, out / 'summary.json',
-               {'target': args.target, 'reached': bool(result.success),
-                'message': result.message, 'path': list(result.path),
-                'wall_time': time.monotonic() - started})
-    if result.success:
-        print(f'[walker] reached {args.target} in {result.steps_taken} steps, '
-              f'{result.duration:.1f} s of walking; summary in {out / "summary.json"}')
-        return 0
-    print(f'[walker] the walk to {args.target} did not reach it: {result.message}')
+    with _OUTPUT:
+        progress.say('')
+        if label:
+            print(f'[walker] {label}:')
+        print(format_table(rows) if rows else '[walker] no step was taken')
+        write_json(rows, out / summary_name,
+                   {'target': target, 'reached': bool(result.success),
+                    'message': result.message, 'path': list(result.path),
+                    'wall_time': time.monotonic() - started,
+                    **({'namespace': client.namespace} if label else {})})
+        if result.success:
+            print(f'[walker] {prefix}reached {target} in {result.steps_taken} steps, '
+                  f'{result.duration:.1f} s of walking; summary in {out / summary_name}')
+            return 0
+        print(f'[walker] {prefix}the walk to {target} did not reach it: {result.message}')
     return 1
 
 
-def _report_interruption(client, deaths, signum, progress: _Progress) -> int:
+_OUTPUT = threading.Lock()
+
+
+def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop,
+                  out: Path) -> int:
+    """Walk every walker to its target at once, one thread each; the first error stops all."""
+    errors: list[BaseException] = []
+
+    def walk(walker: _Walker) -> None:
+        name = 'summary.json' if walker.namespace == '/walker' else \
+            f'summary_{walker.label}.json'
+        try:
+            walker.code = _walk(walker.client, walker.target, args, progress,
+                                lambda: bool(errors) or should_stop(), out, walker.label, name)
+        except BaseException as error:  # re-raised in the main thread
+            errors.append(error)
+
+    threads = [threading.Thread(target=walk, args=(w,), name=w.label) for w in walkers]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    if errors:
+        raise next((e for e in errors if not isinstance(e, WalkInterruptedError)), errors[0])
+    return max(w.code for w in walkers)
+
+
+def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
     for process in deaths:
         progress.say(f'[walker] error: node {process.spec.full_name} died '
                      f'(exit code {process.popen.returncode}); the end of its log:\n'
                      f'{process.log_tail()}')
     if signum is not None:
         progress.say(f'[walker] interrupted ({signal.Signals(signum).name}): stopping safely')
-    if client is not None:
+    for client in clients:
         try:
             response = client.call_trigger('hold', timeout=2.0)
-            progress.say(f'[walker] supervisor: {response.message}')
+            progress.say(f'[walker] supervisor {client.namespace}: {response.message}')
         except Exception as error:  # reporting only: shutting down anyway
-            progress.say(f'[walker] could not ask the supervisor to hold: {error}')
+            progress.say(f'[walker] could not ask the supervisor {client.namespace} to hold: '
+                         f'{error}')
     return 130 if signum is not None and not deaths else 5

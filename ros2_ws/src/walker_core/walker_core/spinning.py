@@ -21,7 +21,7 @@ import os
 from collections.abc import Callable, Iterable
 
 import rclpy
-from rclpy.executors import Executor, SingleThreadedExecutor
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
 __all__ = ['make_executor', 'spin_nodes', 'TopicSampler', 'EXECUTOR_VARIABLE']
@@ -47,6 +47,9 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
                context=None) -> None:
     """Spin nodes until the context shuts down (SIGINT, SIGTERM) or ``stop()`` is true.
 
+    A shutdown while the executor waits ends the spinning as a shutdown between two waits
+    does (no ``ExternalShutdownException`` escapes, e.g. from a helper thread).
+
     Parameters
     ----------
     nodes : Node or iterable of Node
@@ -63,6 +66,8 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
     try:
         while rclpy.ok(context=context) and not (stop is not None and stop()):
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
+    except ExternalShutdownException:
+        pass
     finally:
         for node in nodes:
             executor.remove_node(node)

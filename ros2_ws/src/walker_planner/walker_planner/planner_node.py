@@ -87,10 +87,13 @@ class PlannerNode(Node):
     Streaming runs on a helper node (``<name>_stream``) spun in a thread of its own, so that
     planning, which takes tens to hundreds of milliseconds for a long Cartesian path, never
     stalls the setpoints the controllers expect every period.
+
+    Keyword arguments are passed to ``Node`` (``cli_args``, ``context``, ...), so that the node
+    can also be built in a composed process (``walker_bringup.composition``).
     """
 
-    def __init__(self) -> None:
-        super().__init__('planner')
+    def __init__(self, **kwargs) -> None:
+        super().__init__('planner', **kwargs)
         self._robot = declare_section(self, WalkerParameters)
         self._planner = declare_section(self, PlannerParameters, PREFIX)
         guard_section_updates(self, PlannerParameters, PREFIX, lambda: self._planner,

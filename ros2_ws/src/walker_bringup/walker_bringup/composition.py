@@ -1,0 +1,311 @@
+"""The walker's graph in one process: every node built from its class, spun by executors.
+
+This is the rclpy counterpart of a component container: the nodes of :func:`walker_graph`
+are instantiated in one process, each with exactly the ``--ros-args`` its own process would
+get (``Node(cli_args=..., use_global_arguments=False)``), so names, namespaces, remappings and
+parameters are the same; only the process boundary goes. ``ros2 run walker_bringup
+composed_graph --sim-time`` runs it; ``run_all.py --composed`` starts it under the same
+supervision as the separate processes.
+
+Executors: the plant, the five controllers and the planner share one executor, the one
+:func:`walker_core.spinning.make_executor` selects (the events executor by default), in the
+main thread. The supervisor keeps the default ``SingleThreadedExecutor``, as in its own
+process (its action execution awaits futures of service and action calls, which failed inside
+the events executor), and so does the recorder (it subscribes to topics as they appear, which
+the events executor does not pick up after a node was added); those two share a second thread.
+The planner streams from its own thread, as in its process. All threads share one Python
+interpreter: the whole graph gets at most one core of Python, where the separate processes
+can use every core; what it saves is the process boundary (no inter-process transport, no
+wake-up of another process per message).
+
+Shutdown: SIGINT or SIGTERM stops the spinning, the recorder takes what it has received and
+closes its bag, then every node is destroyed (the planner last: destroying it shuts the
+context down).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import importlib
+import signal
+import sys
+import threading
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from walker_bringup.graph import NodeSpec, StartStance, executable_path, walker_graph
+
+__all__ = ['Component', 'COMPONENTS', 'CompositionError', 'ComposedGraph', 'component_of',
+           'composed_command', 'parse_arguments', 'graph_from_arguments', 'main']
+
+_SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
+
+
+@dataclasses.dataclass(frozen=True)
+class Component:
+    """How one executable of the graph is built as a node in the composed process.
+
+    Attributes
+    ----------
+    module, class_name : str
+        Where the node class is (it takes ``Node``'s keyword arguments).
+    default_executor : bool
+        The node needs rclpy's default ``SingleThreadedExecutor`` (see the module notes).
+    start : str
+        Name of a method to call once the node is built ('' for none), as its ``main()`` does.
+    """
+
+    module: str
+    class_name: str
+    default_executor: bool = False
+    start: str = ''
+
+    def node_class(self) -> type:
+        """Import and return the node class."""
+        return getattr(importlib.import_module(self.module), self.class_name)
+
+
+#: The node class of every executable of :func:`walker_graph`, by (package, executable).
+COMPONENTS: dict[tuple[str, str], Component] = {
+    ('walker_sim', 'plant_node'): Component('walker_sim.plant_node', 'PlantNode'),
+    ('walker_control', 'joint_controller_node'): Component(
+        'walker_control.joint_controller_node', 'JointControllerNode'),
+    ('walker_planner', 'planner_node'): Component(
+        'walker_planner.planner_node', 'PlannerNode', start='start_streaming'),
+    ('walker_supervisor', 'supervisor_node'): Component(
+        'walker_supervisor.supervisor_node', 'SupervisorNode', default_executor=True),
+    ('walker_bag', 'recorder_node'): Component(
+        'walker_bag.recorder_node', 'RecorderNode', default_executor=True),
+}
+
+
+class CompositionError(RuntimeError):
+    """A node of the graph could not be built; the message names it and says why."""
+
+
+def component_of(spec: NodeSpec) -> Component:
+    """Return the component of a node spec.
+
+    Raises
+    ------
+    CompositionError
+        If the executable is not one the composed graph knows.
+    """
+    try:
+        return COMPONENTS[(spec.package, spec.executable)]
+    except KeyError:
+        known = ', '.join(f'{p}/{e}' for p, e in COMPONENTS)
+        raise CompositionError(f'{spec.full_name}: {spec.package}/{spec.executable} cannot be '
+                               f'composed (known: {known})') from None
+
+
+class ComposedGraph:
+    """The nodes of a graph, built in this process in start order.
+
+    Parameters
+    ----------
+    specs : sequence of NodeSpec
+        The graph, as :func:`walker_graph` lists it.
+    context : rclpy.context.Context
+        An initialised context all nodes share.
+
+    Raises
+    ------
+    CompositionError
+        If a node refuses to start (invalid parameters, a bag that cannot be created, ...);
+        the nodes already built are destroyed first.
+    """
+
+    def __init__(self, specs: Sequence[NodeSpec], context) -> None:
+        self.context = context
+        self.nodes: list[tuple[NodeSpec, Component, object]] = []
+        components = [component_of(spec) for spec in specs]
+        try:
+            for spec, component in zip(specs, components, strict=True):
+                try:
+                    node = component.node_class()(cli_args=spec.ros_arguments(),
+                                                  use_global_arguments=False, context=context)
+                except Exception as error:  # any refusal: report which node and why
+                    raise CompositionError(f'{spec.full_name} refused to start: {error}') \
+                        from error
+                self.nodes.append((spec, component, node))
+                if component.start:
+                    getattr(node, component.start)()
+        except BaseException:
+            self.destroy()
+            raise
+
+    def node(self, name: str):
+        """Return the node built from the spec named ``name`` (e.g. ``'plant'``)."""
+        for spec, _, node in self.nodes:
+            if spec.name == name:
+                return node
+        raise KeyError(name)
+
+    def spin(self, stop: Callable[[], bool]) -> None:
+        """Spin every node until ``stop()`` is true or the context shuts down."""
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        from walker_core.spinning import make_executor
+
+        fast = make_executor(self.context)
+        default = SingleThreadedExecutor(context=self.context)
+        for _, component, node in self.nodes:
+            (default if component.default_executor else fast).add_node(node)
+        self._default_executor = default
+
+        def running() -> bool:
+            return rclpy.ok(context=self.context) and not stop()
+
+        def spin_default() -> None:
+            while running():
+                default.spin_once(timeout_sec=_SPIN_TIMEOUT)
+
+        thread = threading.Thread(target=spin_default, name='default-executor', daemon=True)
+        thread.start()
+        try:
+            while running():
+                fast.spin_once(timeout_sec=_SPIN_TIMEOUT)
+        finally:
+            thread.join(timeout=5.0)
+            for _, component, node in self.nodes:
+                if not component.default_executor:
+                    fast.remove_node(node)
+            fast.shutdown(timeout_sec=0.0)
+
+    def destroy(self) -> None:
+        """Close the recorder's bag (after taking what it received), destroy every node."""
+        recorder = [node for spec, _, node in self.nodes if spec.executable == 'recorder_node']
+        executor = getattr(self, '_default_executor', None)
+        for node in recorder:
+            if executor is not None:
+                try:
+                    node.drain(executor)
+                except Exception as error:  # the bag is closed below in any case
+                    print(f'[composed_graph] recorder drain failed: {error}', file=sys.stderr)
+            node.close_bag()
+        if executor is not None:
+            for _, component, node in self.nodes:
+                if component.default_executor:
+                    executor.remove_node(node)
+            executor.shutdown(timeout_sec=0.0)
+            self._default_executor = None
+        # The planner shuts the context down when destroyed (to stop its stream thread).
+        last = [item for item in self.nodes if item[0].executable == 'planner_node']
+        for spec, _, node in [i for i in reversed(self.nodes) if i not in last] + last:
+            try:
+                node.destroy_node()
+            except Exception as error:  # keep destroying the others
+                print(f'[composed_graph] destroying {spec.full_name}: {error}', file=sys.stderr)
+        self.nodes = []
+
+
+def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """Command-line options of ``composed_graph`` (those of :func:`walker_graph`)."""
+    parser = argparse.ArgumentParser(
+        prog='composed_graph',
+        description="Run the walker's whole node graph in one process (composition).")
+    parser.add_argument('--params-file', default=None,
+                        help='parameter file (default: the installed walker.yaml)')
+    parser.add_argument('--namespace', default='/walker', help='robot namespace')
+    parser.add_argument('--sim-time', action='store_true',
+                        help='lock-stepped on the plant clock (default: real time)')
+    parser.add_argument('--record', action='store_true', help='also run the recorder')
+    parser.add_argument('--bag-path', default=None, help="the recorder's bag directory")
+    parser.add_argument('--start', default=None, metavar='GRIPPER,BASE_NODE,OTHER_NODE',
+                        help="start stance of the plant (default: the parameter file's)")
+    parser.add_argument('--clock-topic', default=None,
+                        help='remap /clock to this topic in every node')
+    parser.add_argument('-p', '--param', action='append', default=[], metavar='NAME:=VALUE',
+                        help='parameter override for every node (repeatable)')
+    args = parser.parse_args(argv)
+    parameters = []
+    for text in args.param:
+        name, separator, value = text.partition(':=')
+        if not separator or not name or not value:
+            parser.error(f'--param {text!r}: expected NAME:=VALUE, e.g. '
+                         'timing.control_rate:=1000.0')
+        parameters.append((name, value))
+    args.param = tuple(parameters)
+    if args.start is not None:
+        parts = args.start.split(',')
+        if len(parts) != 3 or not all(parts):
+            parser.error(f'--start {args.start!r}: expected GRIPPER,BASE_NODE,OTHER_NODE, '
+                         'e.g. a,n1_2,n2_2')
+        args.start = StartStance(*parts)
+    if args.bag_path is not None and not args.record:
+        parser.error('--bag-path needs --record')
+    return args
+
+
+def graph_from_arguments(args: argparse.Namespace) -> list[NodeSpec]:
+    """Return the graph the options describe (what the separate processes would run)."""
+    from walker_core.robot_parameters import default_parameter_file
+
+    params_file = Path(args.params_file or default_parameter_file()).resolve()
+    return walker_graph(params_file, args.namespace, sim_time=args.sim_time,
+                        record=args.record, bag_path=args.bag_path, start=args.start,
+                        clock_topic=args.clock_topic, parameters=args.param)
+
+
+def composed_command(params_file: str | Path, namespace: str = '/walker',
+                     sim_time: bool = False, record: bool = False,
+                     bag_path: str | Path | None = None, start: StartStance | None = None,
+                     clock_topic: str | None = None,
+                     parameters: tuple[tuple[str, str], ...] = (),
+                     executable: str | None = None) -> list[str]:
+    """Return the command line of the composed graph with :func:`walker_graph`'s arguments."""
+    command = [executable or str(executable_path('walker_bringup', 'composed_graph')),
+               '--params-file', str(params_file), '--namespace', namespace]
+    if sim_time:
+        command.append('--sim-time')
+    if record:
+        command.append('--record')
+        if bag_path is not None:
+            command += ['--bag-path', str(bag_path)]
+    if start is not None:
+        command += ['--start', f'{start.base_gripper},{start.base_node},{start.other_node}']
+    if clock_topic:
+        command += ['--clock-topic', clock_topic]
+    for name, value in parameters:
+        command += ['--param', f'{name}:={value}']
+    return command
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the composed graph until SIGINT or SIGTERM; exit code 2 when a node refuses."""
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+
+    args = parse_arguments(sys.argv[1:] if argv is None else argv)
+    specs = graph_from_arguments(args)
+    stop = threading.Event()
+
+    def on_signal(signum, frame) -> None:
+        stop.set()
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, on_signal)
+    context = rclpy.context.Context()
+    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+    graph = None
+    code = 0
+    try:
+        graph = ComposedGraph(specs, context)
+        print(f'[composed_graph] {len(graph.nodes)} nodes in one process: '
+              + ', '.join(spec.full_name for spec, _, _ in graph.nodes), flush=True)
+        graph.spin(stop.is_set)
+    except CompositionError as error:
+        print(f'[composed_graph] {error}', file=sys.stderr, flush=True)
+        code = 2
+    finally:
+        if graph is not None:
+            graph.destroy()
+        rclpy.try_shutdown(context=context)
+    return code
+
+
+if __name__ == '__main__':
+    sys.exit(main())
