@@ -66,9 +66,9 @@ _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       history=HistoryPolicy.KEEP_LAST)
 # Every mode command must reach every controller in order (a step's final HOLD and the next
 # step's mode follow each other within milliseconds), so more than the newest is kept.
-_MODES = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                    history=HistoryPolicy.KEEP_LAST)
+_MODE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                       history=HistoryPolicy.KEEP_LAST)
 _REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
@@ -134,7 +134,7 @@ class SupervisorNode(TeleopServer, Node):
         self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
         self._pending_adoption = False
 
-        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODES)
+        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODE_QOS)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
         # The joint states (500 Hz) and the tip pose are sampled at the decision rate, not
