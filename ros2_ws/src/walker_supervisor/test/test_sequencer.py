@@ -292,6 +292,25 @@ def test_resume_mid_step_recovers_to_the_target_and_completes_the_step(phase):
     assert world.sequencer.base_gripper == 'b'
 
 
+def test_a_step_completed_after_resume_has_its_outcome_taken_once():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    assert world.sequencer.take_outcome() is None
+    _hold_during(world, Phase.COARSE)
+    aborted = world.sequencer.take_outcome()
+    assert aborted is not None and not aborted.success and aborted.message == 'a fault'
+    assert world.sequencer.take_outcome() is None
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    assert world.sequencer.take_outcome() is None, 'the step is under way again'
+    while world.sequencer.busy:
+        world.advance()
+    completed = world.sequencer.take_outcome()
+    assert completed is not None and completed.success
+    assert world.sequencer.take_outcome() is None, 'taken once: no walk counts it again'
+    assert world.sequencer.step == step
+
+
 def test_resume_in_the_hole_lifts_out_first():
     world = World()
     _hold_during(world, Phase.EXTRACTION)

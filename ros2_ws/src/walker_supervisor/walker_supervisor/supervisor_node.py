@@ -43,7 +43,7 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler
-from walker_supervisor.core.health import HealthMonitor, Level
+from walker_supervisor.core.health import HealthMonitor, Level, reason_naming_silent_sources
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -119,7 +119,6 @@ class SupervisorNode(Node):
         self._true_insertion_error = math.nan
         self._last_feedback = -math.inf
         self._last_phase: tuple | None = None
-        self._step_in_progress = False
         self._residual_vibration = math.nan
         self._bounded: set[str] = set()
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
@@ -424,6 +423,14 @@ class SupervisorNode(Node):
             self.get_logger().error(reason)
             self._execute(self.sequencer.hold(reason, self._now()))
             self._publish_phase()
+        elif self.sequencer.phase == Phase.SAFE_HOLD:
+            # the hold's first reason may be a consequence (controllers holding on stale
+            # inputs): name the dead source behind it as soon as the watchdog sees it
+            reason = reason_naming_silent_sources(self.sequencer.reason, heard)
+            if reason != self.sequencer.reason:
+                self.get_logger().error(f'in safe hold: {reason}')
+                self._execute(self.sequencer.hold(reason, self._now()))
+                self._publish_phase()
 
     def _publish_diagnostics(self) -> None:
         message = DiagnosticArray()
@@ -472,12 +479,15 @@ class SupervisorNode(Node):
             if now - self._last_feedback >= FEEDBACK_PERIOD:
                 self._publish_feedback(walk)
                 self._last_feedback = now
+        else:
+            self._end_step_outside_walk()
         self._publish_phase()
 
     def _advance_walk(self, walk: Walk, now: float) -> None:
         """Between steps: record the step that ended, then start the next or end the walk."""
-        if self._step_in_progress:
-            self._record_outcome(walk, self.sequencer.outcome)
+        outcome = self.sequencer.take_outcome()
+        if outcome is not None:
+            self._record_outcome(walk, outcome)
         if self.sequencer.phase == Phase.SAFE_HOLD and not walk.failed:
             walk.outcomes.append(StepOutcome(False, self.sequencer.reason, {}, 0.0,
                                              math.nan, 0))
@@ -500,7 +510,6 @@ class SupervisorNode(Node):
                                              {}, 0.0, math.nan, 0))
             self.get_logger().error(walk.outcomes[-1].message)
             return
-        self._step_in_progress = True
         write_step_state(self._state_file, step, frame.heading)
         self._step_bound = 2.0 * self.params.gripper.screw_time
         self._bounded: set[str] = set()
@@ -510,8 +519,25 @@ class SupervisorNode(Node):
                                f'({math.degrees(targets.sweep):+.0f} deg about {step.base_node})')
         self._execute(commands)
 
+    def _end_step_outside_walk(self) -> None:
+        """A step resumed after its walk ended has ended too: log it, forget its file.
+
+        Its outcome is taken here so that the next walk does not count it as its own first
+        step.
+        """
+        outcome = self.sequencer.take_outcome()
+        if outcome is None:
+            return
+        step = self.sequencer.step
+        if outcome.success:
+            clear_step_state(self._state_file)
+            self.get_logger().info(f'step {step.from_node} -> {step.to_node} completed after '
+                                   f'resume in {outcome.duration:.2f} s')
+        else:
+            self.get_logger().error(f'step {step.from_node} -> {step.to_node} failed after '
+                                    f'resume: {outcome.message}')
+
     def _record_outcome(self, walk: Walk, outcome: StepOutcome) -> None:
-        self._step_in_progress = False
         if outcome.success:
             clear_step_state(self._state_file)
         walk.outcomes.append(outcome)
@@ -735,7 +761,6 @@ class SupervisorNode(Node):
             response.success = False
             response.message = str(error)
             return response
-        self._step_in_progress = self.sequencer.busy
         self._execute(commands)
         response.success = True
         response.message = ('resumed: completing the step to '

@@ -206,6 +206,7 @@ class StepSequencer:
         self.stage = ''
         self.reason = ''
         self.outcome: StepOutcome | None = None
+        self._outcome_taken = True
         self._step: PlannedStep | None = None
         self._targets: StepTargets | None = None
         self._theta = np.zeros(5)
@@ -235,6 +236,18 @@ class StepSequencer:
     def targets(self) -> StepTargets | None:
         """The targets of the step under way (or of the last one)."""
         return self._targets
+
+    def take_outcome(self) -> StepOutcome | None:
+        """The outcome of the step that ended since the last call, once; None otherwise.
+
+        A step ends once, however it was started and resumed: taken by the walk it belongs to,
+        or, for a step completed by :meth:`resume` after its walk was aborted, by whoever asks
+        next, so that it is never taken again as the first step of another walk.
+        """
+        if self._outcome_taken or self.outcome is None:
+            return None
+        self._outcome_taken = True
+        return self.outcome
 
     def adopt(self, step: PlannedStep, targets: StepTargets, reason: str) -> None:
         """Take over an interrupted step, in SAFE_HOLD, so that :meth:`resume` completes it.
@@ -536,6 +549,7 @@ class StepSequencer:
         self.base_gripper = self._step.moving_gripper
         self.outcome = StepOutcome(True, '', dict(self._durations), now - self._step_started,
                                    self._insertion_error, self._attempts + 1)
+        self._outcome_taken = False
         return [SetControlMode('hold', self._step.moving_gripper)]
 
     def _abort(self, reason: str, now: float) -> list:
@@ -544,6 +558,7 @@ class StepSequencer:
             self.outcome = StepOutcome(False, reason, dict(self._durations),
                                        now - self._step_started, self._insertion_error,
                                        self._attempts)
+            self._outcome_taken = False
         self.phase, self.reason = Phase.SAFE_HOLD, reason
         commands = [CancelTrajectory()] if self._trajectory_running else []
         self._trajectory_running = False
