@@ -30,8 +30,10 @@ class World:
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
-                 gripper_never=False):
+                 gripper_never=False, jam_seen_first=False):
         self.stance = stance
+        self.jam_seen_first = jam_seen_first  # the jammed state arrives before the answer
+        self.late_answers = []
         self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
         self.now = 0.0
         base, other = TRUSS.position(stance.base_node), TRUSS.position(stance.other_node)
@@ -83,6 +85,10 @@ class World:
         else:
             if self.jams > 0:
                 self.jams -= 1
+                if self.jam_seen_first:
+                    self.grippers[request.gripper] = 'jammed'
+                    self.late_answers.append('jammed 3 mm off')
+                    return
                 self.execute(self.sequencer.gripper_done(False, 'jammed 3 mm off', self.now))
                 return
             self.grippers[request.gripper] = 'screwing'
@@ -113,7 +119,10 @@ class World:
                 self.execute(self.sequencer.trajectory_done(True, '', self.now))
         assert any(state == 'attached' for state in self.grippers.values())
         self.phases.append(self.sequencer.phase)
+        late, self.late_answers = self.late_answers, []  # sent before this tick's states
         self.execute(self.sequencer.tick(self.now, self.theta, velocities, dict(self.grippers)))
+        for message in late:
+            self.execute(self.sequencer.gripper_done(False, message, self.now))
 
 
 def _other(gripper):
@@ -188,6 +197,28 @@ def test_a_jammed_insertion_is_retried():
     lifts = [c for c in world.log
              if isinstance(c, TrajectoryRequest) and c.purpose == 'retry_lift']
     assert len(lifts) == 2
+
+
+@pytest.mark.parametrize('jams, attempts', [(2, 3), (5, 3)])
+def test_a_jam_seen_in_the_gripper_states_before_its_answer_counts_once(jams, attempts):
+    world = World(jams=jams, jam_seen_first=True)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    lifts = [c for c in world.log
+             if isinstance(c, TrajectoryRequest) and c.purpose == 'retry_lift']
+    screw_ins = [c for c in world.log if c == GripperRequest('b', 'screw_in')]
+    assert len(screw_ins) == attempts and len(lifts) == attempts - 1
+    if jams < attempts:
+        assert outcome.success and outcome.insertion_attempts == attempts
+    else:
+        assert not outcome.success and f'jammed {attempts} times' in outcome.message
+        assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.late_answers == []
+
+
+def test_an_answer_that_nobody_waits_for_is_refused():
+    world = World()
+    with pytest.raises(SequencerError, match='unexpected gripper result'):
+        world.sequencer.gripper_done(True, '', 0.0)
 
 
 def test_too_many_jams_abort_to_safe_hold_with_the_base_attached():

@@ -634,12 +634,13 @@ class SupervisorNode(Node):
 
     def _on_gripper_response(self, future) -> None:
         response = future.result()
-        if response is None:
-            commands = self.sequencer.gripper_done(False, 'no response from the plant',
-                                                   self._now())
-        else:
-            commands = self.sequencer.gripper_done(response.success, response.message,
-                                                   self._now())
+        success, message = ((False, 'no response from the plant') if response is None
+                            else (response.success, response.message))
+        try:
+            commands = self.sequencer.gripper_done(success, message, self._now())
+        except SequencerError as error:  # an answer nobody waits for: say so, keep running
+            self.get_logger().error(f'gripper answer ignored: {error}')
+            return
         self._execute(commands)
 
     def _request_trajectory(self, request: TrajectoryRequest) -> None:

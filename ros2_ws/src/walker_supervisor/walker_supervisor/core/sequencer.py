@@ -220,6 +220,7 @@ class StepSequencer:
         self._fine_lines = 0
         self._insertion_error = math.nan
         self._trajectory_running = False
+        self._gripper_answers_due = 0  # gripper commands sent and not answered yet
 
     # ------------------------------------------------------------------ queries
     @property
@@ -303,6 +304,7 @@ class StepSequencer:
         self._enter(Phase.EXTRACTION, now, 'unscrewing')
         self._deadline = math.inf
         self._gripper_deadline = now + self._screw_allowance
+        self._gripper_answers_due += 1
         return [SetControlMode('fine', step.base_gripper),
                 GripperRequest(step.moving_gripper, 'unscrew')]
 
@@ -312,8 +314,16 @@ class StepSequencer:
         ``success`` True means the command was accepted: the gripper is unscrewing or screwing,
         and its reported state (:meth:`tick`) says when it is free or attached. False means it
         was refused, failed, or jammed at once.
+
+        The gripper states and the answer travel separately: when the states have already shown
+        the outcome (a jam, a gripper free) and the step has moved on, or the walker is in safe
+        hold, the late answer changes nothing.
         """
+        answered = self._gripper_answers_due > 0
+        self._gripper_answers_due = max(0, self._gripper_answers_due - 1)
         if self.stage not in ('unscrewing', 'screwing'):
+            if answered:
+                return []
             raise SequencerError(f'unexpected gripper result in phase {self.phase.name} '
                                  f'({self.stage or "no stage"})')
         if success:
@@ -404,6 +414,7 @@ class StepSequencer:
                 self.stage = 'screwing'
                 self._deadline = math.inf
                 self._gripper_deadline = now + self._screw_allowance
+                self._gripper_answers_due += 1
                 return [GripperRequest(self._step.moving_gripper, 'screw_in')]
         return []
 
