@@ -247,6 +247,42 @@ def test_a_stalled_trajectory_times_out_to_safe_hold():
     assert isinstance(world.log[-2], CancelTrajectory)
 
 
+def test_a_trajectory_the_planner_never_answers_times_out_to_safe_hold():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    sequencer = world.sequencer
+    sequencer.start(step, targets, 0.0, dict(world.grippers))
+    sequencer.gripper_done(True, '', 0.0)
+    request = sequencer.tick(0.5, world.theta, np.zeros(5), {'a': 'attached', 'b': 'free'})
+    assert [c.purpose for c in request if isinstance(c, TrajectoryRequest)] == ['extraction']
+    now = 0.5
+    while sequencer.phase != Phase.SAFE_HOLD:  # no trajectory_started, no trajectory_done
+        now += DT
+        assert now < 0.5 + SUPERVISOR.phase_timeout + 1.0, 'the request waits forever'
+        commands = sequencer.tick(now, world.theta, np.zeros(5),
+                                  {'a': 'attached', 'b': 'free'})
+    assert now == pytest.approx(0.5 + SUPERVISOR.phase_timeout, abs=3 * DT)
+    assert 'extraction trajectory did not start' in sequencer.reason
+    assert 'planner' in sequencer.reason
+    assert commands == [CancelTrajectory(), SetControlMode('hold', 'a')]
+
+
+def test_a_hold_while_a_trajectory_is_being_planned_cancels_it():
+    """The plan's answer, arriving after the hold, must not start a motion."""
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    sequencer = world.sequencer
+    sequencer.start(step, targets, 0.0, dict(world.grippers))
+    sequencer.gripper_done(True, '', 0.0)
+    sequencer.tick(0.5, world.theta, np.zeros(5), {'a': 'attached', 'b': 'free'})
+    assert sequencer.hold('hold requested by an operator', 0.6) == [
+        CancelTrajectory(), SetControlMode('hold', 'a')]
+
+
 def test_losing_the_base_during_a_step_aborts():
     world = World()
     step = possible_steps(TRUSS, world.stance)[0]

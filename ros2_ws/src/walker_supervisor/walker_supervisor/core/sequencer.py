@@ -21,7 +21,8 @@ Rules it enforces:
   tried anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
   ``max_insertion_attempts`` times, then the step is aborted to SAFE_HOLD;
-* any failure or a phase that overruns its planned time by ``phase_timeout`` ends in SAFE_HOLD:
+* any failure, a phase that overruns its planned time by ``phase_timeout``, or a trajectory that
+  has not started ``phase_timeout`` after its request (the planner gone) ends in SAFE_HOLD:
   trajectories cancelled, controllers holding, grippers untouched (the base stays attached);
 * :meth:`StepSequencer.resume` leaves SAFE_HOLD: with both grippers attached it returns to IDLE;
   with the moving gripper free it completes the interrupted step from where the arm is (out of
@@ -221,6 +222,8 @@ class StepSequencer:
         self._insertion_error = math.nan
         self._trajectory_running = False
         self._gripper_answers_due = 0  # gripper commands sent and not answered yet
+        self._requested: str | None = None  # purpose of a trajectory requested, not started
+        self._requested_at: float | None = None  # [s] first tick after the request
 
     # ------------------------------------------------------------------ queries
     @property
@@ -350,11 +353,13 @@ class StepSequencer:
     def trajectory_started(self, planned_duration: float, now: float) -> None:
         """Note that the requested trajectory is streaming and should take this long [s]."""
         self._trajectory_running = True
+        self._requested = self._requested_at = None
         self._deadline = now + planned_duration + self.parameters.phase_timeout
 
     def trajectory_done(self, success: bool, message: str, now: float) -> list:
         """Take the end of the streamed trajectory (``success`` False: refused or aborted)."""
         self._trajectory_running = False
+        self._requested = self._requested_at = None
         if self.phase in (Phase.IDLE, Phase.SAFE_HOLD):
             return []
         if not success:
@@ -395,6 +400,13 @@ class StepSequencer:
         if now > self._deadline:
             return self._abort(f'{self.phase.name.lower()} overran its planned time '
                                f'({self.stage})', now)
+        if self._requested is not None:  # planned and streamed by the planner, or not at all
+            if self._requested_at is None:
+                self._requested_at = now
+            elif now - self._requested_at > self.parameters.phase_timeout:
+                return self._abort(f'the {self._requested} trajectory did not start within '
+                                   f'{self.parameters.phase_timeout:g} s of its request (no '
+                                   f'answer from the planner)', now)
         if self.stage in ('unscrewing', 'screwing'):
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
@@ -499,6 +511,7 @@ class StepSequencer:
                     start_point: np.ndarray, goal_point: np.ndarray, sweep: float = 0.0
                     ) -> TrajectoryRequest:
         self._deadline = math.inf  # set by trajectory_started
+        self._requested, self._requested_at = purpose, None
         return TrajectoryRequest(purpose, np.array(start, dtype=float),
                                  np.array(goal, dtype=float), np.array(start_point, dtype=float),
                                  np.array(goal_point, dtype=float), sweep,
@@ -571,6 +584,8 @@ class StepSequencer:
                                        self._attempts)
             self._outcome_taken = False
         self.phase, self.reason = Phase.SAFE_HOLD, reason
-        commands = [CancelTrajectory()] if self._trajectory_running else []
+        commands = [CancelTrajectory()] if self._trajectory_running \
+            or self._requested is not None else []
         self._trajectory_running = False
+        self._requested = self._requested_at = None
         return commands + [SetControlMode('hold', self.base_gripper)]
