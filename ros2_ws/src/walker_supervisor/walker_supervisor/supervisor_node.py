@@ -520,7 +520,7 @@ class SupervisorNode(Node):
         self._execute(commands)
 
     def _end_step_outside_walk(self) -> None:
-        """A step resumed after its walk ended has ended too: log it, forget its file.
+        """Log a step resumed after its walk ended, once it has ended; forget its file.
 
         Its outcome is taken here so that the next walk does not count it as its own first
         step.

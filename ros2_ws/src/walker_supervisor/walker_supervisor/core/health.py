@@ -88,7 +88,7 @@ class HealthMonitor:
 
 
 def reason_naming_silent_sources(reason: str, statuses: list[SourceStatus]) -> str:
-    """The reason of a safe hold, with every silent source it does not name yet added.
+    """Return the reason of a safe hold with every silent source it does not name yet added.
 
     A dead node is often noticed first through what it stops: the controllers hold on inputs
     gone stale, within timeouts shorter than the watchdog's, and the walker stops with their

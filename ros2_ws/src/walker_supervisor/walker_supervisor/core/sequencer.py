@@ -242,7 +242,7 @@ class StepSequencer:
         return self._targets
 
     def take_outcome(self) -> StepOutcome | None:
-        """The outcome of the step that ended since the last call, once; None otherwise.
+        """Return the outcome of the step that ended since the last call, once; else None.
 
         A step ends once, however it was started and resumed: taken by the walk it belongs to,
         or, for a step completed by :meth:`resume` after its walk was aborted, by whoever asks
