@@ -142,6 +142,7 @@ class SupervisorNode(Node):
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
+        self.stop_client = self.create_client(Trigger, 'stop_trajectory')
         self.step_server = ActionServer(
             self, Step, 'step', execute_callback=self._execute_step,
             goal_callback=lambda _: GoalResponse.ACCEPT, cancel_callback=self._on_cancel)
@@ -211,6 +212,15 @@ class SupervisorNode(Node):
             self._execute(self.sequencer.hold(
                 f'started with gripper {", ".join(free)} not attached', self._now()))
             self._pending_adoption = True
+            # a motion an earlier incarnation started may still be streaming: in safe hold
+            # nothing moves, so stop it (the controllers hold where it stops)
+            self._when_ready(self.stop_client.service_is_ready, self._stop_orphan_stream,
+                             lambda: None)
+
+    def _stop_orphan_stream(self) -> None:
+        self.get_logger().warning('stopping any trajectory still streaming for an earlier '
+                                  'supervisor')
+        self.stop_client.call_async(Trigger.Request())
 
     def _on_tip_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
