@@ -56,7 +56,7 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--out', default=None,
                         help='output directory (default: runs/<date-time>)')
     parser.add_argument('--namespace', default='/walker', help='robot namespace')
-    parser.add_argument('--startup-timeout', type=float, default=60.0,
+    parser.add_argument('--startup-timeout', type=float, default=120.0,
                         help='seconds to wait for the graph to come up')
     parser.add_argument('--walk-timeout', type=float, default=600.0,
                         help='seconds the walk may take (wall clock)')

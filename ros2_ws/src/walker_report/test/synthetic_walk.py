@@ -243,7 +243,8 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
                 w.write('phase', time_, t_['walker_msgs/msg/StepPhase'](
                     header=w.header(time_), phase=PHASE_CODES[name],
                     base_gripper=STEPS[min(index, 1)].base, step_index=index,
-                    step_count=count, from_node=source, to_node=target, phase_progress=0.0,
+                    step_count=count, from_node=source, to_node=target, base_node='',
+                    base_heading=0.0, phase_progress=0.0,
                     reason=reason))
             messages.append((time_, 1, phase))
         for time_, states, base in gripper_events(safe_hold):

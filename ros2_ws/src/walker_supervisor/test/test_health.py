@@ -48,3 +48,24 @@ def test_a_hold_reason_comes_to_name_the_silent_source_behind_it():
         == 'plant: silent'
     never = [SourceStatus('planner', Level.ERROR, 'not heard from yet')]
     assert reason_naming_silent_sources(first, never) == first
+
+
+def test_trouble_is_a_fault_only_once_it_has_lasted_the_grace_without_a_break():
+    monitor = HealthMonitor({'controller': 1.0}, trouble_grace=0.5)
+    monitor.seen('controller', 10.0, 'holding: its inputs are stale')
+    monitor.seen('controller', 10.3, 'holding: its inputs are stale')
+    # reported, but not yet long enough: a step that just started may still clear it
+    assert monitor.faults(10.3, include_trouble=True) == []
+    assert monitor.status(10.3)[0].level == Level.WARN
+    monitor.seen('controller', 10.4, '')  # cleared: the clock starts again
+    monitor.seen('controller', 10.6, 'holding: its inputs are stale')
+    assert monitor.faults(11.0, include_trouble=True) == []
+    monitor.seen('controller', 11.1, 'holding: its inputs are stale')
+    assert monitor.faults(11.1, include_trouble=True) == [
+        'controller: holding: its inputs are stale']
+    assert monitor.faults(11.1, include_trouble=False) == []
+
+
+def test_a_negative_grace_is_refused():
+    with pytest.raises(ValueError, match='trouble_grace'):
+        HealthMonitor({'plant': 1.0}, trouble_grace=-0.1)

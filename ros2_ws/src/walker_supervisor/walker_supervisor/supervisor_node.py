@@ -161,7 +161,8 @@ class SupervisorNode(Node):
         self.health = HealthMonitor({'plant joint states': timeout,
                                      'plant gripper states': timeout,
                                      **{f'controller {j}': timeout
-                                        for j in PHYSICAL_JOINT_NAMES}})
+                                        for j in PHYSICAL_JOINT_NAMES}},
+                                    trouble_grace=timeout)
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.create_timer(_WATCHDOG_PERIOD, self._watch, clock=self._steady)
@@ -369,6 +370,10 @@ class SupervisorNode(Node):
                                  f'resume first')
         if self._positions is None:
             raise SequencerError('no joint states received from the plant yet')
+        self._sample_measurements()
+        faults = self.health.faults(self._steady_now(), include_trouble=False)
+        if faults:
+            raise SequencerError('cannot start while ' + '; '.join(faults))
         return self._current_stance()
 
     async def _run_walk(self, goal_handle, target: str, route: list[PlannedStep],
@@ -424,11 +429,12 @@ class SupervisorNode(Node):
     def _watch(self) -> None:
         """Steady-clock watchdog: a source that falls silent stops the walker in safe hold."""
         self._sample_measurements()
-        heard = [s for s in self.health.status(self._steady_now())
-                 if s.message != 'not heard from yet']
-        faults = [f'{s.name}: {s.message}' for s in heard
-                  if s.level == Level.ERROR or (self.sequencer.busy and s.level == Level.WARN)]
-        if faults and (self.sequencer.busy or self.sequencer.phase == Phase.IDLE):
+        faults = [fault for fault in self.health.faults(self._steady_now(),
+                                                        include_trouble=self.sequencer.busy)
+                  if not fault.endswith(': not heard from yet')]
+        # Between steps both grippers are attached and nothing moves: a fault is reported on
+        # /diagnostics and refuses new goals while it lasts (_start_checks), and needs no resume.
+        if faults and self.sequencer.busy:
             reason = 'fault: ' + '; '.join(faults)
             self.get_logger().error(reason)
             self._execute(self.sequencer.hold(reason, self._now()))
@@ -436,7 +442,8 @@ class SupervisorNode(Node):
         elif self.sequencer.phase == Phase.SAFE_HOLD:
             # the hold's first reason may be a consequence (controllers holding on stale
             # inputs): name the dead source behind it as soon as the watchdog sees it
-            reason = reason_naming_silent_sources(self.sequencer.reason, heard)
+            reason = reason_naming_silent_sources(self.sequencer.reason,
+                                                  self.health.status(self._steady_now()))
             if reason != self.sequencer.reason:
                 self.get_logger().error(f'in safe hold: {reason}')
                 self._execute(self.sequencer.hold(reason, self._now()))

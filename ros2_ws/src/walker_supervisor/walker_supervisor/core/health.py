@@ -40,15 +40,23 @@ class HealthMonitor:
     ----------
     sources : dict of str to float
         Source name -> timeout [s] (steady clock) after which silence is a fault.
+    trouble_grace : float
+        [s] how long a source must report trouble without a break before :meth:`faults`
+        counts it: a report sent just before a command that clears it (a controller still
+        holding when a step starts) is not a fault.
     """
 
-    def __init__(self, sources: dict[str, float]) -> None:
+    def __init__(self, sources: dict[str, float], trouble_grace: float = 0.0) -> None:
         for name, timeout in sources.items():
             if not timeout > 0:
                 raise ValueError(f'timeout of {name!r} must be positive, got {timeout}')
+        if not trouble_grace >= 0:
+            raise ValueError(f'trouble_grace must be zero or positive, got {trouble_grace}')
         self._timeouts = dict(sources)
+        self._grace = float(trouble_grace)
         self._last_seen: dict[str, float] = {}
         self._trouble: dict[str, str] = {}
+        self._trouble_since: dict[str, float] = {}
 
     @property
     def names(self) -> list[str]:
@@ -64,6 +72,10 @@ class HealthMonitor:
             raise KeyError(f'unknown source {name!r}')
         self._last_seen[name] = now
         self._trouble[name] = trouble
+        if not trouble:
+            self._trouble_since.pop(name, None)
+        else:
+            self._trouble_since.setdefault(name, now)
 
     def status(self, now: float) -> list[SourceStatus]:
         """Every source's status at steady time ``now`` [s]."""
@@ -82,9 +94,14 @@ class HealthMonitor:
         return statuses
 
     def faults(self, now: float, include_trouble: bool) -> list[str]:
-        """Faults now, one sentence each: silent sources, and reported trouble if asked."""
+        """Faults now, one sentence each: silent sources and, if asked, lasting trouble.
+
+        Trouble counts once it has been reported without a break for ``trouble_grace``.
+        """
         return [f'{s.name}: {s.message}' for s in self.status(now)
-                if s.level == Level.ERROR or (include_trouble and s.level == Level.WARN)]
+                if s.level == Level.ERROR
+                or (include_trouble and s.level == Level.WARN
+                    and now - self._trouble_since.get(s.name, now) >= self._grace)]
 
 
 def reason_naming_silent_sources(reason: str, statuses: list[SourceStatus]) -> str:
