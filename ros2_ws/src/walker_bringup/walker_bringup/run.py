@@ -34,6 +34,7 @@ from walker_report.walk_report import written_text
 __all__ = ['main', 'parse_arguments', 'write_report']
 
 PHASE_NAMES = ('idle', 'extraction', 'coarse', 'fine', 'insertion', 'safe hold')
+SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -62,6 +63,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='seconds the walk may take (wall clock)')
     parser.add_argument('--no-walk', dest='walk', action='store_false',
                         help='bring the graph up, report it ready, and shut it down')
+    parser.add_argument('--serve', action='store_true',
+                        help='bring the graph up and keep it running, without walking, until '
+                             'Ctrl-C: for an operator with walkerctl or the ros2 tools')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     return parser.parse_args(argv)
 
@@ -150,6 +154,8 @@ def main(argv: list[str] | None = None) -> int:
                 key=len(r.ready)),
             should_stop=should_stop)
         progress.say(f'[walker] graph ready in {time.monotonic() - started:.1f} s')
+        if args.serve:
+            return _serve(client, args, should_stop, deaths)
         if not args.walk:
             return 0
         code = _walk(client, args, progress, should_stop, out)
@@ -179,6 +185,22 @@ def main(argv: list[str] | None = None) -> int:
         if not write_report(out / 'bag', out / 'report', params_file, args.quiet):
             code = code or 6
     return code
+
+
+def _serve(client: GraphClient, args, should_stop, deaths: list) -> int:
+    """Keep the graph running until Ctrl-C (exit code 0) or a node dies.
+
+    The client keeps spinning: a participant that stops taking its messages would hold up the
+    graph's reliable writers.
+    """
+    domain = os.environ.get('ROS_DOMAIN_ID', '0')
+    print(f'[walker] serving in namespace {args.namespace}, ROS_DOMAIN_ID={domain}: try '
+          f'scripts/walkerctl status; Ctrl-C shuts the graph down', flush=True)
+    while not should_stop():
+        client.spin_for(SERVE_POLL)
+    if deaths:
+        raise WalkInterruptedError('a node died')
+    return 0
 
 
 def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) -> bool:

@@ -342,6 +342,21 @@ def _hold_during(world, phase):
     return step
 
 
+@pytest.mark.parametrize('accepted', [True, False])
+def test_a_gripper_answer_after_a_hold_is_ignored(accepted):
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    start = world.sequencer.start(step, targets, world.now, dict(world.grippers))
+    assert isinstance(start[-1], GripperRequest) and start[-1].action == 'unscrew'
+    world.execute(world.sequencer.hold('hold requested by an operator', world.now))
+    # the plant's answer to the unscrew sent before the hold comes in now
+    assert world.sequencer.gripper_done(accepted, '', world.now) == []
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.sequencer.reason == 'hold requested by an operator'
+
+
 @pytest.mark.parametrize('phase', [Phase.COARSE, Phase.FINE])
 def test_resume_mid_step_recovers_to_the_target_and_completes_the_step(phase):
     world = World()
@@ -407,6 +422,28 @@ def test_resume_without_a_step_to_complete_is_refused():
     world.sequencer.hold('operator', 0.0)
     with pytest.raises(SequencerError, match='no step to complete'):
         world.sequencer.resume(0.1, world.theta, {'a': 'attached', 'b': 'free'}, {})
+
+
+def test_a_step_forgotten_after_an_operator_changed_the_stance_is_not_completed():
+    world = World()
+    _hold_during(world, Phase.COARSE)
+    world.sequencer.forget_step()
+    with pytest.raises(SequencerError, match='no step to complete'):
+        world.sequencer.resume(world.now, world.theta, dict(world.grippers), {'a': 'n1_1'})
+    world.sequencer.resume(world.now, world.theta, {'a': 'attached', 'b': 'attached'},
+                           {'a': 'n1_1', 'b': 'n2_1'})
+    assert world.sequencer.phase == Phase.IDLE
+
+
+def test_a_step_under_way_cannot_be_forgotten():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    world.execute(world.sequencer.start(step, targets, world.now, dict(world.grippers)))
+    with pytest.raises(SequencerError, match='a step is under way'):
+        world.sequencer.forget_step()
+    assert world.sequencer.step is step
 
 
 def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():

@@ -10,7 +10,9 @@ Interfaces (relative to the node's namespace):
 * actions ``step`` (walker_msgs/action/Step), ``walk_to`` (walker_msgs/action/WalkTo); a goal sent
   while a walk runs is refused (aborted at once with the reason); cancelling a walk lets the step
   under way finish, so the walker ends with both grippers attached;
-* services ``hold`` and ``resume`` (std_srvs/srv/Trigger);
+* services ``hold`` and ``resume`` (std_srvs/srv/Trigger); ``hold`` also stops a jog;
+* the teleoperation services ``jog_joint``, ``jog_tip`` and ``operate_gripper``
+  (:mod:`walker_supervisor.teleop_server`);
 * publishes ``phase`` (walker_msgs/StepPhase, latched), ``control_mode`` (latched) and
   ``step_reports`` (walker_msgs/StepReport, one per step, latched history).
 """
@@ -54,6 +56,7 @@ from walker_supervisor.core.step_geometry import (
 from walker_supervisor.core.walk import VibrationMeter, Walk
 from walker_supervisor.step_state import (
     clear_step_state, read_step_state, step_state_path, write_step_state)
+from walker_supervisor.teleop_server import TeleopServer
 from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['SupervisorNode', 'main']
@@ -88,8 +91,8 @@ _BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
 
 
-class SupervisorNode(Node):
-    """ROS front of the step sequencer and the walk."""
+class SupervisorNode(TeleopServer, Node):
+    """ROS front of the step sequencer, the walk and teleoperation."""
 
     def __init__(self, **kwargs) -> None:
         super().__init__('supervisor', **kwargs)
@@ -151,6 +154,7 @@ class SupervisorNode(Node):
             goal_callback=lambda _: GoalResponse.ACCEPT, cancel_callback=self._on_cancel)
         self.create_service(Trigger, 'hold', self._on_hold)
         self.create_service(Trigger, 'resume', self._on_resume)
+        self._init_teleop()
         self.create_timer(TICK_PERIOD, self._tick)
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
@@ -280,7 +284,12 @@ class SupervisorNode(Node):
             raise SequencerError('a walk starts only with both grippers attached (now: '
                                  + ', '.join(f'{g}: {self._grippers.get(g, "unknown")}'
                                              for g in ('a', 'b')) + ')')
-        return Stance(base, self._gripper_nodes[base], self._gripper_nodes[other])
+        stance = Stance(base, self._gripper_nodes[base], self._gripper_nodes[other])
+        if stance.other_node not in self.truss.neighbors(stance.base_node):
+            # an operator may have screwed a gripper in elsewhere
+            raise SequencerError(f'the grippers are in {stance.base_node} and '
+                                 f'{stance.other_node}, which are not neighbouring nodes')
+        return stance
 
     # ------------------------------------------------------------------ actions
     def _on_cancel(self, goal_handle) -> CancelResponse:
@@ -374,6 +383,7 @@ class SupervisorNode(Node):
         faults = self.health.faults(self._steady_now(), include_trouble=False)
         if faults:
             raise SequencerError('cannot start while ' + '; '.join(faults))
+        self._teleop_check_idle()
         return self._current_stance()
 
     async def _run_walk(self, goal_handle, target: str, route: list[PlannedStep],
@@ -432,8 +442,11 @@ class SupervisorNode(Node):
         faults = [fault for fault in self.health.faults(self._steady_now(),
                                                         include_trouble=self.sequencer.busy)
                   if not fault.endswith(': not heard from yet')]
-        # Between steps both grippers are attached and nothing moves: a fault is reported on
-        # /diagnostics and refuses new goals while it lasts (_start_checks), and needs no resume.
+        if faults:
+            self._teleop_stop('fault: ' + '; '.join(faults))
+        # Between steps no step moves (an operator's jog was stopped just above): a fault is
+        # reported on /diagnostics and refuses new goals while it lasts (_start_checks), and
+        # needs no resume.
         if faults and self.sequencer.busy:
             reason = 'fault: ' + '; '.join(faults)
             self.get_logger().error(reason)
@@ -477,6 +490,7 @@ class SupervisorNode(Node):
     def _tick(self) -> None:
         now = self._now()
         self._sample_measurements()
+        self._teleop_tick(now)
         if self._pending_adoption and self._positions is not None:
             self._pending_adoption = False
             self._adopt_interrupted_step()
@@ -757,6 +771,7 @@ class SupervisorNode(Node):
     # ------------------------------------------------------------------ hold / resume
     def _on_hold(self, request: Trigger.Request, response: Trigger.Response):
         self._execute(self.sequencer.hold('hold requested by an operator', self._now()))
+        self._teleop_stop('hold requested by an operator')
         response.success = True
         response.message = 'holding: trajectories stopped, controllers hold, grippers unchanged'
         return response

@@ -3,7 +3,8 @@
 Which of the planner's named trajectory types serves each purpose of a step (paper section 5):
 extraction and insertion are straight lines along the hole axis, the coarse motion is the
 bang-bang node-to-node trajectory, the fine motion a constant-velocity Cartesian line; a step
-resumed after a safe hold recovers to the point above its target with a Cartesian blend.
+resumed after a safe hold recovers to the point above its target with a Cartesian blend. An
+operator's joint jog is a minimum-jerk joint move, a tip jog a constant-velocity Cartesian line.
 """
 
 from __future__ import annotations
@@ -27,9 +28,11 @@ TRAJECTORY_TYPES = {
     'fine': ('cartesian_line', True),
     'insertion': ('insertion_line', True),
     'recover': ('cartesian_parabolic_accel', True),
+    'jog_joint': ('joint_min_jerk', False),  # teleoperation (core/teleop.py)
+    'jog_tip': ('cartesian_line', True),
 }
 #: Motions that start where the joints are now (the others start at a planned point).
-_FROM_MEASURED = frozenset({'fine', 'insertion', 'retry_lift', 'recover'})
+_FROM_MEASURED = frozenset({'fine', 'insertion', 'retry_lift', 'recover', 'jog_tip'})
 
 
 def _vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:

@@ -124,7 +124,8 @@ class TrajectoryRequest:
     Attributes
     ----------
     purpose : str
-        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'.
+        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'
+        (a step's), 'jog_joint' or 'jog_tip' (an operator's, :mod:`.teleop`).
     start, goal : ndarray, shape (5,)
         Joint angles J1..J5 [rad] (role order of ``base_gripper``).
     start_point, goal_point : ndarray, shape (3,)
@@ -316,14 +317,18 @@ class StepSequencer:
 
         ``success`` True means the command was accepted: the gripper is unscrewing or screwing,
         and its reported state (:meth:`tick`) says when it is free or attached. False means it
-        was refused, failed, or jammed at once.
+        was refused, failed, or jammed at once. An answer that arrives after a hold is
+        ignored: the hold has stopped the step, and the gripper's reported state is what
+        :meth:`resume` goes by.
 
         The gripper states and the answer travel separately: when the states have already shown
-        the outcome (a jam, a gripper free) and the step has moved on, or the walker is in safe
-        hold, the late answer changes nothing.
+        the outcome (a jam, a gripper free) and the step has moved on, the late answer changes
+        nothing either.
         """
         answered = self._gripper_answers_due > 0
         self._gripper_answers_due = max(0, self._gripper_answers_due - 1)
+        if self.phase == Phase.SAFE_HOLD:
+            return []
         if self.stage not in ('unscrewing', 'screwing'):
             if answered:
                 return []
@@ -502,6 +507,21 @@ class StepSequencer:
         return [SetControlMode('fine', self._step.base_gripper),
                 self._trajectory('recover', self._theta, self._targets.above_to, tip,
                                  self._targets.point_above_to)]
+
+    def forget_step(self) -> None:
+        """Forget the last (or interrupted) step: an operator has changed the stance.
+
+        After a gripper was screwed in or out by hand, the step's targets no longer describe
+        the walker, so :meth:`resume` must not complete it.
+
+        Raises
+        ------
+        SequencerError
+            A step is under way.
+        """
+        if self.busy:
+            raise SequencerError(f'a step is under way (phase {self.phase.name})')
+        self._step, self._targets = None, None
 
     # ------------------------------------------------------------------ internals
     def _start_point(self) -> np.ndarray:
