@@ -14,11 +14,13 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from collections.abc import Iterator
 
-__all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess']
+__all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
+           'SharedMemoryGuard']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 # Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
@@ -114,3 +116,103 @@ class NodeProcess:
     def __exit__(self, *exc_info: object) -> None:
         self.stop()
         self._log.close()
+
+
+class SharedMemoryGuard:
+    """Keep the Fast DDS shared-memory files of a graph in /dev/shm while its processes live.
+
+    /dev/shm is shared by every test run on the machine. A run that cleans up after itself by
+    deleting the Fast DDS files created during it that no process maps (older versions of
+    ``walker_bringup.processes``) also deletes another graph's lock files, which are never
+    mapped; Fast DDS then takes that graph's segments for a dead process's and deletes them,
+    and the graph goes deaf. The guard keeps a hard link to every file that a process of the
+    graph maps or locks, in a directory of its own, and links back any that disappears while
+    its process lives, so the same file (and lock) is found again. Links of processes that have
+    ended are dropped, so the files of a killed node go the usual way.
+
+    Parameters
+    ----------
+    pids : callable
+        Returns the process ids of the graph now (they change as nodes are restarted).
+    period : float
+        Seconds between two looks.
+    """
+
+    _SHM = Path('/dev/shm')
+
+    def __init__(self, pids, period: float = 0.02) -> None:
+        self._pids = pids
+        self._period = period
+        self._dir = self._SHM / f'walker-shm-guard-{os.getpid()}'
+        self._links: dict[str, tuple[int, set[int]]] = {}  # name -> (inode, owner pids)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name='shm-guard', daemon=True)
+        self.restored = 0
+
+    def __enter__(self) -> 'SharedMemoryGuard':
+        if self._SHM.is_dir():
+            self._dir.mkdir(exist_ok=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5.0)
+        for link in self._dir.glob('*') if self._dir.is_dir() else ():
+            with contextlib.suppress(OSError):
+                link.unlink()
+        with contextlib.suppress(OSError):
+            self._dir.rmdir()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self._period):
+            with contextlib.suppress(Exception):  # a process ending mid-look, a file gone
+                self._look()
+
+    def _used(self, pids: set[int]) -> dict[str, set[int]]:
+        """Name in /dev/shm -> the graph's processes that own it.
+
+        A process owns the files it locks (the ``_el`` lock files of its segments and ports)
+        and the segments whose lock file it holds; segments of other graphs that it merely
+        maps are not the guard's business.
+        """
+        locked: dict[int, set[int]] = {}
+        with contextlib.suppress(OSError):
+            for line in Path('/proc/locks').read_text().splitlines():
+                fields = line.split()
+                if len(fields) > 5 and fields[4].isdigit() and int(fields[4]) in pids:
+                    locked.setdefault(int(fields[5].rsplit(':', 1)[1]), set()).add(
+                        int(fields[4]))
+        used: dict[str, set[int]] = {}
+        for entry in self._SHM.iterdir():
+            if 'fastrtps' in entry.name:
+                with contextlib.suppress(OSError):
+                    owners = locked.get(entry.stat().st_ino)
+                    if owners:
+                        used[entry.name] = set(owners)
+        for name in [n for n in used if n.endswith('_el')]:
+            segment = name.removesuffix('_el')
+            if (self._SHM / segment).exists():
+                used.setdefault(segment, set()).update(used[name])
+        return used
+
+    def _look(self) -> None:
+        pids = set(self._pids())
+        for name, (_inode, owners) in list(self._links.items()):
+            link, original = self._dir / name, self._SHM / name
+            if not owners & pids:  # its processes ended: let it go
+                with contextlib.suppress(OSError):
+                    link.unlink()
+                del self._links[name]
+            elif not original.exists():
+                with contextlib.suppress(OSError):
+                    os.link(link, original)
+                    self.restored += 1
+        for name, owners in self._used(pids).items():
+            if name in self._links:
+                self._links[name] = (self._links[name][0], self._links[name][1] | owners)
+                continue
+            with contextlib.suppress(OSError):
+                os.link(self._SHM / name, self._dir / name)
+                self._links[name] = ((self._dir / name).stat().st_ino, owners)

@@ -60,6 +60,19 @@ def test_a_dead_child_is_reported_once(tmp_path):
         assert group.poll_deaths() == []
 
 
+def test_a_killed_child_restarts_with_its_log_continued(tmp_path):
+    with ProcessGroup(tmp_path, ENV) as group:
+        first = group.start(SPEC, python_child('import sys; print("first"); sys.exit(3)'))
+        first.popen.wait(timeout=10)
+        second = group.restart(first, python_child('print("second")'))
+        second.popen.wait(timeout=10)
+        assert second.spec == first.spec and second.log_path == first.log_path
+        log = second.log_path.read_text()
+        assert log.index('first') < log.index('restarted') < log.index('second')
+        assert 'code 3' in log
+        assert group.poll_deaths() == [second], 'the replaced process is not reported again'
+
+
 def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
     stubborn = ('import signal, time\n'
                 'signal.signal(signal.SIGINT, signal.SIG_IGN)\n'
@@ -82,6 +95,25 @@ def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
     for process in (a, b):
         with pytest.raises(ProcessLookupError):
             os.kill(process.popen.pid, 0)
+
+
+def test_only_shared_memory_no_live_process_uses_is_stale(tmp_path, monkeypatch):
+    from walker_bringup import processes
+
+    monkeypatch.setattr(processes, '_SHM', tmp_path)
+    before = processes._fastdds_files()
+    names = ['fastrtps_live', 'fastrtps_live_el', 'fastrtps_dead', 'fastrtps_dead_el',
+             'sem.fastrtps_port7001_mutex', 'fastrtps_young']
+    old = time.time() - 60.0
+    for name in names:
+        (tmp_path / name).write_bytes(b'')
+        if name != 'fastrtps_young':
+            os.utime(tmp_path / name, (old, old))
+    monkeypatch.setattr(processes, '_mapped_shared_memory',
+                        lambda: {'fastrtps_live', 'fastrtps_port7001_mutex'})
+    stale = processes.stale_shared_memory_files(before)
+    # a live segment's lock file stays with it: Fast DDS would take the segment for dead
+    assert [p.name for p in stale] == ['fastrtps_dead', 'fastrtps_dead_el']
 
 
 def report(index, success=True, duration=6.0, bound=4.0):

@@ -64,11 +64,30 @@ def _mapped_shared_memory() -> set[str]:
     return mapped
 
 
-def stale_shared_memory_files(before: set[Path]) -> list[Path]:
-    """Fast DDS files in /dev/shm created since ``before`` and mapped by no live process."""
+def stale_shared_memory_files(before: set[Path], min_age: float = 10.0) -> list[Path]:
+    """Fast DDS files in /dev/shm created since ``before`` that no live process uses.
+
+    A file is in use when a live process maps it; a segment's lock file (``<segment>_el``),
+    which is never mapped, is in use with its segment. The lock file matters most: Fast DDS
+    takes a segment whose lock file is gone for a dead process's and deletes it, and another
+    graph on the same machine (another domain, another test run) then loses its messages.
+    Files younger than ``min_age`` seconds are left too: a process that is starting may have
+    created a file it has not mapped yet.
+    """
+    candidates = _fastdds_files() - before  # listed before the mappings are read
     mapped = _mapped_shared_memory()
-    return sorted(p for p in _fastdds_files() - before
-                  if p.name not in mapped and p.name.removeprefix('sem.') not in mapped)
+    now = time.time()
+
+    def in_use(path: Path) -> bool:
+        name = path.name.removeprefix('sem.')
+        return name in mapped or name.removesuffix('_el') in mapped
+
+    def young(path: Path) -> bool:
+        try:
+            return now - path.stat().st_mtime < min_age
+        except OSError:
+            return True  # gone already
+    return sorted(p for p in candidates if not in_use(p) and not young(p))
 
 
 class ProcessGroup:
@@ -92,16 +111,32 @@ class ProcessGroup:
         self.processes: list[ManagedProcess] = []
         self._shm_before = _fastdds_files()
 
-    def start(self, spec: NodeSpec, command: list[str] | None = None) -> ManagedProcess:
+    def start(self, spec: NodeSpec, command: list[str] | None = None,
+              append_log: bool = False) -> ManagedProcess:
         """Start a node (its installed executable, or ``command``)."""
         log_path = self.log_dir / f'{spec.name}.log'
-        with open(log_path, 'w') as log:
+        with open(log_path, 'a' if append_log else 'w') as log:
             popen = subprocess.Popen(command or spec.command(), env=self.env, stdout=log,
                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                      start_new_session=True)
         process = ManagedProcess(spec, popen, log_path, time.monotonic())
         self.processes.append(process)
         return process
+
+    def restart(self, process: ManagedProcess, command: list[str] | None = None
+                ) -> ManagedProcess:
+        """Start a node again (after it died or was killed), its log continuing in its file.
+
+        A process still alive is stopped first. The new process joins the group; the old one
+        is not reported by :meth:`poll_deaths` any more.
+        """
+        if process.alive:
+            self.stop(process)
+        process.reported_dead = True
+        with open(process.log_path, 'a') as log:
+            log.write(f'--- restarted (the previous process ended with code '
+                      f'{process.popen.returncode}) ---\n')
+        return self.start(process.spec, command, append_log=True)
 
     def poll_deaths(self) -> list[ManagedProcess]:
         """Return the processes that have exited since the last call (each reported once)."""

@@ -244,6 +244,23 @@ def test_a_stopped_setpoint_stream_makes_the_joint_hold_and_report_it(ros_env, p
         assert controller.wait_for_output('stale', WAIT), controller.output
 
 
+def test_a_new_tracking_mode_after_a_stale_hold_reports_fresh_inputs_at_once(ros_env, plant):
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env, timeouts=STRICT):
+        plant.step()
+        plant.command(ControlMode.COARSE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        plant.setpoint(plant.stamp_ns + PERIOD_NS, 0.01)
+        plant.step()
+        assert plant.step_until(lambda s: s.mode == ControlMode.HOLD).stale
+        plant.command(ControlMode.HOLD, 'a')  # the supervisor's hold, then its resume
+        plant.step_until(lambda s: s.mode == ControlMode.HOLD, steps=1)
+        plant.command(ControlMode.FINE, 'a')
+        state = plant.step_until(lambda s: s.mode == ControlMode.FINE)
+        assert not state.stale, 'the first state in the new mode still reports stale inputs'
+
+
 def test_a_stopped_state_stream_is_reported_stale(ros_env, plant):
     from walker_msgs.msg import ControlMode
 

@@ -191,6 +191,9 @@ class JointControllerNode(Node):
             self.get_logger().info(f'mode {controller.mode.name}, base gripper '
                                    f'{controller.base_gripper}, role J{controller.role}')
         self._watchdog.expect_setpoints(mode.tracks_setpoints)
+        # Judge the inputs again now: the next states must not report a staleness that this
+        # command has ended (the supervisor would take it for a fault of the motion it starts).
+        self._stale = self._watchdog.check(self._steady.now().nanoseconds * 1e-9)
 
     def _on_setpoint(self, msg: JointCommand) -> None:
         try:

@@ -2,7 +2,8 @@
 
 import pytest
 
-from walker_supervisor.core.health import HealthMonitor, Level
+from walker_supervisor.core.health import (
+    HealthMonitor, Level, SourceStatus, reason_naming_silent_sources)
 
 
 def test_silence_after_the_timeout_is_a_fault_and_trouble_a_warning():
@@ -27,6 +28,26 @@ def test_bad_sources_and_timeouts_are_refused():
         HealthMonitor({'plant': 0.0})
     with pytest.raises(KeyError, match='unknown source'):
         HealthMonitor({'plant': 1.0}).seen('planner', 0.0)
+
+
+def test_a_hold_reason_comes_to_name_the_silent_source_behind_it():
+    monitor = HealthMonitor({'plant joint states': 1.0, 'controller vertex_joint': 1.0,
+                             'controller a_yaw_joint': 1.0})
+    for name in monitor.names:
+        monitor.seen(name, 0.0)
+    monitor.seen('controller a_yaw_joint', 0.6, 'holding: its inputs are stale')
+    first = 'fault: controller a_yaw_joint: holding: its inputs are stale'
+    # before the watchdog's timeout, nothing is silent: the reason stays
+    assert reason_naming_silent_sources(first, monitor.status(0.9)) == first
+    monitor.seen('plant joint states', 1.5)
+    reason = reason_naming_silent_sources(first, monitor.status(1.6))
+    assert reason == first + '; then controller vertex_joint: silent for 1.60 s (timeout 1 s)'
+    # named once: a later look adds nothing, whatever the silence has grown to
+    assert reason_naming_silent_sources(reason, monitor.status(2.0)) == reason
+    assert reason_naming_silent_sources('', [SourceStatus('plant', Level.ERROR, 'silent')]) \
+        == 'plant: silent'
+    never = [SourceStatus('planner', Level.ERROR, 'not heard from yet')]
+    assert reason_naming_silent_sources(first, never) == first
 
 
 def test_trouble_is_a_fault_only_once_it_has_lasted_the_grace_without_a_break():

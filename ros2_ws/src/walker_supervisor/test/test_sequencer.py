@@ -31,12 +31,14 @@ class World:
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
-                 gripper_never=False, lift_lag=None):
+                 gripper_never=False, lift_lag=None, jam_seen_first=False):
         self.stance = stance
         # (joint, lag [rad], time [s]): after the extraction line's stream ends, that joint is
         # still ``lag`` short of the line's end, and catches up only ``time`` later
         self.lift_lag = lift_lag
         self.lagging = None
+        self.jam_seen_first = jam_seen_first  # the jammed state arrives before the answer
+        self.late_answers = []
         self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
         self.now = 0.0
         base, other = TRUSS.position(stance.base_node), TRUSS.position(stance.other_node)
@@ -88,6 +90,10 @@ class World:
         else:
             if self.jams > 0:
                 self.jams -= 1
+                if self.jam_seen_first:
+                    self.grippers[request.gripper] = 'jammed'
+                    self.late_answers.append('jammed 3 mm off')
+                    return
                 self.execute(self.sequencer.gripper_done(False, 'jammed 3 mm off', self.now))
                 return
             self.grippers[request.gripper] = 'screwing'
@@ -127,7 +133,10 @@ class World:
                 self.theta[joint], self.lagging = end, None
         assert any(state == 'attached' for state in self.grippers.values())
         self.phases.append(self.sequencer.phase)
+        late, self.late_answers = self.late_answers, []  # sent before this tick's states
         self.execute(self.sequencer.tick(self.now, self.theta, velocities, dict(self.grippers)))
+        for message in late:
+            self.execute(self.sequencer.gripper_done(False, message, self.now))
 
 
 def _other(gripper):
@@ -204,6 +213,28 @@ def test_a_jammed_insertion_is_retried():
     assert len(lifts) == 2
 
 
+@pytest.mark.parametrize('jams, attempts', [(2, 3), (5, 3)])
+def test_a_jam_seen_in_the_gripper_states_before_its_answer_counts_once(jams, attempts):
+    world = World(jams=jams, jam_seen_first=True)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    lifts = [c for c in world.log
+             if isinstance(c, TrajectoryRequest) and c.purpose == 'retry_lift']
+    screw_ins = [c for c in world.log if c == GripperRequest('b', 'screw_in')]
+    assert len(screw_ins) == attempts and len(lifts) == attempts - 1
+    if jams < attempts:
+        assert outcome.success and outcome.insertion_attempts == attempts
+    else:
+        assert not outcome.success and f'jammed {attempts} times' in outcome.message
+        assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.late_answers == []
+
+
+def test_an_answer_that_nobody_waits_for_is_refused():
+    world = World()
+    with pytest.raises(SequencerError, match='unexpected gripper result'):
+        world.sequencer.gripper_done(True, '', 0.0)
+
+
 def test_too_many_jams_abort_to_safe_hold_with_the_base_attached():
     world = World(jams=5)
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
@@ -228,6 +259,42 @@ def test_a_stalled_trajectory_times_out_to_safe_hold():
     assert not outcome.success and 'overran' in outcome.message
     assert world.now == pytest.approx(1.0 + SUPERVISOR.phase_timeout, abs=3 * DT)
     assert isinstance(world.log[-2], CancelTrajectory)
+
+
+def test_a_trajectory_the_planner_never_answers_times_out_to_safe_hold():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    sequencer = world.sequencer
+    sequencer.start(step, targets, 0.0, dict(world.grippers))
+    sequencer.gripper_done(True, '', 0.0)
+    request = sequencer.tick(0.5, world.theta, np.zeros(5), {'a': 'attached', 'b': 'free'})
+    assert [c.purpose for c in request if isinstance(c, TrajectoryRequest)] == ['extraction']
+    now = 0.5
+    while sequencer.phase != Phase.SAFE_HOLD:  # no trajectory_started, no trajectory_done
+        now += DT
+        assert now < 0.5 + SUPERVISOR.phase_timeout + 1.0, 'the request waits forever'
+        commands = sequencer.tick(now, world.theta, np.zeros(5),
+                                  {'a': 'attached', 'b': 'free'})
+    assert now == pytest.approx(0.5 + SUPERVISOR.phase_timeout, abs=3 * DT)
+    assert 'extraction trajectory did not start' in sequencer.reason
+    assert 'planner' in sequencer.reason
+    assert commands == [CancelTrajectory(), SetControlMode('hold', 'a')]
+
+
+def test_a_hold_while_a_trajectory_is_being_planned_cancels_it():
+    """The plan's answer, arriving after the hold, must not start a motion."""
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    sequencer = world.sequencer
+    sequencer.start(step, targets, 0.0, dict(world.grippers))
+    sequencer.gripper_done(True, '', 0.0)
+    sequencer.tick(0.5, world.theta, np.zeros(5), {'a': 'attached', 'b': 'free'})
+    assert sequencer.hold('hold requested by an operator', 0.6) == [
+        CancelTrajectory(), SetControlMode('hold', 'a')]
 
 
 def test_losing_the_base_during_a_step_aborts():
@@ -319,6 +386,25 @@ def test_resume_mid_step_recovers_to_the_target_and_completes_the_step(phase):
     assert world.sequencer.outcome.success, world.sequencer.outcome.message
     assert world.grippers == {'a': 'attached', 'b': 'attached'}
     assert world.sequencer.base_gripper == 'b'
+
+
+def test_a_step_completed_after_resume_has_its_outcome_taken_once():
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    assert world.sequencer.take_outcome() is None
+    _hold_during(world, Phase.COARSE)
+    aborted = world.sequencer.take_outcome()
+    assert aborted is not None and not aborted.success and aborted.message == 'a fault'
+    assert world.sequencer.take_outcome() is None
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    assert world.sequencer.take_outcome() is None, 'the step is under way again'
+    while world.sequencer.busy:
+        world.advance()
+    completed = world.sequencer.take_outcome()
+    assert completed is not None and completed.success
+    assert world.sequencer.take_outcome() is None, 'taken once: no walk counts it again'
+    assert world.sequencer.step == step
 
 
 def test_resume_in_the_hole_lifts_out_first():

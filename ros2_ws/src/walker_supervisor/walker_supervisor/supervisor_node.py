@@ -45,7 +45,7 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler
-from walker_supervisor.core.health import HealthMonitor, Level
+from walker_supervisor.core.health import HealthMonitor, Level, reason_naming_silent_sources
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -127,7 +127,6 @@ class SupervisorNode(TeleopServer, Node):
         self._true_insertion_error = math.nan
         self._last_feedback = -math.inf
         self._last_phase: tuple | None = None
-        self._step_in_progress = False
         self._residual_vibration = math.nan
         self._bounded: set[str] = set()
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
@@ -151,6 +150,7 @@ class SupervisorNode(TeleopServer, Node):
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
+        self.stop_client = self.create_client(Trigger, 'stop_trajectory')
         self.step_server = ActionServer(
             self, Step, 'step', execute_callback=self._execute_step,
             goal_callback=lambda _: GoalResponse.ACCEPT, cancel_callback=self._on_cancel)
@@ -222,6 +222,15 @@ class SupervisorNode(TeleopServer, Node):
             self._execute(self.sequencer.hold(
                 f'started with gripper {", ".join(free)} not attached', self._now()))
             self._pending_adoption = True
+            # a motion an earlier incarnation started may still be streaming: in safe hold
+            # nothing moves, so stop it (the controllers hold where it stops)
+            self._when_ready(self.stop_client.service_is_ready, self._stop_orphan_stream,
+                             lambda: None)
+
+    def _stop_orphan_stream(self) -> None:
+        self.get_logger().warning('stopping any trajectory still streaming for an earlier '
+                                  'supervisor')
+        self.stop_client.call_async(Trigger.Request())
 
     def _on_tip_pose(self, msg: PoseStamped) -> None:
         p = msg.pose.position
@@ -453,6 +462,15 @@ class SupervisorNode(TeleopServer, Node):
             self.get_logger().error(reason)
             self._execute(self.sequencer.hold(reason, self._now()))
             self._publish_phase()
+        elif self.sequencer.phase == Phase.SAFE_HOLD:
+            # the hold's first reason may be a consequence (controllers holding on stale
+            # inputs): name the dead source behind it as soon as the watchdog sees it
+            reason = reason_naming_silent_sources(self.sequencer.reason,
+                                                  self.health.status(self._steady_now()))
+            if reason != self.sequencer.reason:
+                self.get_logger().error(f'in safe hold: {reason}')
+                self._execute(self.sequencer.hold(reason, self._now()))
+                self._publish_phase()
 
     def _publish_diagnostics(self) -> None:
         message = DiagnosticArray()
@@ -502,12 +520,15 @@ class SupervisorNode(TeleopServer, Node):
             if now - self._last_feedback >= FEEDBACK_PERIOD:
                 self._publish_feedback(walk)
                 self._last_feedback = now
+        else:
+            self._end_step_outside_walk()
         self._publish_phase()
 
     def _advance_walk(self, walk: Walk, now: float) -> None:
         """Between steps: record the step that ended, then start the next or end the walk."""
-        if self._step_in_progress:
-            self._record_outcome(walk, self.sequencer.outcome)
+        outcome = self.sequencer.take_outcome()
+        if outcome is not None:
+            self._record_outcome(walk, outcome)
         if self.sequencer.phase == Phase.SAFE_HOLD and not walk.failed:
             walk.outcomes.append(StepOutcome(False, self.sequencer.reason, {}, 0.0,
                                              math.nan, 0))
@@ -530,7 +551,6 @@ class SupervisorNode(TeleopServer, Node):
                                              {}, 0.0, math.nan, 0))
             self.get_logger().error(walk.outcomes[-1].message)
             return
-        self._step_in_progress = True
         write_step_state(self._state_file, step, frame.heading)
         self._step_bound = 2.0 * self.params.gripper.screw_time
         self._bounded: set[str] = set()
@@ -540,8 +560,25 @@ class SupervisorNode(TeleopServer, Node):
                                f'({math.degrees(targets.sweep):+.0f} deg about {step.base_node})')
         self._execute(commands)
 
+    def _end_step_outside_walk(self) -> None:
+        """Log a step resumed after its walk ended, once it has ended; forget its file.
+
+        Its outcome is taken here so that the next walk does not count it as its own first
+        step.
+        """
+        outcome = self.sequencer.take_outcome()
+        if outcome is None:
+            return
+        step = self.sequencer.step
+        if outcome.success:
+            clear_step_state(self._state_file)
+            self.get_logger().info(f'step {step.from_node} -> {step.to_node} completed after '
+                                   f'resume in {outcome.duration:.2f} s')
+        else:
+            self.get_logger().error(f'step {step.from_node} -> {step.to_node} failed after '
+                                    f'resume: {outcome.message}')
+
     def _record_outcome(self, walk: Walk, outcome: StepOutcome) -> None:
-        self._step_in_progress = False
         if outcome.success:
             clear_step_state(self._state_file)
         walk.outcomes.append(outcome)
@@ -638,12 +675,13 @@ class SupervisorNode(TeleopServer, Node):
 
     def _on_gripper_response(self, future) -> None:
         response = future.result()
-        if response is None:
-            commands = self.sequencer.gripper_done(False, 'no response from the plant',
-                                                   self._now())
-        else:
-            commands = self.sequencer.gripper_done(response.success, response.message,
-                                                   self._now())
+        success, message = ((False, 'no response from the plant') if response is None
+                            else (response.success, response.message))
+        try:
+            commands = self.sequencer.gripper_done(success, message, self._now())
+        except SequencerError as error:  # an answer nobody waits for: say so, keep running
+            self.get_logger().error(f'gripper answer ignored: {error}')
+            return
         self._execute(commands)
 
     def _request_trajectory(self, request: TrajectoryRequest) -> None:
@@ -766,7 +804,6 @@ class SupervisorNode(TeleopServer, Node):
             response.success = False
             response.message = str(error)
             return response
-        self._step_in_progress = self.sequencer.busy
         self._execute(commands)
         response.success = True
         response.message = ('resumed: completing the step to '

@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 
-__all__ = ['Level', 'SourceStatus', 'HealthMonitor']
+__all__ = ['Level', 'SourceStatus', 'HealthMonitor', 'reason_naming_silent_sources']
 
 
 class Level(enum.IntEnum):
@@ -102,3 +102,19 @@ class HealthMonitor:
                 if s.level == Level.ERROR
                 or (include_trouble and s.level == Level.WARN
                     and now - self._trouble_since.get(s.name, now) >= self._grace)]
+
+
+def reason_naming_silent_sources(reason: str, statuses: list[SourceStatus]) -> str:
+    """Return the reason of a safe hold with every silent source it does not name yet added.
+
+    A dead node is often noticed first through what it stops: the controllers hold on inputs
+    gone stale, within timeouts shorter than the watchdog's, and the walker stops with their
+    complaint as its reason. Once the watchdog sees the dead source itself, the reason should
+    name it too. Returns ``reason`` unchanged when it names every silent source already.
+    """
+    new = [f'{s.name}: {s.message}' for s in statuses
+           if s.level == Level.ERROR and s.message != 'not heard from yet'
+           and s.name not in reason]
+    if not new:
+        return reason
+    return f'{reason}; then {"; ".join(new)}' if reason else '; '.join(new)

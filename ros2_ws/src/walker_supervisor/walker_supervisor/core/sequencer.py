@@ -21,7 +21,8 @@ Rules it enforces:
   tried anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
   ``max_insertion_attempts`` times, then the step is aborted to SAFE_HOLD;
-* any failure or a phase that overruns its planned time by ``phase_timeout`` ends in SAFE_HOLD:
+* any failure, a phase that overruns its planned time by ``phase_timeout``, or a trajectory that
+  has not started ``phase_timeout`` after its request (the planner gone) ends in SAFE_HOLD:
   trajectories cancelled, controllers holding, grippers untouched (the base stays attached);
 * :meth:`StepSequencer.resume` leaves SAFE_HOLD: with both grippers attached it returns to IDLE;
   with the moving gripper free it completes the interrupted step from where the arm is (out of
@@ -212,6 +213,7 @@ class StepSequencer:
         self.stage = ''
         self.reason = ''
         self.outcome: StepOutcome | None = None
+        self._outcome_taken = True
         self._step: PlannedStep | None = None
         self._targets: StepTargets | None = None
         self._theta = np.zeros(5)
@@ -225,6 +227,9 @@ class StepSequencer:
         self._fine_lines = 0
         self._insertion_error = math.nan
         self._trajectory_running = False
+        self._gripper_answers_due = 0  # gripper commands sent and not answered yet
+        self._requested: str | None = None  # purpose of a trajectory requested, not started
+        self._requested_at: float | None = None  # [s] first tick after the request
 
     # ------------------------------------------------------------------ queries
     @property
@@ -241,6 +246,18 @@ class StepSequencer:
     def targets(self) -> StepTargets | None:
         """The targets of the step under way (or of the last one)."""
         return self._targets
+
+    def take_outcome(self) -> StepOutcome | None:
+        """Return the outcome of the step that ended since the last call, once; else None.
+
+        A step ends once, however it was started and resumed: taken by the walk it belongs to,
+        or, for a step completed by :meth:`resume` after its walk was aborted, by whoever asks
+        next, so that it is never taken again as the first step of another walk.
+        """
+        if self._outcome_taken or self.outcome is None:
+            return None
+        self._outcome_taken = True
+        return self.outcome
 
     def adopt(self, step: PlannedStep, targets: StepTargets, reason: str) -> None:
         """Take over an interrupted step, in SAFE_HOLD, so that :meth:`resume` completes it.
@@ -296,6 +313,7 @@ class StepSequencer:
         self._enter(Phase.EXTRACTION, now, 'unscrewing')
         self._deadline = math.inf
         self._gripper_deadline = now + self._screw_allowance
+        self._gripper_answers_due += 1
         return [SetControlMode('fine', step.base_gripper),
                 GripperRequest(step.moving_gripper, 'unscrew')]
 
@@ -307,10 +325,18 @@ class StepSequencer:
         was refused, failed, or jammed at once. An answer that arrives after a hold is
         ignored: the hold has stopped the step, and the gripper's reported state is what
         :meth:`resume` goes by.
+
+        The gripper states and the answer travel separately: when the states have already shown
+        the outcome (a jam, a gripper free) and the step has moved on, the late answer changes
+        nothing either.
         """
+        answered = self._gripper_answers_due > 0
+        self._gripper_answers_due = max(0, self._gripper_answers_due - 1)
         if self.phase == Phase.SAFE_HOLD:
             return []
         if self.stage not in ('unscrewing', 'screwing'):
+            if answered:
+                return []
             raise SequencerError(f'unexpected gripper result in phase {self.phase.name} '
                                  f'({self.stage or "no stage"})')
         if success:
@@ -337,11 +363,13 @@ class StepSequencer:
     def trajectory_started(self, planned_duration: float, now: float) -> None:
         """Note that the requested trajectory is streaming and should take this long [s]."""
         self._trajectory_running = True
+        self._requested = self._requested_at = None
         self._deadline = now + planned_duration + self.parameters.phase_timeout
 
     def trajectory_done(self, success: bool, message: str, now: float) -> list:
         """Take the end of the streamed trajectory (``success`` False: refused or aborted)."""
         self._trajectory_running = False
+        self._requested = self._requested_at = None
         if self.phase in (Phase.IDLE, Phase.SAFE_HOLD):
             return []
         if not success:
@@ -384,6 +412,13 @@ class StepSequencer:
         if now > self._deadline:
             return self._abort(f'{self.phase.name.lower()} overran its planned time '
                                f'({self.stage})', now)
+        if self._requested is not None:  # planned and streamed by the planner, or not at all
+            if self._requested_at is None:
+                self._requested_at = now
+            elif now - self._requested_at > self.parameters.phase_timeout:
+                return self._abort(f'the {self._requested} trajectory did not start within '
+                                   f'{self.parameters.phase_timeout:g} s of its request (no '
+                                   f'answer from the planner)', now)
         if self.stage in ('unscrewing', 'screwing'):
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.stage == 'lifted':
@@ -405,6 +440,7 @@ class StepSequencer:
                 self.stage = 'screwing'
                 self._deadline = math.inf
                 self._gripper_deadline = now + self._screw_allowance
+                self._gripper_answers_due += 1
                 return [GripperRequest(self._step.moving_gripper, 'screw_in')]
         return []
 
@@ -504,6 +540,7 @@ class StepSequencer:
                     start_point: np.ndarray, goal_point: np.ndarray, sweep: float = 0.0
                     ) -> TrajectoryRequest:
         self._deadline = math.inf  # set by trajectory_started
+        self._requested, self._requested_at = purpose, None
         return TrajectoryRequest(purpose, np.array(start, dtype=float),
                                  np.array(goal, dtype=float), np.array(start_point, dtype=float),
                                  np.array(goal_point, dtype=float), sweep,
@@ -576,6 +613,7 @@ class StepSequencer:
         self.base_gripper = self._step.moving_gripper
         self.outcome = StepOutcome(True, '', dict(self._durations), now - self._step_started,
                                    self._insertion_error, self._attempts + 1)
+        self._outcome_taken = False
         return [SetControlMode('hold', self._step.moving_gripper)]
 
     def _abort(self, reason: str, now: float) -> list:
@@ -584,7 +622,10 @@ class StepSequencer:
             self.outcome = StepOutcome(False, reason, dict(self._durations),
                                        now - self._step_started, self._insertion_error,
                                        self._attempts)
+            self._outcome_taken = False
         self.phase, self.reason = Phase.SAFE_HOLD, reason
-        commands = [CancelTrajectory()] if self._trajectory_running else []
+        commands = [CancelTrajectory()] if self._trajectory_running \
+            or self._requested is not None else []
         self._trajectory_running = False
+        self._requested = self._requested_at = None
         return commands + [SetControlMode('hold', self.base_gripper)]
