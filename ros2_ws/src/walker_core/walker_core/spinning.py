@@ -48,7 +48,8 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
     """Spin nodes until the context shuts down (SIGINT, SIGTERM) or ``stop()`` is true.
 
     A shutdown while the executor waits ends the spinning as a shutdown between two waits
-    does (no ``ExternalShutdownException`` escapes, e.g. from a helper thread).
+    does (no ``ExternalShutdownException`` escapes, e.g. from a helper thread, nor the
+    ``RuntimeError`` the events executor may raise when the context goes away under it).
 
     Parameters
     ----------
@@ -68,6 +69,11 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
     except ExternalShutdownException:
         pass
+    except RuntimeError:
+        # The events executor may fail inside spin_once while the context shuts down (a
+        # signal arrived during the wait): that is the end asked for, not an error.
+        if rclpy.ok(context=context):
+            raise
     finally:
         for node in nodes:
             executor.remove_node(node)

@@ -1,0 +1,45 @@
+"""spin_nodes: how spinning ends (in-process, no DDS traffic needed)."""
+
+import pytest
+from rclpy.node import Node
+
+from walker_core import spinning
+
+
+class _FailingExecutor:
+    """An executor whose spin_once raises, optionally shutting the context down first."""
+
+    def __init__(self, context, shut_down_first: bool) -> None:
+        self.context, self.shut_down_first = context, shut_down_first
+
+    def add_node(self, node) -> None:
+        pass
+
+    def remove_node(self, node) -> None:
+        pass
+
+    def shutdown(self, timeout_sec=None) -> None:
+        pass
+
+    def spin_once(self, timeout_sec=None) -> None:
+        if self.shut_down_first:
+            self.context.try_shutdown()
+        raise RuntimeError('Unable to convert call argument to Python object')
+
+
+@pytest.mark.parametrize('shut_down_first', [True, False])
+def test_an_executor_error_during_shutdown_ends_spinning_quietly_and_any_other_is_raised(
+        monkeypatch, rclpy_context, shut_down_first):
+    context = rclpy_context
+    node = Node('spin_probe', context=context, start_parameter_services=False,
+                enable_rosout=False)
+    monkeypatch.setattr(spinning, 'make_executor',
+                        lambda ctx: _FailingExecutor(context, shut_down_first))
+    try:
+        if shut_down_first:
+            spinning.spin_nodes(node, context=context)  # returns: the shutdown was asked for
+        else:
+            with pytest.raises(RuntimeError, match='Unable to convert'):
+                spinning.spin_nodes(node, context=context)
+    finally:
+        node.destroy_node()
