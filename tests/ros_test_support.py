@@ -20,7 +20,8 @@ from pathlib import Path
 from collections.abc import Iterator
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
-           'SharedMemoryGuard']
+           'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
+           'processes_with']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 # Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
@@ -216,3 +217,30 @@ class SharedMemoryGuard:
             with contextlib.suppress(OSError):
                 os.link(self._SHM / name, self._dir / name)
                 self._links[name] = ((self._dir / name).stat().st_ino, owners)
+
+
+def attached_grippers(message) -> list[str]:
+    """Names of the grippers a ``walker_msgs/GripperStates`` message reports ATTACHED."""
+    from walker_msgs.msg import GripperState
+
+    return [g.name for g in message.grippers if g.state == GripperState.ATTACHED]
+
+
+def assert_always_attached(states) -> None:
+    """Check the space-station rule on every ``GripperStates`` message seen: one attached."""
+    assert states, 'no gripper state was received'
+    for message in states:
+        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
+        assert attached_grippers(message), f'no gripper attached at t = {stamp:.3f} s'
+
+
+def processes_with(marker: str) -> list[int]:
+    """Ids of the processes (other than this one) whose command line contains ``marker``."""
+    found = []
+    for cmdline in Path('/proc').glob('[0-9]*/cmdline'):
+        try:
+            if marker in cmdline.read_bytes().decode(errors='replace'):
+                found.append(int(cmdline.parent.name))
+        except OSError:
+            continue
+    return [pid for pid in found if pid != os.getpid()]

@@ -3,24 +3,12 @@
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-from ros_test_support import REPO_ROOT, isolated_domain, ros_environment
+from ros_test_support import REPO_ROOT, isolated_domain, processes_with, ros_environment
 
 pytestmark = pytest.mark.integration
-
-
-def _processes_with(marker: str) -> list[int]:
-    found = []
-    for cmdline in Path('/proc').glob('[0-9]*/cmdline'):
-        try:
-            if marker in cmdline.read_bytes().decode(errors='replace'):
-                found.append(int(cmdline.parent.name))
-        except OSError:
-            continue
-    return [pid for pid in found if pid != os.getpid()]
 
 
 def test_run_all_composed_brings_the_graph_up_in_one_process(tmp_path):
@@ -36,4 +24,4 @@ def test_run_all_composed_brings_the_graph_up_in_one_process(tmp_path):
     assert 'in 1 composed process' in text
     assert 'graph ready' in text
     assert 'all processes stopped (graph: ' in text
-    assert _processes_with(namespace) == [], text
+    assert processes_with(namespace) == [], text

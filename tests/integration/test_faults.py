@@ -21,7 +21,8 @@ from pathlib import Path
 
 import pytest
 
-from ros_test_support import SharedMemoryGuard, isolated_domain, ros_environment
+from ros_test_support import (
+    SharedMemoryGuard, assert_always_attached, isolated_domain, ros_environment)
 
 pytestmark = pytest.mark.integration
 
@@ -298,21 +299,8 @@ def graph(tmp_path_factory):
             codes = running.close()
         # every node stopped cleanly: the ones killed were replaced by processes that did
         assert all(code == 0 for code in codes.values()), codes
-        _assert_always_attached(running.gripper_states)
+        assert_always_attached(running.gripper_states)
         _assert_the_bag_holds_the_faults(running)
-
-
-def _attached(message) -> list[str]:
-    from walker_msgs.msg import GripperState
-
-    return [g.name for g in message.grippers if g.state == GripperState.ATTACHED]
-
-
-def _assert_always_attached(states) -> None:
-    assert states, 'no gripper state was received'
-    for message in states:
-        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
-        assert _attached(message), f'no gripper attached at t = {stamp:.3f} s'
 
 
 def _assert_the_bag_holds_the_faults(graph: FaultGraph) -> None:

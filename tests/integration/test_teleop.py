@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from ros_test_support import REPO_ROOT, isolated_domain, ros_environment
+from ros_test_support import REPO_ROOT, assert_always_attached, isolated_domain, ros_environment
 
 pytestmark = pytest.mark.integration
 
@@ -145,17 +145,7 @@ def graph(tmp_path_factory):
         finally:
             codes = running.close()
         assert all(code == 0 for code in codes.values()), codes
-        _assert_always_attached(running.gripper_states)
-
-
-def _assert_always_attached(states):
-    from walker_msgs.msg import GripperState
-
-    assert states, 'no gripper state was received'
-    for message in states:
-        attached = [g.name for g in message.grippers if g.state == GripperState.ATTACHED]
-        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
-        assert attached, f'no gripper attached at t = {stamp:.3f} s'
+        assert_always_attached(running.gripper_states)
 
 
 def _moved(before, after) -> float:

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from ros_test_support import REPO_ROOT, isolated_domain, ros_environment
+from ros_test_support import (
+    REPO_ROOT, assert_always_attached, isolated_domain, processes_with, ros_environment)
 
 pytestmark = pytest.mark.integration
 
@@ -83,17 +84,7 @@ def graph(tmp_path_factory):
         finally:
             codes = running.close()
         assert all(code == 0 for code in codes.values()), codes
-        _assert_always_attached(running.gripper_states)
-
-
-def _assert_always_attached(states):
-    from walker_msgs.msg import GripperState
-
-    assert states, 'no gripper state was received'
-    for message in states:
-        attached = [g.name for g in message.grippers if g.state == GripperState.ATTACHED]
-        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
-        assert attached, f'no gripper attached at t = {stamp:.3f} s'
+        assert_always_attached(running.gripper_states)
 
 
 @pytest.mark.parametrize('action, target, words', [
@@ -158,17 +149,6 @@ def test_a_cancelled_walk_finishes_its_step_and_ends_attached(graph):
     assert client.phase.phase == StepPhase.IDLE
 
 
-def _processes_with(marker: str) -> list[int]:
-    found = []
-    for cmdline in Path('/proc').glob('[0-9]*/cmdline'):
-        try:
-            if marker in cmdline.read_bytes().decode(errors='replace'):
-                found.append(int(cmdline.parent.name))
-        except OSError:
-            continue
-    return [pid for pid in found if pid != os.getpid()]
-
-
 @pytest.mark.parametrize('interrupt', [False, True])
 def test_run_all_leaves_no_process_behind(tmp_path, interrupt):
     namespace = f'/walker_leak_check_{os.getpid()}_{int(interrupt)}'
@@ -190,4 +170,4 @@ def test_run_all_leaves_no_process_behind(tmp_path, interrupt):
         text = ''.join(output)
         assert run.returncode == (130 if interrupt else 0), text
         assert 'all node processes stopped' in text
-        assert _processes_with(namespace) == [], text
+        assert processes_with(namespace) == [], text
