@@ -44,7 +44,7 @@ def make_executor(context=None) -> Executor:
 
 
 def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = None,
-               context=None) -> None:
+               context=None, executor: Executor | None = None) -> None:
     """Spin nodes until the context shuts down (SIGINT, SIGTERM) or ``stop()`` is true.
 
     A shutdown while the executor waits ends the spinning as a shutdown between two waits
@@ -59,9 +59,11 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
         Checked every loop; return True to stop spinning.
     context : rclpy.context.Context, optional
         The nodes' context (the default context when omitted).
+    executor : rclpy.executors.Executor, optional
+        The executor to spin with (default: :func:`make_executor`'s choice).
     """
     nodes = [nodes] if isinstance(nodes, Node) else list(nodes)
-    executor = make_executor(context)
+    executor = make_executor(context) if executor is None else executor
     for node in nodes:
         executor.add_node(node)
     try:
@@ -70,8 +72,9 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
     except ExternalShutdownException:
         pass
     except RuntimeError:
-        # The events executor may fail inside spin_once while the context shuts down (a
-        # signal arrived during the wait): that is the end asked for, not an error.
+        # A callback or the events executor may fail inside spin_once while the context shuts
+        # down (a signal arrived meanwhile: publishers and subscriptions are gone under it):
+        # that is the end asked for, not an error.
         if rclpy.ok(context=context):
             raise
     finally:

@@ -44,7 +44,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
-from walker_core.spinning import TopicSampler
+from walker_core.spinning import TopicSampler, spin_nodes
 from walker_supervisor.core.health import HealthMonitor, Level, reason_naming_silent_sources
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
@@ -869,10 +869,7 @@ def main(args: list[str] | None = None) -> None:
         # The default executor: the supervisor's asynchronous service and action calls have
         # shown a failure inside the events executor, and it handles few messages (its high-rate
         # inputs are sampled).
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
+        spin_nodes(node, executor=SingleThreadedExecutor())
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ParameterError as error:
