@@ -1,5 +1,7 @@
 """spin_nodes: how spinning ends (in-process, no DDS traffic needed)."""
 
+import threading
+
 import pytest
 from rclpy.node import Node
 
@@ -9,7 +11,7 @@ from walker_core import spinning
 class _FailingExecutor:
     """An executor whose spin_once raises, optionally shutting the context down first."""
 
-    def __init__(self, context, shut_down_first: bool) -> None:
+    def __init__(self, context, shut_down_first) -> None:
         self.context, self.shut_down_first = context, shut_down_first
 
     def add_node(self, node) -> None:
@@ -22,12 +24,14 @@ class _FailingExecutor:
         pass
 
     def spin_once(self, timeout_sec=None) -> None:
-        if self.shut_down_first:
+        if self.shut_down_first == 'now':
             self.context.try_shutdown()
+        elif self.shut_down_first == 'soon':  # a signal's shutdown still under way elsewhere
+            threading.Timer(0.2, self.context.try_shutdown).start()
         raise RuntimeError('Unable to convert call argument to Python object')
 
 
-@pytest.mark.parametrize('shut_down_first', [True, False])
+@pytest.mark.parametrize('shut_down_first', ['now', 'soon', None])
 def test_an_executor_error_during_shutdown_ends_spinning_quietly_and_any_other_is_raised(
         monkeypatch, rclpy_context, shut_down_first):
     context = rclpy_context

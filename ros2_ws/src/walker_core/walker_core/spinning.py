@@ -18,6 +18,7 @@ This module imports rclpy; the rest of ``walker_core`` does not.
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable, Iterable
 
 import rclpy
@@ -29,6 +30,7 @@ __all__ = ['make_executor', 'spin_nodes', 'TopicSampler', 'EXECUTOR_VARIABLE']
 #: Environment variable choosing the executor: ``events`` (default) or ``single``.
 EXECUTOR_VARIABLE = 'WALKER_EXECUTOR'
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before the loop checks for shutdown again
+_SHUTDOWN_GRACE = 1.0  # [s] how long an error in spinning waits for a shutdown under way
 
 
 def make_executor(context=None) -> Executor:
@@ -74,7 +76,11 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
     except RuntimeError:
         # A callback or the events executor may fail inside spin_once while the context shuts
         # down (a signal arrived meanwhile: publishers and subscriptions are gone under it):
-        # that is the end asked for, not an error.
+        # that is the end asked for, not an error. The signal's shutdown may still be under way
+        # on another thread: it is given a moment to complete before the error counts.
+        deadline = time.monotonic() + _SHUTDOWN_GRACE
+        while rclpy.ok(context=context) and time.monotonic() < deadline:
+            time.sleep(0.01)
         if rclpy.ok(context=context):
             raise
     finally:

@@ -69,3 +69,14 @@ def test_trouble_is_a_fault_only_once_it_has_lasted_the_grace_without_a_break():
 def test_a_negative_grace_is_refused():
     with pytest.raises(ValueError, match='trouble_grace'):
         HealthMonitor({'plant': 1.0}, trouble_grace=-0.1)
+
+
+def test_the_sources_not_heard_from_yet_are_listed_until_each_is_heard():
+    monitor = HealthMonitor({'plant': 1.0, 'controller': 1.0})
+    assert monitor.unheard() == ['plant', 'controller']
+    monitor.seen('controller', 3.0)
+    assert monitor.unheard() == ['plant']
+    monitor.seen('plant', 3.5, 'trouble counts as heard')
+    assert monitor.unheard() == []
+    assert monitor.faults(10.0, include_trouble=False)  # heard once, silent since: a fault
+    assert monitor.unheard() == []

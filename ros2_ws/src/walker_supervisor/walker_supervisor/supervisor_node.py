@@ -306,18 +306,23 @@ class SupervisorNode(TeleopServer, Node):
         return CancelResponse.ACCEPT
 
     async def _measurements_ready(self) -> None:
-        """Wait (at most ``_FIRST_STATE_WAIT`` seconds) for the first joint and gripper states.
+        """Wait (at most ``_FIRST_STATE_WAIT`` seconds) for the first measurements.
 
-        A goal may arrive before this node's own subscriptions have matched the plant's.
+        A goal may arrive before this node's own subscriptions have matched the plant's and
+        every controller's: the joint and gripper states, and a state from each controller.
         """
-        if self._positions is not None and len(self._grippers) == 2:
+        if self._measured():
             return
         waiter = rclpy.task.Future()
         self._measurement_waiters.append((time.monotonic() + _FIRST_STATE_WAIT, waiter))
         await waiter
 
+    def _measured(self) -> bool:
+        return self._positions is not None and len(self._grippers) == 2 \
+            and not self.health.unheard()
+
     def _release_measurement_waiters(self) -> None:
-        ready = self._positions is not None and len(self._grippers) == 2
+        ready = self._measured()
         now = time.monotonic()
         for entry in list(self._measurement_waiters):
             deadline, waiter = entry

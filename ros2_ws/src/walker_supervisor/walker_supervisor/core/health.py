@@ -77,6 +77,10 @@ class HealthMonitor:
         else:
             self._trouble_since.setdefault(name, now)
 
+    def unheard(self) -> list[str]:
+        """Return the sources not heard from yet."""
+        return [name for name in self._timeouts if name not in self._last_seen]
+
     def status(self, now: float) -> list[SourceStatus]:
         """Every source's status at steady time ``now`` [s]."""
         statuses = []
