@@ -45,6 +45,10 @@ class FaultGraph:
         self.params = load_walker_parameters(default_parameter_file())
         self.bag = tmp / 'bag' / 'faults'
         env = ros_environment(domain)
+        # The graph's nodes talk over UDP on loopback only: a participant killed with SIGKILL
+        # leaves its Fast DDS shared-memory ports behind, and a node restarted in its place has
+        # been seen deaf to the graph (no control mode, no states) over shared memory.
+        env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
         self.specs = {spec.name: spec for spec in walker_graph(
             default_parameter_file(), sim_time=True, record=True, bag_path=self.bag)}
         # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
