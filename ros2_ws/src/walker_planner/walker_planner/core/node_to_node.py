@@ -37,7 +37,7 @@ __all__ = ['PlanarModel', 'NodeToNodeSolution', 'NodeToNodeTrajectory', 'solve_n
            'SWEEP_TYPE_NAME']
 
 SWEEP_TYPE_NAME = 'bang_bang_node'
-_GRID_POINTS = 12
+_GRID_POINTS = 48
 
 
 @dataclasses.dataclass(frozen=True)
@@ -219,7 +219,7 @@ def solve_node_to_node(model: PlanarModel, rho_start: float, half_sweep: float,
 
     Notes
     -----
-    ``T(rho_mid)`` is evaluated on a grid of 12 midpoints and refined by bounded Brent
+    ``T(rho_mid)`` is evaluated on a grid of 48 midpoints and refined by bounded Brent
     minimisation around the best one; the pure rotation ``rho_mid = rho_start`` is a candidate.
     """
     summarize_profile(rho_start, rho_min, half_sweep)  # validates the data, names the problem
