@@ -21,7 +21,7 @@ from collections.abc import Iterator
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
-           'processes_with']
+           'processes_with', 'running_graph']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 # Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
@@ -244,3 +244,33 @@ def processes_with(marker: str) -> list[int]:
         except OSError:
             continue
     return [pid for pid in found if pid != os.getpid()]
+
+
+@contextlib.contextmanager
+def running_graph(make_graph, tmp: Path) -> Iterator:
+    """Run a graph of node processes in a domain of its own; check how it ended.
+
+    ``make_graph(tmp, domain)`` starts the graph; the object it returns has ``close()`` (which
+    returns each process's exit code by name), ``group`` (its ``ProcessGroup``) and
+    ``gripper_states`` (every ``GripperStates`` message its client saw). On leaving, every node
+    must have stopped cleanly on SIGINT (a node that hangs or fails in its shutdown is a defect
+    the test names, with the end of its log) and a gripper must have been attached throughout.
+    """
+    with isolated_domain() as domain:
+        graph = make_graph(tmp, domain)
+        try:
+            yield graph
+        finally:
+            codes = graph.close()
+        unclean = {name: code for name, code in codes.items() if code != 0}
+        assert not unclean, _unclean_exits(graph.group, unclean)
+        assert_always_attached(graph.gripper_states)
+
+
+def _unclean_exits(group, unclean: dict) -> str:
+    """Describe the nodes that did not exit with code 0, each with the end of its log."""
+    lines = [f'nodes that did not stop cleanly (exit codes): {unclean}']
+    newest = {process.spec.name: process for process in group.processes}
+    for name in unclean:
+        lines += [f'--- end of the log of {name} ---', newest[name].log_tail(25)]
+    return '\n'.join(lines)

@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from ros_test_support import REPO_ROOT, assert_always_attached, isolated_domain, ros_environment
+from ros_test_support import REPO_ROOT, ros_environment, running_graph
 
 pytestmark = pytest.mark.integration
 
@@ -138,14 +138,8 @@ def _patient_parameters(tmp):
 
 @pytest.fixture(scope='module')
 def graph(tmp_path_factory):
-    with isolated_domain() as domain:
-        running = Graph(tmp_path_factory.mktemp('teleop'), domain)
-        try:
-            yield running
-        finally:
-            codes = running.close()
-        assert all(code == 0 for code in codes.values()), codes
-        assert_always_attached(running.gripper_states)
+    with running_graph(Graph, tmp_path_factory.mktemp('teleop')) as running:
+        yield running
 
 
 def _moved(before, after) -> float:

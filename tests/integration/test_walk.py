@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from ros_test_support import (
-    REPO_ROOT, assert_always_attached, isolated_domain, processes_with, ros_environment)
+    REPO_ROOT, isolated_domain, processes_with, ros_environment, running_graph)
 
 pytestmark = pytest.mark.integration
 
@@ -77,14 +77,8 @@ class Graph:
 
 @pytest.fixture(scope='module')
 def graph(tmp_path_factory):
-    with isolated_domain() as domain:
-        running = Graph(tmp_path_factory.mktemp('walk'), domain)
-        try:
-            yield running
-        finally:
-            codes = running.close()
-        assert all(code == 0 for code in codes.values()), codes
-        assert_always_attached(running.gripper_states)
+    with running_graph(Graph, tmp_path_factory.mktemp('walk')) as running:
+        yield running
 
 
 @pytest.mark.parametrize('action, target, words', [
