@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 
 from ros_test_support import (
-    SharedMemoryGuard, assert_always_attached, isolated_domain, ros_environment)
+    SharedMemoryGuard, ros_environment, running_graph)
 
 pytestmark = pytest.mark.integration
 
@@ -74,7 +74,7 @@ class FaultGraph:
         from diagnostic_msgs.msg import DiagnosticArray
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
-        from walker_msgs.msg import GripperStates, StepPhase
+        from walker_msgs.msg import GripperStates, StepPhase, StepReport
 
         from walker_bringup.graph_client import GraphClient, init_context
 
@@ -92,6 +92,8 @@ class FaultGraph:
                                  reliable)
         node.create_subscription(StepPhase, 'phase',
                                  lambda m: self.phases.append((time.monotonic(), m)), reliable)
+        self.step_reports = []
+        node.create_subscription(StepReport, 'step_reports', self.step_reports.append, reliable)
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
                                  QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE))
         node.create_subscription(
@@ -295,16 +297,10 @@ class FaultGraph:
 
 @pytest.fixture(scope='module')
 def graph(tmp_path_factory):
-    with isolated_domain() as domain:
-        running = FaultGraph(tmp_path_factory.mktemp('faults'), domain)
-        try:
-            yield running
-        finally:
-            codes = running.close()
-        # every node stopped cleanly: the ones killed were replaced by processes that did
-        assert all(code == 0 for code in codes.values()), codes
-        assert_always_attached(running.gripper_states)
-        _assert_the_bag_holds_the_faults(running)
+    # every node must stop cleanly: the ones killed were replaced by processes that do
+    with running_graph(FaultGraph, tmp_path_factory.mktemp('faults')) as running:
+        yield running
+    _assert_the_bag_holds_the_faults(running)
 
 
 def _assert_the_bag_holds_the_faults(graph: FaultGraph) -> None:
@@ -469,6 +465,50 @@ def test_the_supervisor_killed_in_insertion_is_restarted_and_completes_the_step(
         graph.wait_until(lambda: graph.phase.phase == StepPhase.IDLE, FAULT_TIMEOUT,
                          'the restarted supervisor idle')
         assert set(graph.attached_nodes()) == {'a', 'b'}
+
+
+# ---------------------------------------------------------------------- a jammed insertion
+def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_resumed(graph):
+    """A fouled thread jams every try: the step ends in safe hold; resume completes it.
+
+    The plant's thread is fouled (``sim.jam_screw_ins``) for as many screw-ins as the
+    supervisor tries; the base holds throughout; with the thread clear again, resume completes
+    the step.
+    """
+    from action_msgs.msg import GoalStatus
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    from rclpy.parameter import Parameter
+    from walker_msgs.msg import GripperState, StepPhase
+
+    def plant_jams() -> int:
+        answer = graph.parameters('plant', 'get_parameters',
+                                  GetParameters.Request(names=['sim.jam_screw_ins']))
+        return answer.values[0].integer_value
+
+    attempts = graph.parameters('supervisor', 'get_parameters', GetParameters.Request(
+        names=['supervisor.max_insertion_attempts'])).values[0].integer_value
+    assert attempts >= 2, 'the bounded retry needs at least two attempts to show'
+    injected = SetParameters.Request(parameters=[
+        Parameter('sim.jam_screw_ins', value=attempts).to_parameter_msg()])
+    assert graph.parameters('plant', 'set_parameters', injected).results[0].successful
+    assert plant_jams() == attempts
+    step = graph.one_step()
+    started = time.monotonic()
+    handle = graph.start_walk(step.to_node)
+    held = graph.wait_phase(StepPhase.SAFE_HOLD, TIMEOUT, started)
+    assert f'insertion jammed {attempts} times' in held.reason, held.reason
+    assert 'fouled' in held.reason, held.reason
+    wrapped = graph.result(handle)
+    assert wrapped.status == GoalStatus.STATUS_ABORTED and not wrapped.result.success
+    report = graph.step_reports[-1]
+    assert not report.success and report.insertion_attempts == attempts, report
+    assert plant_jams() == 0, 'each jam counts the injected fault down'
+    # the base holds the walker; the jammed gripper is free, never screwed in
+    assert graph.attached_nodes() == {step.base_gripper: step.base_node}
+    moving = [g for message in graph.gripper_states for g in message.grippers
+              if g.name == step.moving_gripper]
+    assert any(g.state == GripperState.JAMMED and g.node == step.to_node for g in moving)
+    graph.resume_and_complete(step)
 
 
 # ---------------------------------------------------------------------- a silent publisher

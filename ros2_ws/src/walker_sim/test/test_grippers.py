@@ -110,6 +110,27 @@ def test_commands_in_the_wrong_state_are_refused(mode_setup, command, words):
             grippers.request_unscrew('b')
 
 
+def test_a_fouled_thread_jams_the_next_screw_ins_however_well_aligned_then_clears():
+    grippers = logic({'a': 'n1_1'})
+    grippers.fouled_screw_ins = 2
+    for remaining in (1, 0):
+        outcome = grippers.request_screw_in('b', aligned())
+        assert not outcome.success and outcome.status.mode == GripperMode.JAMMED
+        assert 'thread is fouled' in outcome.status.message
+        assert f'{remaining} more screw-ins will jam' in outcome.status.message
+        assert grippers.fouled_screw_ins == remaining
+    outcome = grippers.request_screw_in('b', aligned())  # retried from JAMMED: clear now
+    assert outcome.success and outcome.status.mode == GripperMode.SCREWING
+
+
+def test_a_fouled_thread_does_not_count_down_on_a_refused_screw_in():
+    grippers = logic()  # both attached: screw-in is refused before the thread is tried
+    grippers.fouled_screw_ins = 1
+    with pytest.raises(GripperCommandError):
+        grippers.request_screw_in('b', aligned())
+    assert grippers.fouled_screw_ins == 1
+
+
 def test_a_jammed_gripper_backs_out_at_once():
     grippers = logic({'a': 'n1_1'})
     grippers.request_screw_in('b', aligned(1.0))

@@ -9,6 +9,7 @@ import xml.etree.ElementTree as ElementTree
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ros_test_support import NodeProcess
@@ -273,5 +274,33 @@ def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_cont
         assert not frozen.successful and node.sim.physics_rate == 2000.0
         described = node.describe_parameter('sim.physics_rate')
         assert '[Hz]' in described.description and described.read_only
+    finally:
+        node.destroy_node()
+
+
+def test_an_injected_fouled_thread_jams_screw_ins_and_the_parameter_counts_down(rclpy_context):
+    from rclpy.parameter import Parameter
+    from walker_msgs.srv import GripperCommand
+
+    from walker_sim.plant_node import PlantNode
+
+    node = PlantNode(context=rclpy_context, namespace=NAMESPACE)
+    try:
+        refused = node.set_parameters([Parameter('sim.jam_screw_ins', value=-1)])[0]
+        assert not refused.successful and node.plant.fouled_screw_ins == 0
+        assert node.set_parameters([Parameter('sim.jam_screw_ins', value=2)])[0].successful
+        assert node.plant.fouled_screw_ins == 2
+        # the start stance has both grippers attached: let b go, then screw it back in
+        release = GripperCommand.Request(gripper='b', command=GripperCommand.Request.UNSCREW)
+        assert node._on_gripper_command(release, GripperCommand.Response()).success
+        while node.plant.gripper_status('b').mode.name != 'FREE':
+            node.plant.step(np.zeros(5), 0.01)
+        screw_in = GripperCommand.Request(gripper='b', command=GripperCommand.Request.SCREW_IN)
+        for remaining in (1, 0):
+            answer = node._on_gripper_command(screw_in, GripperCommand.Response())
+            assert not answer.success and 'fouled' in answer.message
+            assert node.get_parameter('sim.jam_screw_ins').value == remaining
+        answer = node._on_gripper_command(screw_in, GripperCommand.Response())
+        assert answer.success, answer.message
     finally:
         node.destroy_node()

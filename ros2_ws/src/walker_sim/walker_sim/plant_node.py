@@ -34,6 +34,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.logging import get_logger
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
@@ -140,6 +141,18 @@ class PlantNode(Node):
         self.sim = sim
         self.commands.command_timeout = sim.command_timeout
         self.lockstep.timeout = sim.lockstep_timeout
+        if sim.jam_screw_ins != self.plant.fouled_screw_ins:
+            self.plant.foul_thread(sim.jam_screw_ins)
+            self.get_logger().warning(
+                f'fault injected: the next {sim.jam_screw_ins} screw-ins jam (sim.jam_screw_ins)'
+                if sim.jam_screw_ins else 'injected fault cleared: screw-ins jam only when '
+                'out of tolerance')
+
+    def _count_down_injected_jams(self) -> None:
+        """Keep ``sim.jam_screw_ins`` equal to the jams still to come, for ``ros2 param get``."""
+        if self.plant.fouled_screw_ins != self.sim.jam_screw_ins:
+            self.set_parameters([Parameter('sim.jam_screw_ins',
+                                           value=self.plant.fouled_screw_ins)])
 
     # ------------------------------------------------------------------ stepping
     def _advance(self, periods: int = 1) -> None:
@@ -280,6 +293,7 @@ class PlantNode(Node):
         try:
             if request.command == GripperCommand.Request.SCREW_IN:
                 outcome = self.plant.screw_in(gripper)
+                self._count_down_injected_jams()
                 response.success = outcome.success
                 response.message = outcome.status.message
             elif request.command == GripperCommand.Request.UNSCREW:

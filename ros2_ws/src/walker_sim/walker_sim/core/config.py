@@ -77,6 +77,9 @@ class SimParameters:
     stiction_velocity: float = parameter(
         'joint speed below which a joint is stuck and must break away at the stiction level',
         'rad/s', 1e-6, 1.0)
+    jam_screw_ins: int = parameter(
+        'fault injection: this many coming screw-ins jam whatever the alignment (a fouled '
+        'thread); the plant counts it down as they jam', '', 0, 100, read_only=False)
     start: StartConfiguration
 
     @classmethod

@@ -11,6 +11,9 @@ is ATTACHED. Outside the tolerance the thread jams at once (JAMMED): the gripper
 the message says by how much it missed. Unscrewing takes ``gripper.screw_time`` too
 (UNSCREWING, still attached) and is refused, by the plant itself as by the hardware's
 interlock, unless the other gripper is ATTACHED: the walker never lets go of the truss.
+
+A fouled thread (debris, a damaged hole) can be injected for tests of the supervisor's retry and
+abort: :attr:`GripperLogic.fouled_screw_ins` coming screw-ins jam whatever the alignment.
 """
 
 from __future__ import annotations
@@ -159,6 +162,9 @@ class GripperLogic:
         self._status = {g: GripperStatus(g, GripperMode.FREE) for g in GRIPPERS}
         self._elapsed = dict.fromkeys(GRIPPERS, 0.0)
         self._base = 'a'
+        #: Coming screw-ins that jam whatever the alignment (an injected fouled thread); each
+        #: one that jams counts it down.
+        self.fouled_screw_ins = 0
 
     @classmethod
     def from_parameters(cls, params) -> 'GripperLogic':
@@ -227,6 +233,10 @@ class GripperLogic:
         if alignment.axis_error > self.axis_tolerance:
             misses.append(f'axis error {math.degrees(alignment.axis_error):.2f} deg exceeds '
                           f'the tolerance {math.degrees(self.axis_tolerance):.2f} deg')
+        if self.fouled_screw_ins > 0:
+            self.fouled_screw_ins -= 1
+            misses.append(f'the thread is fouled (injected fault; {self.fouled_screw_ins} '
+                          f'more screw-ins will jam)')
         if misses:
             message = (f'jammed at node {alignment.node}: ' + '; '.join(misses))
             self._status[gripper] = GripperStatus(gripper, GripperMode.JAMMED, alignment.node,

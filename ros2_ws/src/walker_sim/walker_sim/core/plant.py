@@ -480,6 +480,23 @@ class WalkerPlant:
             self._pull[gripper] = (pose, self._seat_pose(pose, alignment.node))
         return outcome
 
+    @property
+    def fouled_screw_ins(self) -> int:
+        """Coming screw-ins that jam whatever the alignment (an injected fault)."""
+        return self._grippers.fouled_screw_ins
+
+    def foul_thread(self, screw_ins: int) -> None:
+        """Inject a fouled thread: the next ``screw_ins`` screw-ins jam (0 clears it).
+
+        Raises
+        ------
+        ValueError
+            A negative count (nothing changes).
+        """
+        if screw_ins < 0:
+            raise ValueError(f'screw_ins must be 0 or more, got {screw_ins}')
+        self._grippers.fouled_screw_ins = int(screw_ins)
+
     def unscrew(self, gripper: str) -> GripperStatus:
         """Unscrew a gripper; it lets go after ``gripper.screw_time``.
 
