@@ -20,5 +20,6 @@ setup(
     license='Apache-2.0',
     entry_points={'console_scripts': [
         'composed_graph = walker_bringup.composition:main',
+        'lossy_link = walker_bringup.lossy_link_node:main',
     ]},
 )
