@@ -6,8 +6,9 @@ Interfaces (relative to the node's namespace, ``/walker`` by default; docs/archi
   with ``execute`` true, also start streaming it;
 * action ``follow_trajectory`` (``walker_msgs/action/FollowTrajectory``): stream a
   ``trajectory_msgs/JointTrajectory`` at the control rate, with feedback; cancelling stops
-  the stream with a hold setpoint at the last position; a goal is rejected while a stream runs;
-* service ``stop_trajectory`` (``std_srvs/srv/Trigger``): stop whatever stream runs;
+  the stream at once (no joint state needed) with a hold setpoint at the last position; a goal
+  is rejected while a stream runs;
+* service ``stop_trajectory`` (``std_srvs/srv/Trigger``): stop whatever stream runs, at once;
 * ``controllers/<joint>/setpoint`` (``walker_msgs/msg/JointCommand``), published;
 * ``planned_trajectory`` (``trajectory_msgs/msg/JointTrajectory``), latched;
 * ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors.
@@ -215,7 +216,7 @@ class PlannerNode(Node):
         with self._lock:
             active = self._active
             if active is not None:
-                active.cancelled, active.message = True, 'stopped by stop_trajectory'
+                self._end_now(active, 'stopped by stop_trajectory')
         response.success = active is not None
         response.message = 'stopping the stream' if active else 'no stream is running'
         return response
@@ -232,7 +233,22 @@ class PlannerNode(Node):
         return GoalResponse.ACCEPT
 
     def _on_cancel(self, goal_handle) -> CancelResponse:
+        with self._lock:
+            active = self._active
+            if active is not None and active.goal_handle is goal_handle:
+                self._end_now(active, 'cancelled')
         return CancelResponse.ACCEPT
+
+    def _end_now(self, active: _ActiveStream, message: str) -> None:
+        """End a stream at once (lock held), holding where it was, without waiting for a state.
+
+        The stream otherwise ends at the next joint state: a plant that has stopped sending
+        them (frozen, gone) would keep a cancelled stream running, and the next goal refused,
+        until it is back.
+        """
+        active.cancelled, active.message = True, message
+        now = self._measured[0] if self._measured is not None else active.stream.origin
+        self._finish(active, active.stream.hold(now, active.last))
 
     async def _on_execute(self, goal_handle):
         result = FollowTrajectory.Result()

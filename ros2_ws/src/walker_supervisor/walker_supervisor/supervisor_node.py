@@ -69,6 +69,12 @@ _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 _MODE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL,
                        history=HistoryPolicy.KEEP_LAST)
+# The phase is latched with a short history: a subscriber that matches late (a recorder
+# matching a restarted supervisor, seen to take more than a second over UDP) still receives
+# the phases it missed, a safe hold among them, and its newest message is the phase now.
+_PHASE_QOS = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                        history=HistoryPolicy.KEEP_LAST)
 _REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
@@ -134,7 +140,7 @@ class SupervisorNode(TeleopServer, Node):
         self._pending_adoption = False
 
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODE_QOS)
-        self.phase_pub = self.create_publisher(StepPhase, 'phase', _LATCHED)
+        self.phase_pub = self.create_publisher(StepPhase, 'phase', _PHASE_QOS)
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
         # The joint states (500 Hz) and the tip pose are sampled at the decision rate, not
         # handled message by message: a Python callback per message would cost more CPU than
