@@ -311,6 +311,19 @@ def test_a_correction_leads_every_joint_back_to_the_goal_of_the_jog():
                           joint.goal)
 
 
+def test_the_miss_of_a_jog_is_the_farthest_joint_and_the_tip_distance():
+    jog = RULES.tip_jog(situation(LIFTED), [0.02, 0.0, 0.0], 0.0)
+    assert RULES.joint_miss(roles_to_physical(jog.goal, 'a'), jog) == 0.0
+    assert RULES.tip_miss(roles_to_physical(jog.goal, 'a'), jog) == pytest.approx(0.0, abs=1e-12)
+    settled = jog.goal.copy()
+    settled[1] += 0.003
+    settled[4] -= 0.004
+    physical = roles_to_physical(settled, 'a')
+    assert RULES.joint_miss(physical, jog) == pytest.approx(0.004)
+    expected = np.linalg.norm(KIN.forward(settled)[:3] - jog.goal_point)
+    assert RULES.tip_miss(physical, jog) == pytest.approx(expected) and expected > 1e-4
+
+
 def test_a_correction_into_the_truss_is_refused():
     jog = RULES.tip_jog(situation(LIFTED), [0.0, 0.0, -0.05], 0.0)
     beside = KIN.inverse([0.0, SPACING - 0.02, 0.0, 0.0, 0.0], reference=LIFTED)

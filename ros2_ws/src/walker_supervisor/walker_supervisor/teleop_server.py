@@ -35,7 +35,7 @@ from walker_msgs.action import FollowTrajectory
 from walker_msgs.msg import GripperState, GripperStates
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip, PlanTrajectory
 
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_supervisor.core.sequencer import MAX_FINE_LINES, SequencerError, TrajectoryRequest
 from walker_supervisor.core.teleop import (
@@ -190,13 +190,10 @@ class TeleopServer:
         call.max_velocity = jog.speed
         index = PHYSICAL_JOINT_NAMES.index(jog.joint_name)
 
-        def off_target() -> float:  # [rad] the farthest joint from the jog's goal
-            roles = physical_to_roles(self._positions, jog.base_gripper)
-            return float(np.max(np.abs(roles - jog.goal)))
-
         outcome = await self._teleop_move(
             jog, call, lambda: float(self._positions[index] - jog.target),
-            (off_target, self.teleop_settings.joint_tolerance))
+            (lambda: self.teleop.joint_miss(self._positions, jog),
+             self.teleop_settings.joint_tolerance))
         if outcome.success:
             outcome.message = (
                 f'{jog.joint_name} at {self._positions[index]:.4f} rad, '
@@ -213,8 +210,7 @@ class TeleopServer:
             return self._teleop_answer(response, _Outcome(False, str(error)), 'jog_tip')
 
         def error() -> float:
-            tip = self.kinematics.forward(physical_to_roles(self._positions, jog.base_gripper))
-            return float(np.linalg.norm(tip[:3] - jog.goal_point))
+            return self.teleop.tip_miss(self._positions, jog)
 
         tolerance = self.settings.insertion_alignment
         outcome = await self._teleop_move(jog, self._tip_call(jog), error, (error, tolerance))

@@ -463,6 +463,27 @@ class TeleopRules:
         goal = self._check_reachable(path, start, base)
         return TipJog(free, base, start, start_point, goal_point, delta, speed, goal)
 
+    @staticmethod
+    def joint_miss(positions: np.ndarray, jog: JointJog | TipJog) -> float:
+        """Return how far [rad] the farthest joint is from a jog's goal angles.
+
+        Parameters
+        ----------
+        positions : ndarray, shape (5,)
+            Measured joint angles in physical order [rad].
+        """
+        roles = physical_to_roles(np.asarray(positions, dtype=float), jog.base_gripper)
+        return float(np.max(np.abs(roles - jog.goal)))
+
+    def tip_miss(self, positions: np.ndarray, jog: TipJog) -> float:
+        """Return the distance [m] of the free gripper from a tip jog's goal point.
+
+        The forward kinematics of the measured joints (physical order [rad]): what the walker
+        knows of where its gripper is.
+        """
+        roles = physical_to_roles(np.asarray(positions, dtype=float), jog.base_gripper)
+        return float(np.linalg.norm(self.kinematics.forward(roles)[:3] - jog.goal_point))
+
     def correction(self, positions: np.ndarray, jog: JointJog | TipJog) -> Correction:
         """Return the joint move from where a jog settled to its goal configuration.
 
