@@ -549,3 +549,52 @@ def test_a_joint_that_never_reaches_the_coarse_start_ends_the_step_in_safe_hold(
     assert not outcome.success and 'extraction overran' in outcome.message
     assert world.sequencer.phase == Phase.SAFE_HOLD
     assert world.grippers[world.stance.base_gripper] == 'attached'
+
+
+def _folded_mid_sweep(world, radius, height=0.03, turned=0.9):
+    """Joints with the tip ``radius`` from the base yaw axis, ``turned`` rad into the sweep."""
+    sweep = world.sequencer.step.sweep
+    start = world.targets.point_above_from
+    angle = math.atan2(start[1], start[0]) + turned * math.copysign(1.0, sweep)
+    point = [radius * math.cos(angle), radius * math.sin(angle), height, 0.0,
+             world.targets.above_from[4]]
+    return KIN.inverse(point, reference=world.targets.above_from)
+
+
+def _hold_a_half_turn_in_coarse_motion(world):
+    step = next(s for s in possible_steps(TRUSS, world.stance)
+                if abs(abs(s.sweep) - math.pi) < 1e-9)
+    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                TRUSS.position(step.to_node), world.theta, 0.03)
+    world.targets = targets
+    world.execute(world.sequencer.start(step, targets, world.now, dict(world.grippers)))
+    while world.sequencer.phase != Phase.COARSE:
+        world.advance()
+    world.execute(world.sequencer.hold('controllers held mid-sweep', world.now))
+    world.motion = None
+    return step
+
+
+def test_resume_where_the_arm_folded_mid_sweep_goes_back_in_joint_space_and_completes():
+    world = World()
+    _hold_a_half_turn_in_coarse_motion(world)
+    world.theta = _folded_mid_sweep(world, 0.205)  # no straight tip line from here
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    back = [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+    assert back.purpose == 'recover_joint' and back.mode == 'fine'
+    np.testing.assert_allclose(back.goal, world.targets.above_to)
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+
+
+def test_resume_with_no_safe_way_back_is_refused_and_changes_nothing():
+    world = World()
+    _hold_a_half_turn_in_coarse_motion(world)
+    world.theta = _folded_mid_sweep(world, 0.205, height=0.005)  # low, folded
+    with pytest.raises(SequencerError, match='no safe way back above n0_1'):
+        world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                               {'a': 'n1_1', 'b': ''})
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert world.sequencer.reason == 'controllers held mid-sweep'

@@ -45,7 +45,8 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler, spin_nodes
-from walker_supervisor.core.health import HealthMonitor, Level, reason_naming_silent_sources
+from walker_supervisor.core.health import (
+    HealthMonitor, Level, controller_trouble, reason_naming_silent_sources)
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -169,6 +170,7 @@ class SupervisorNode(TeleopServer, Node):
         self.create_timer(TICK_PERIOD, self._tick)
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
+        self._commanded_mode = ''  # the last mode sent to the controllers
         self._controller_states = {
             joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
                                            _CONTROLLER_STATES)
@@ -447,9 +449,9 @@ class SupervisorNode(TeleopServer, Node):
         for joint, subscription in self._controller_states.items():
             reports = self._sampler.take(subscription)
             if reports:
-                stale = reports[-1].stale
-                self.health.seen(f'controller {joint}', now,
-                                 'holding: its inputs are stale' if stale else '')
+                tracking = self.sequencer.busy and self._commanded_mode in ('coarse', 'fine')
+                self.health.seen(f'controller {joint}', now, controller_trouble(
+                    reports[-1].stale, reports[-1].mode == ControllerState.HOLD, tracking))
 
     # ------------------------------------------------------------------ health
     def _faults(self) -> list[str]:
@@ -636,6 +638,7 @@ class SupervisorNode(TeleopServer, Node):
                 self._cancel_trajectory()
 
     def _publish_mode(self, mode: str, base: str) -> None:
+        self._commanded_mode = mode
         msg = ControlMode(mode=_MODES[mode], base_gripper=base)
         msg.header.stamp = self.get_clock().now().to_msg()
         self.mode_pub.publish(msg)
@@ -793,6 +796,7 @@ class SupervisorNode(TeleopServer, Node):
     def _on_hold(self, request: Trigger.Request, response: Trigger.Response):
         self._execute(self.sequencer.hold('hold requested by an operator', self._now()))
         self._teleop_stop('hold requested by an operator')
+        self._publish_phase()  # at once: the decision timer runs on the graph's clock
         response.success = True
         response.message = 'holding: trajectories stopped, controllers hold, grippers unchanged'
         return response
@@ -816,6 +820,10 @@ class SupervisorNode(TeleopServer, Node):
             response.message = str(error)
             return response
         self._execute(commands)
+        # at once, before anything can end the motion again: the decision timer runs on the
+        # graph's clock, which stands still while the plant does, and every resume must show
+        # on the phase topic as the phase it entered
+        self._publish_phase()
         response.success = True
         response.message = ('resumed: completing the step to '
                             f'{self.sequencer.step.to_node}' if self.sequencer.busy else

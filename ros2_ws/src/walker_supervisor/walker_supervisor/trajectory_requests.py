@@ -3,7 +3,8 @@
 Which of the planner's named trajectory types serves each purpose of a step (paper section 5):
 extraction and insertion are straight lines along the hole axis, the coarse motion is the
 bang-bang node-to-node trajectory, the fine motion a constant-velocity Cartesian line; a step
-resumed after a safe hold recovers to the point above its target with a Cartesian blend. An
+resumed after a safe hold recovers to the point above its target with a Cartesian blend (or,
+where the arm cannot follow a straight tip line, a minimum-jerk joint move). An
 operator's joint jog is a minimum-jerk joint move, a tip jog a constant-velocity Cartesian line.
 """
 
@@ -17,6 +18,7 @@ from walker_msgs.srv import PlanTrajectory
 from walker_core.joint_roles import roles_to_physical
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.sequencer import TrajectoryRequest
+from walker_supervisor.core.way_back import ik_branch
 
 __all__ = ['TRAJECTORY_TYPES', 'plan_request']
 
@@ -28,6 +30,8 @@ TRAJECTORY_TYPES = {
     'fine': ('cartesian_line', True),
     'insertion': ('insertion_line', True),
     'recover': ('cartesian_parabolic_accel', True),
+    # back to above the target where no straight tip line is followable (core/way_back.py)
+    'recover_joint': ('joint_min_jerk', False),
     'jog_joint': ('joint_min_jerk', False),  # teleoperation (core/teleop.py)
     'jog_tip': ('cartesian_line', True),
 }
@@ -42,12 +46,9 @@ def _vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.nda
     the request with the reason).
     """
     near = np.asarray(near, dtype=float)
-    l1, l2 = kinematics.l1, kinematics.l2
-    t2, t3, t4 = near[1:4]
-    reach = l2 * math.sin(t2) + l2 * math.sin(t2 + t3) + l1 * math.sin(t2 + t3 + t4)
+    elbow, reach = ik_branch(kinematics, near)
     try:
-        return kinematics.inverse([*point, 0.0, near[4]], 'up' if t3 >= 0 else 'down',
-                                  'forward' if reach >= 0 else 'backward', reference=near,
+        return kinematics.inverse([*point, 0.0, near[4]], elbow, reach, reference=near,
                                   check_limits=False)
     except KinematicsError:
         return near

@@ -13,7 +13,8 @@ from __future__ import annotations
 import dataclasses
 import enum
 
-__all__ = ['Level', 'SourceStatus', 'HealthMonitor', 'reason_naming_silent_sources']
+__all__ = ['Level', 'SourceStatus', 'HealthMonitor', 'reason_naming_silent_sources',
+           'controller_trouble']
 
 
 class Level(enum.IntEnum):
@@ -122,3 +123,27 @@ def reason_naming_silent_sources(reason: str, statuses: list[SourceStatus]) -> s
     if not new:
         return reason
     return f'{reason}; then {"; ".join(new)}' if reason else '; '.join(new)
+
+
+def controller_trouble(stale: bool, holding: bool, tracking_commanded: bool) -> str:
+    """Return what is wrong with a joint controller by its own report ('' when nothing).
+
+    Parameters
+    ----------
+    stale : bool
+        It reports an input stream timed out (it is holding for that).
+    holding : bool
+        It reports the HOLD mode.
+    tracking_commanded : bool
+        A step is under way and the supervisor's last mode command was COARSE or FINE.
+
+    A controller whose inputs went stale holds, and keeps holding once they are fresh again
+    until the next mode command (its reference has moved on meanwhile: tracking it again at once
+    would jump). Its stale flag is then down, but it no longer follows the step's motion: the
+    arm stops wherever it was, mid-sweep perhaps, while the step goes on without it.
+    """
+    if stale:
+        return 'holding: its inputs are stale'
+    if holding and tracking_commanded:
+        return 'holding since its inputs went stale: it follows no motion until a mode command'
+    return ''

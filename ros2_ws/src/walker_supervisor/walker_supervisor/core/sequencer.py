@@ -42,6 +42,7 @@ from walker_core.kinematics import WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
+from walker_supervisor.core.way_back import line_is_followable, lowest_tip_height
 
 __all__ = [
     'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',
@@ -499,23 +500,24 @@ class StepSequencer:
         if self._step is None or self._targets is None:
             raise SequencerError('the free gripper has no step to complete: jog it over a node '
                                  'and screw it in')
+        tip = self.kinematics.forward(self._theta)[:3]
+        in_hole = (tip[2] < 0.5 * self._targets.point_above_from[2] and np.linalg.norm(
+            tip[:2] - self._targets.point_above_from[:2]) < self.parameters.coarse_to_fine_region)
+        way = None if in_hole else self._way_back_purpose('recover')
+        if not in_hole and way is None:
+            raise SequencerError(self._no_way_back())
         self.reason = ''
         self._fine_lines = 0
         self._attempts = 0
         self._step_started = now
         self._durations = {}
-        tip = self.kinematics.forward(self._theta)[:3]
-        in_hole = (tip[2] < 0.5 * self._targets.point_above_from[2] and np.linalg.norm(
-            tip[:2] - self._targets.point_above_from[:2]) < self.parameters.coarse_to_fine_region)
         if in_hole:  # still in (or at) the hole it was leaving: out along the axis first
             self._enter(Phase.EXTRACTION, now, 'lifting')
             return [SetControlMode('fine', self._step.base_gripper),
                     self._trajectory('extraction', self._theta, self._targets.above_from, tip,
                                      self._targets.point_above_from)]
         self._enter(Phase.FINE, now, 'moving')
-        return [SetControlMode('fine', self._step.base_gripper),
-                self._trajectory('recover', self._theta, self._targets.above_to, tip,
-                                 self._targets.point_above_to)]
+        return [SetControlMode('fine', self._step.base_gripper), self._way_back(way)]
 
     def forget_step(self) -> None:
         """Forget the last (or interrupted) step: an operator has changed the stance.
@@ -588,9 +590,37 @@ class StepSequencer:
             return commands
         self._fine_lines += 1
         self.stage = 'moving'
+        purpose = self._way_back_purpose('fine')
+        if purpose is None:
+            return commands + self._abort(self._no_way_back(), now)
+        return commands + [self._way_back(purpose)]
+
+    def _way_back_purpose(self, line: str) -> str | None:
+        """How to go from the measured joints to above the target (None: no safe way).
+
+        ``line`` (a Cartesian line: 'fine' or 'recover') where the arm can follow one; else
+        ``recover_joint`` (a joint-space line) if the tip stays at least half the approach
+        height above the truss along it (:mod:`walker_supervisor.core.way_back`).
+        """
+        t = self._targets
+        if line_is_followable(self.kinematics, self._theta, t.point_above_to):
+            return line
+        floor = t.point_to[2] + 0.5 * (t.point_above_to[2] - t.point_to[2])
+        if lowest_tip_height(self.kinematics, self._theta, t.above_to) >= floor:
+            return 'recover_joint'
+        return None
+
+    def _way_back(self, purpose: str) -> TrajectoryRequest:
         tip = self.kinematics.forward(self._theta)[:3]
-        return commands + [self._trajectory('fine', self._theta, self._targets.above_to, tip,
-                                            self._targets.point_above_to)]
+        return self._trajectory(purpose, self._theta, self._targets.above_to, tip,
+                                self._targets.point_above_to)
+
+    def _no_way_back(self) -> str:
+        tip = self.kinematics.forward(self._theta)[:3]
+        return (f'no safe way back above {self._step.to_node} from here (tip at '
+                f'({tip[0]:+.3f}, {tip[1]:+.3f}, {tip[2]:+.3f}) m in the base frame): neither '
+                f'a straight tip line nor a joint-space line keeps the arm in its workspace '
+                f'and above the truss; jog the arm nearer and resume')
 
     def _enter_insertion(self, now: float) -> list:
         self._insertion_error = self.tip_error()

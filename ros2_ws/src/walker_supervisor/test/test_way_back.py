@@ -1,0 +1,63 @@
+"""The way back above a step's target: which straight tip lines the arm can follow."""
+
+import math
+
+import numpy as np
+import pytest
+
+from walker_core.kinematics import WalkerKinematics
+from walker_core.robot_parameters import load_walker_parameters
+from walker_supervisor.core.health import controller_trouble
+from walker_supervisor.core.way_back import ik_branch, line_is_followable, lowest_tip_height
+
+KIN = WalkerKinematics.from_parameters(load_walker_parameters())
+ABOVE_TARGET = np.array([0.0, -0.9, 0.03])  # half a turn from (0, 0.9)
+
+
+def tip_at(radius, angle, height=0.03):
+    return KIN.inverse([radius * math.cos(angle), radius * math.sin(angle), height, 0.0, 0.0],
+                       reference=KIN.inverse([0.0, 0.9, 0.03, 0.0, 0.0]))
+
+
+@pytest.mark.parametrize('radius, angle, followable', [
+    (0.205, math.pi / 2 + 0.9, False),  # folded near the base: the line passes closer still
+    (0.25, math.pi / 2 + 0.9, False),
+    (0.25, math.pi, True),  # far enough round: the line keeps its distance from the base
+    (0.6, math.pi + 0.3, True),
+])
+def test_a_tip_line_is_followable_only_where_the_arm_stays_within_its_limits(radius, angle,
+                                                                             followable):
+    theta = tip_at(radius, angle)
+    assert line_is_followable(KIN, theta, ABOVE_TARGET) == followable
+    if not followable:  # the planner agrees: some point of the line has no joint solution
+        start = KIN.forward(theta)[:3]
+        closest = min(np.linalg.norm((start + f * (ABOVE_TARGET - start))[:2])
+                      for f in np.linspace(0.0, 1.0, 200))
+        assert closest < radius
+
+
+def test_the_joint_line_between_two_configurations_at_one_height_stays_at_that_height():
+    start, goal = tip_at(0.205, math.pi / 2 + 0.9), KIN.inverse([*ABOVE_TARGET, 0.0, 0.0])
+    assert lowest_tip_height(KIN, start, goal) == pytest.approx(0.03, abs=1e-3)
+    low = tip_at(0.205, math.pi / 2 + 0.9, height=0.005)
+    assert lowest_tip_height(KIN, low, goal) < 0.01
+
+
+def test_the_branch_is_the_elbow_and_reach_of_the_joints():
+    assert ik_branch(KIN, KIN.inverse([0.0, 0.9, 0.03, 0.0, 0.0])) == ('up', 'forward')
+    for elbow in ('up', 'down'):
+        for reach in ('forward', 'backward'):
+            theta = KIN.inverse([0.0, 0.9, 0.03, 0.0, 0.0], elbow, reach, check_limits=False)
+            assert ik_branch(KIN, theta) == (elbow, reach)
+
+
+@pytest.mark.parametrize('stale, holding, tracking, words', [
+    (False, False, True, ''),
+    (True, True, True, 'stale'),
+    (False, True, True, 'follows no motion'),  # fresh again, still holding in a step
+    (False, True, False, ''),  # holding between steps, as commanded
+])
+def test_a_controller_holding_in_a_step_is_trouble_even_once_its_inputs_are_fresh(
+        stale, holding, tracking, words):
+    trouble = controller_trouble(stale, holding, tracking)
+    assert (words in trouble) if words else trouble == ''
