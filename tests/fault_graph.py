@@ -1,0 +1,324 @@
+"""The fault-injection graph: the whole walker over DDS in sim time, and what the checks need.
+
+Shared by the fault suite (``tests/integration/test_faults.py``) and the fault matrix
+(``tests/fault_matrix/``): the recorder, the plant, five controllers (the vertex one reading its
+setpoints through a ``lossy_link``, lossless until a test degrades it), the planner and the
+supervisor, each a separate process, with timeouts that tolerate a loaded machine; a client
+that keeps every phase, gripper state, step report and supervisor diagnostic seen; and the
+operations a test needs (a step, a kill, a restart, a resume until the step completes).
+"""
+
+import dataclasses
+import os
+import signal
+import time
+from pathlib import Path
+
+from ros_test_support import SharedMemoryGuard, ros_environment
+
+__all__ = ['FaultGraph', 'assert_the_bag_holds_the_faults', 'TIMEOUT', 'FAULT_TIMEOUT',
+           'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LINK_INPUT', 'LINK_OUTPUT']
+
+TIMEOUT = 300.0  # [s] of wall time for a step (or the rest of one) on a loaded 2-core machine
+FAULT_TIMEOUT = 60.0  # [s] wall time for a fault to be noticed and reported
+WATCHDOG = 3.0  # [s] steady clock: the supervisor's watchdog (shipped: 1 s)
+INPUT_TIMEOUTS = (('control.setpoint_timeout', '2.0'),  # [s] the controllers' (shipped: 0.5 s)
+                  ('control.state_timeout', '2.0'))
+STILL = 1e-3  # [rad] joints that moved less than this did not move
+LINK_INPUT = 'controllers/vertex_joint/setpoint'  # the planner's stream to the vertex joint
+LINK_OUTPUT = 'controllers/vertex_joint/setpoint_lossy'  # what the vertex controller reads
+
+
+class FaultGraph:
+    """The running graph, a client, and everything seen on the topics the checks need."""
+
+    def __init__(self, tmp: Path, domain: int) -> None:
+        from walker_bringup.graph import NodeSpec, walker_graph
+        from walker_bringup.processes import ProcessGroup
+        from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+
+        self.params = load_walker_parameters(default_parameter_file())
+        self.bag = tmp / 'bag' / 'faults'
+        env = ros_environment(domain)
+        # The graph's nodes talk over UDP on loopback only: a participant killed with SIGKILL
+        # leaves its Fast DDS shared-memory ports behind, and a node restarted in its place has
+        # been seen deaf to the graph (no control mode, no states) over shared memory.
+        env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
+        self.specs = {spec.name: spec for spec in walker_graph(
+            default_parameter_file(), sim_time=True, record=True, bag_path=self.bag)}
+        # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
+        # planner's interpreter, and with it its setpoint stream, for up to a second there): a
+        # healthy node is never taken for a dead one, and a dead one is still named within
+        # seconds. The shipped values are shorter (README).
+        for name, spec in list(self.specs.items()):
+            extra = INPUT_TIMEOUTS if name.startswith('controller_') else \
+                (('supervisor.watchdog_timeout', str(WATCHDOG)),) if name == 'supervisor' else ()
+            self.specs[name] = dataclasses.replace(spec, parameters=(*spec.parameters, *extra))
+        # The vertex controller reads its setpoints through a lossy link, lossless until a test
+        # sets it to drop, delay or cut
+        vertex = self.specs['controller_vertex']
+        self.specs['controller_vertex'] = dataclasses.replace(
+            vertex, remaps=(*vertex.remaps, (LINK_INPUT, LINK_OUTPUT)))
+        self.specs['lossy_link'] = NodeSpec(
+            'walker_bringup', 'lossy_link', 'lossy_link', vertex.namespace, vertex.params_file,
+            parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
+                        ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
+        self.group = ProcessGroup(tmp / 'logs', env)
+        self.processes = {}
+        self.context = None
+        self.guard = SharedMemoryGuard(lambda: [os.getpid()] + [
+            p.popen.pid for p in self.processes.values() if p.alive], period=0.05).__enter__()
+        try:
+            self._bring_up(domain)
+        except BaseException:
+            self.close()
+            raise
+
+    def _bring_up(self, domain: int) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+        from walker_msgs.msg import GripperStates, StepPhase, StepReport
+
+        from walker_bringup.graph_client import GraphClient, init_context
+
+        self.processes = {name: self.group.start(spec) for name, spec in self.specs.items()}
+        self.context = init_context(domain)
+        self.client = GraphClient('/walker', self.context)
+        node = self.client.node
+        self.gripper_states = []
+        self.phases = []  # (monotonic time, StepPhase)
+        self.diagnostics = []  # (monotonic time, DiagnosticStatus) of the supervisor
+        self.positions: dict[str, float] = {}
+        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        node.create_subscription(GripperStates, 'gripper_states', self.gripper_states.append,
+                                 reliable)
+        node.create_subscription(StepPhase, 'phase',
+                                 lambda m: self.phases.append((time.monotonic(), m)), reliable)
+        self.step_reports = []
+        node.create_subscription(StepReport, 'step_reports', self.step_reports.append, reliable)
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
+                                 QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE))
+        node.create_subscription(
+            JointState, 'joint_states',
+            lambda m: self.positions.update(zip(m.name, m.position, strict=True)),
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+        self.client.wait_until_ready([s.full_name for s in self.specs.values()], 180.0,
+                                     should_stop=lambda: bool(self.group.poll_deaths()))
+        self.wait_until(lambda: self.phase is not None and len(self.positions) == 5, 60.0,
+                        'the first phase and joint states')
+        if self.phase.phase == 5:  # SAFE_HOLD: the start was slow enough for the watchdog
+            self.resume_when_healthy(120.0)
+        self.wait_until(lambda: self.phase.phase == 0, 60.0, 'the walker idle')
+        self.started = time.monotonic()
+
+    def _on_diagnostics(self, message) -> None:
+        for status in message.status:
+            if status.name.endswith('supervisor: walker'):
+                self.diagnostics.append((time.monotonic(), status))
+
+    def close(self) -> dict:
+        if getattr(self, 'client', None) is not None:
+            self.client.close()
+            self.client = None
+        if self.context is not None:
+            self.context.try_shutdown()
+            self.context = None
+        try:
+            return self.group.stop_all()
+        finally:
+            self.guard.__exit__(None, None, None)
+
+    # ------------------------------------------------------------------ waiting
+    def wait_until(self, condition, timeout: float, what: str) -> None:
+        """Spin until ``condition()`` holds (bounded polling, no sleeps as synchronisation)."""
+        deadline = time.monotonic() + timeout
+        while not condition():
+            assert time.monotonic() < deadline, \
+                f'{what() if callable(what) else what}: not within {timeout:.0f} s'
+            assert not [p for p in self.group.poll_deaths() if p.popen.returncode != -9], \
+                'a node died by itself'
+            self.client.spin_for(0.1)
+
+    @property
+    def phase(self):
+        return self.client.phase
+
+    def wait_phase(self, phase: int, timeout: float, since: float = 0.0):
+        """Wait for a phase message (received after ``since``) in ``phase``; return it."""
+        found = []
+
+        def seen() -> bool:
+            found[:] = [m for t, m in self.phases if t >= since and m.phase == phase]
+            return bool(found)
+
+        self.wait_until(seen, timeout, f'phase {phase}')
+        return found[0]
+
+    # ------------------------------------------------------------------ the walker's state
+    def attached_nodes(self) -> dict:
+        """Gripper -> node of the newest gripper states (attached grippers only)."""
+        from walker_msgs.msg import GripperState
+
+        self.client.spin_for(0.2)
+        newest = self.gripper_states[-1]
+        return {g.name: g.node for g in newest.grippers if g.state == GripperState.ATTACHED}
+
+    def joints(self) -> list[float]:
+        from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+
+        self.client.spin_for(0.3)
+        return [self.positions[name] for name in PHYSICAL_JOINT_NAMES]
+
+    def one_step(self):
+        """Return a step the walker can take now (the supervisor plans the same way)."""
+        from walker_core.truss import Truss
+        from walker_supervisor.core.route import Stance, possible_steps
+
+        base = self.phase.base_gripper
+        other = 'b' if base == 'a' else 'a'
+        nodes = self.attached_nodes()
+        yaws = (self.positions['a_yaw_joint'], self.positions['b_yaw_joint'])
+        drive = self.params.robot.drive.yaw
+        steps = possible_steps(Truss.from_parameters(self.params),
+                               Stance(base, nodes[base], nodes[other]), yaws,
+                               (drive.position_min, drive.position_max))
+        steps.sort(key=lambda s: (abs(s.sweep), s.to_node))  # quarter turns first
+        return steps[0]
+
+    # ------------------------------------------------------------------ commands
+    def start_walk(self, target: str):
+        """Send a walk goal and return its handle once accepted (the walk runs on)."""
+        from walker_msgs.action import WalkTo
+
+        client = self.client
+        assert client.walk_client.wait_for_server(timeout_sec=30.0)
+        handle = client._wait(client.walk_client.send_goal_async(WalkTo.Goal(target_node=target)),
+                              30.0, None, 'the walk goal')
+        assert handle.accepted
+        return handle
+
+    def result(self, handle, timeout: float = TIMEOUT):
+        return self.client._wait(handle.get_result_async(), timeout, None, 'the walk result')
+
+    def kill(self, name: str) -> None:
+        """SIGKILL a node: no clean shutdown, as a crash."""
+        process = self.processes[name]
+        os.killpg(process.popen.pid, signal.SIGKILL)
+        process.popen.wait(timeout=30)
+
+    def restart(self, name: str, ready: str | None = None) -> None:
+        """Start a killed node again and wait until its log says ``ready`` (if given)."""
+        process = self.processes[name] = self.group.restart(self.processes[name])
+        if ready is None:
+            return
+
+        def logged() -> bool:
+            return ready in process.log_path.read_text(errors='replace').rsplit(
+                '--- restarted', 1)[-1]
+
+        self.wait_until(logged, FAULT_TIMEOUT, f'{name} restarted')
+
+    def resume_when_healthy(self, timeout: float = FAULT_TIMEOUT):
+        """Call resume until the supervisor accepts it (it refuses while the graph is unwell)."""
+        answers = []
+
+        def resumed() -> bool:
+            answers.append(self.client.call_trigger('resume', timeout=30.0))
+            if not answers[-1].success:
+                self.client.spin_for(0.5)
+            return answers[-1].success
+
+        self.wait_until(resumed, timeout, lambda: f'resume (answers: '
+                        f'{[a.message for a in answers]})')
+        return answers[-1]
+
+    def resume_and_complete(self, step, attempts: int = 3) -> int:
+        """Resume until the interrupted step completes, as an operator would; return how often.
+
+        A node restarted a moment ago may not be matched yet with the supervisor's clients: a
+        request it never answers ends in safe hold again, and the operator resumes again.
+        """
+        from walker_msgs.msg import StepPhase
+
+        for attempt in range(1, attempts + 1):
+            since = time.monotonic()
+            answer = self.resume_when_healthy()
+            if 'ready for a step' in answer.message:  # it had got as far as screwing in
+                self.complete_step(step, since)
+                return attempt
+            assert step.to_node in answer.message, answer.message
+            # the supervisor publishes the phase a resume enters at once (a SAFE_HOLD seen
+            # first would be the old hold, published again as the walk it stopped ended)
+            moving = self.wait_phase_in((StepPhase.EXTRACTION, StepPhase.FINE), TIMEOUT, since)
+            self.wait_phase_in((StepPhase.IDLE, StepPhase.SAFE_HOLD), TIMEOUT, moving)
+            if self.last_phase.phase == StepPhase.IDLE:
+                self.complete_step(step, since)
+                return attempt
+            self.client.spin_for(2.0)  # an operator's pause before trying again
+        raise AssertionError(f'the step did not complete after {attempts} resumes: '
+                             f'{self.last_phase.reason}')
+
+    def wait_phase_in(self, phases, timeout: float, since: float) -> float:
+        """Wait for a phase message in ``phases`` received after ``since``; return its time."""
+        found = []
+
+        def seen() -> bool:
+            found[:] = [(t, m) for t, m in self.phases if t > since and m.phase in phases]
+            return bool(found)
+
+        self.wait_until(seen, timeout, f'a phase in {phases}')
+        self.last_phase = found[0][1]
+        return found[0][0]
+
+    def gripper_command(self, gripper: str, command: int):
+        from walker_msgs.srv import GripperCommand
+
+        client = self.client.gripper_client
+        assert client.wait_for_service(timeout_sec=30.0)
+        return self.client._wait(client.call_async(GripperCommand.Request(
+            gripper=gripper, command=command)), 30.0, None, 'the gripper command')
+
+    def parameters(self, node: str, service: str, request):
+        from rcl_interfaces.srv import GetParameters, SetParameters
+
+        kind = {'set_parameters': SetParameters, 'get_parameters': GetParameters}[service]
+        client = self.client.node.create_client(kind, f'/walker/{node}/{service}')
+        try:
+            assert client.wait_for_service(timeout_sec=30.0)
+            return self.client._wait(client.call_async(request), 30.0, None, service)
+        finally:
+            self.client.node.destroy_client(client)
+
+    def complete_step(self, step, since: float) -> None:
+        """Wait until the step has ended with its moving gripper screwed in at its target."""
+        from walker_msgs.msg import StepPhase
+
+        self.wait_phase(StepPhase.IDLE, TIMEOUT, since)
+        self.wait_until(lambda: self.attached_nodes().get(step.moving_gripper) == step.to_node,
+                        30.0, f'gripper {step.moving_gripper} attached in {step.to_node}')
+        assert set(self.attached_nodes()) == {'a', 'b'}
+        assert self.phase.phase == StepPhase.IDLE and self.phase.base_gripper \
+            == step.moving_gripper
+
+
+def assert_the_bag_holds_the_faults(graph: FaultGraph) -> None:
+    """Check that the bag holds every safe hold seen, with its reason, and the gripper states."""
+    from walker_bag.core.bag_reader import read_messages
+    from walker_msgs.msg import StepPhase
+
+    recorded = list(read_messages(graph.bag, ['/walker/phase', '/walker/gripper_states']))
+    holds_seen = {m.reason for t, m in graph.phases
+                  if t > graph.started and m.phase == StepPhase.SAFE_HOLD}
+    holds_recorded = {r.message.reason for r in recorded
+                      if r.topic == '/walker/phase' and r.message.phase == StepPhase.SAFE_HOLD}
+    assert holds_seen and holds_seen <= holds_recorded, holds_seen - holds_recorded
+    grippers = [r.message for r in recorded if r.topic == '/walker/gripper_states']
+    assert grippers, 'no gripper states in the bag'
+    for message in grippers:
+        assert [g.name for g in message.grippers if g.state == 2], 'a recorded instant with ' \
+            'no gripper attached'  # 2: walker_msgs/GripperState.ATTACHED
+    last_seen = graph.gripper_states[-1].header.stamp
+    assert max((m.header.stamp.sec, m.header.stamp.nanosec) for m in grippers) >= \
+        (last_seen.sec, last_seen.nanosec), 'the bag stops before the last gripper state seen'
