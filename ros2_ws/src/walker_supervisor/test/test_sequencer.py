@@ -598,3 +598,21 @@ def test_resume_with_no_safe_way_back_is_refused_and_changes_nothing():
                                {'a': 'n1_1', 'b': ''})
     assert world.sequencer.phase == Phase.SAFE_HOLD
     assert world.sequencer.reason == 'controllers held mid-sweep'
+
+
+def test_resume_in_the_hole_lifts_straight_up_from_where_the_gripper_drifted():
+    world = World()
+    _hold_during(world, Phase.EXTRACTION)
+    world.theta = world.theta + np.array([0.003, 0.0, 0.0, 0.0, 0.0])  # ~2.7 mm sideways
+    tip = KIN.forward(world.theta)[:3]
+    assert np.linalg.norm(tip[:2] - world.targets.point_above_from[:2]) > 0.002
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    lift = [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+    assert lift.purpose == 'extraction'
+    np.testing.assert_allclose(lift.goal_point[:2], tip[:2], atol=1e-9)  # vertical
+    assert lift.goal_point[2] == pytest.approx(world.targets.point_above_from[2])
+    np.testing.assert_allclose(KIN.forward(lift.goal)[:3], lift.goal_point, atol=1e-9)
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success, world.sequencer.outcome.message

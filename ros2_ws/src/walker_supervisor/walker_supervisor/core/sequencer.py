@@ -38,11 +38,11 @@ import math
 
 import numpy as np
 
-from walker_core.kinematics import WalkerKinematics
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
-from walker_supervisor.core.way_back import line_is_followable, lowest_tip_height
+from walker_supervisor.core.way_back import ik_branch, line_is_followable, lowest_tip_height
 
 __all__ = [
     'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',
@@ -358,8 +358,12 @@ class StepSequencer:
         if self._attempts >= self.parameters.max_insertion_attempts:
             return self._abort(f'insertion jammed {self._attempts} times: {message}', now)
         self.stage = 'retry_lift'
-        return [self._trajectory('retry_lift', self._theta, self._targets.above_to,
-                                 self._targets.point_to, self._targets.point_above_to)]
+        up = self._straight_up(self._targets.point_above_to)
+        if up is None:
+            return self._abort(f'insertion jammed: {message}; and no straight lift out of the '
+                               f'hole from here', now)
+        tip = self.kinematics.forward(self._theta)[:3]
+        return [self._trajectory('retry_lift', self._theta, up[0], tip, up[1])]
 
     def trajectory_started(self, planned_duration: float, now: float) -> None:
         """Note that the requested trajectory is streaming and should take this long [s]."""
@@ -506,6 +510,9 @@ class StepSequencer:
         way = None if in_hole else self._way_back_purpose('recover')
         if not in_hole and way is None:
             raise SequencerError(self._no_way_back())
+        up = self._straight_up(self._targets.point_above_from) if in_hole else None
+        if in_hole and up is None:
+            raise SequencerError('no straight lift out of the hole from here: jog the arm')
         self.reason = ''
         self._fine_lines = 0
         self._attempts = 0
@@ -514,8 +521,7 @@ class StepSequencer:
         if in_hole:  # still in (or at) the hole it was leaving: out along the axis first
             self._enter(Phase.EXTRACTION, now, 'lifting')
             return [SetControlMode('fine', self._step.base_gripper),
-                    self._trajectory('extraction', self._theta, self._targets.above_from, tip,
-                                     self._targets.point_above_from)]
+                    self._trajectory('extraction', self._theta, up[0], tip, up[1])]
         self._enter(Phase.FINE, now, 'moving')
         return [SetControlMode('fine', self._step.base_gripper), self._way_back(way)]
 
@@ -614,6 +620,23 @@ class StepSequencer:
         tip = self.kinematics.forward(self._theta)[:3]
         return self._trajectory(purpose, self._theta, self._targets.above_to, tip,
                                 self._targets.point_above_to)
+
+    def _straight_up(self, above: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Joints and point straight above the measured tip at the height of ``above``.
+
+        A lift out of a hole follows the hole's axis from where the gripper is, which may be
+        off the axis by as much as it missed the hole (a jam) or drifted while it was free in
+        it; the planner refuses a lift that is not vertical. None when the arm cannot get there.
+        """
+        tip = self.kinematics.forward(self._theta)[:3]
+        point = np.array([tip[0], tip[1], above[2]])
+        elbow, reach = ik_branch(self.kinematics, self._theta)
+        try:
+            joints = self.kinematics.inverse([*point, 0.0, self._theta[4]], elbow, reach,
+                                             reference=self._theta)
+        except KinematicsError:
+            return None
+        return joints, point
 
     def _no_way_back(self) -> str:
         tip = self.kinematics.forward(self._theta)[:3]
