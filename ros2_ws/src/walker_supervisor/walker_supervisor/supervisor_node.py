@@ -184,7 +184,6 @@ class SupervisorNode(TeleopServer, Node):
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.create_timer(_WATCHDOG_PERIOD, self._watch, clock=self._steady)
         self.create_timer(_DIAGNOSTICS_PERIOD, self._publish_diagnostics, clock=self._steady)
-        self._publish_phase()
 
     # ------------------------------------------------------------------ parameters
     def _check_alignment(self, settings: SupervisorParameters) -> None:
@@ -832,6 +831,10 @@ class SupervisorNode(TeleopServer, Node):
 
     # ------------------------------------------------------------------ publishing
     def _publish_phase(self) -> None:
+        if not self._grippers:
+            # Nothing is said before the grippers are known: a supervisor restarted in the
+            # middle of a step would announce IDLE, then hold once it saw a gripper free.
+            return
         walk = self.walk
         step = self.sequencer.step if self.sequencer.busy else None
         key = (self.sequencer.phase, self.sequencer.reason, self.sequencer.base_gripper,
