@@ -7,7 +7,7 @@ import pytest
 
 from walker_core.kinematics import WalkerKinematics
 from walker_core.robot_parameters import load_walker_parameters
-from walker_supervisor.core.health import controller_trouble
+from walker_supervisor.core.health import controller_trouble, tell_mode_again
 from walker_supervisor.core.way_back import ik_branch, line_is_followable, lowest_tip_height
 
 KIN = WalkerKinematics.from_parameters(load_walker_parameters())
@@ -61,3 +61,14 @@ def test_a_controller_holding_in_a_step_is_trouble_even_once_its_inputs_are_fres
         stale, holding, tracking, words):
     trouble = controller_trouble(stale, holding, tracking)
     assert (words in trouble) if words else trouble == ''
+
+
+@pytest.mark.parametrize('stale, holding, tracking, told', [
+    (False, True, True, True),  # fell back on a stall, fresh again: follow the motion again
+    (True, True, True, False),  # still stale: it holds, and the watchdog decides
+    (False, False, True, False),  # tracking already
+    (False, True, False, False),  # holding as commanded
+])
+def test_a_controller_that_fell_back_on_a_stall_is_told_its_mode_again(stale, holding,
+                                                                       tracking, told):
+    assert tell_mode_again(stale, holding, tracking) == told

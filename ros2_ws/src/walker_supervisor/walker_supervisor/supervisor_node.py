@@ -46,7 +46,7 @@ from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler, spin_nodes
 from walker_supervisor.core.health import (
-    HealthMonitor, Level, controller_trouble, reason_naming_silent_sources)
+    HealthMonitor, Level, controller_trouble, reason_naming_silent_sources, tell_mode_again)
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -76,6 +76,9 @@ _MODE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
 _PHASE_QOS = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.TRANSIENT_LOCAL,
                         history=HistoryPolicy.KEEP_LAST)
+#: [s] steady clock: least time between two mode commands re-sent to controllers that fell
+#: back to HOLD on a stall (one command serves all five)
+_TELL_MODE_AGAIN_PERIOD = 0.25
 _REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
@@ -170,7 +173,8 @@ class SupervisorNode(TeleopServer, Node):
         self.create_timer(TICK_PERIOD, self._tick)
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
-        self._commanded_mode = ''  # the last mode sent to the controllers
+        self._commanded_mode = self._commanded_base = ''  # the last mode command sent
+        self._mode_told_again = -math.inf  # [s] steady clock
         self._controller_states = {
             joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
                                            _CONTROLLER_STATES)
@@ -445,12 +449,22 @@ class SupervisorNode(TeleopServer, Node):
             self._on_joint_states(states[-1])
         for pose in self._sampler.take(self._tip_poses):
             self._on_tip_pose(pose)
+        fell_back = []
         for joint, subscription in self._controller_states.items():
             reports = self._sampler.take(subscription)
             if reports:
                 tracking = self.sequencer.busy and self._commanded_mode in ('coarse', 'fine')
-                self.health.seen(f'controller {joint}', now, controller_trouble(
-                    reports[-1].stale, reports[-1].mode == ControllerState.HOLD, tracking))
+                stale, holding = reports[-1].stale, reports[-1].mode == ControllerState.HOLD
+                self.health.seen(f'controller {joint}', now,
+                                 controller_trouble(stale, holding, tracking))
+                if tell_mode_again(stale, holding, tracking):
+                    fell_back.append(joint)
+        if fell_back and now - self._mode_told_again >= _TELL_MODE_AGAIN_PERIOD:
+            self._mode_told_again = now
+            self.get_logger().warning(
+                f'controller {", ".join(fell_back)} fell back to HOLD on a stall of its inputs, '
+                f'which are fresh again: mode {self._commanded_mode.upper()} commanded again')
+            self._publish_mode(self._commanded_mode, self._commanded_base)
 
     # ------------------------------------------------------------------ health
     def _faults(self) -> list[str]:
@@ -637,7 +651,7 @@ class SupervisorNode(TeleopServer, Node):
                 self._cancel_trajectory()
 
     def _publish_mode(self, mode: str, base: str) -> None:
-        self._commanded_mode = mode
+        self._commanded_mode, self._commanded_base = mode, base
         msg = ControlMode(mode=_MODES[mode], base_gripper=base)
         msg.header.stamp = self.get_clock().now().to_msg()
         self.mode_pub.publish(msg)

@@ -14,7 +14,7 @@ import dataclasses
 import enum
 
 __all__ = ['Level', 'SourceStatus', 'HealthMonitor', 'reason_naming_silent_sources',
-           'controller_trouble']
+           'controller_trouble', 'tell_mode_again']
 
 
 class Level(enum.IntEnum):
@@ -147,3 +147,15 @@ def controller_trouble(stale: bool, holding: bool, tracking_commanded: bool) -> 
     if holding and tracking_commanded:
         return 'holding since its inputs went stale: it follows no motion until a mode command'
     return ''
+
+
+def tell_mode_again(stale: bool, holding: bool, tracking_commanded: bool) -> bool:
+    """Return True when a controller should be sent the step's mode again.
+
+    It fell back to HOLD when an input stalled for a moment (a loaded machine delays a stream
+    by more than its timeout), its inputs are fresh again, and the step expects it to track: the
+    mode command lets it follow the motion again, with bumpless transfer, instead of leaving the
+    arm stopped mid-motion. A controller whose inputs stay stale is not told: it holds, and the
+    trouble becomes a fault after the watchdog's grace.
+    """
+    return holding and tracking_commanded and not stale
