@@ -616,3 +616,21 @@ def test_resume_in_the_hole_lifts_straight_up_from_where_the_gripper_drifted():
     while world.sequencer.busy:
         world.advance()
     assert world.sequencer.outcome.success, world.sequencer.outcome.message
+
+
+def test_a_way_back_the_planner_refuses_is_taken_again_in_joint_space_once():
+    world = World()
+    _hold_during(world, Phase.COARSE)
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    assert world.motion[0].purpose == 'recover'
+    world.motion = None
+    world.execute(world.sequencer.trajectory_done(False, 'the path leaves the workspace',
+                                                  world.now))
+    again = world.motion[0]
+    assert again.purpose == 'recover_joint' and world.sequencer.phase == Phase.FINE
+    np.testing.assert_allclose(again.goal, world.targets.above_to)
+    world.motion = None  # refused as well: then the step holds
+    world.execute(world.sequencer.trajectory_done(False, 'refused again', world.now))
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert 'refused again' in world.sequencer.reason

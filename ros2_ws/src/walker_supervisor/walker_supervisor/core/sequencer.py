@@ -230,6 +230,7 @@ class StepSequencer:
         self._trajectory_running = False
         self._gripper_answers_due = 0  # gripper commands sent and not answered yet
         self._requested: str | None = None  # purpose of a trajectory requested, not started
+        self._last_purpose = ''  # purpose of the last trajectory requested
         self._requested_at: float | None = None  # [s] first tick after the request
 
     # ------------------------------------------------------------------ queries
@@ -374,10 +375,17 @@ class StepSequencer:
     def trajectory_done(self, success: bool, message: str, now: float) -> list:
         """Take the end of the streamed trajectory (``success`` False: refused or aborted)."""
         self._trajectory_running = False
-        self._requested = self._requested_at = None
+        purpose, self._requested = self._requested or self._last_purpose, None
+        self._requested_at = None
         if self.phase in (Phase.IDLE, Phase.SAFE_HOLD):
             return []
         if not success:
+            if purpose in ('fine', 'recover') and self.phase == Phase.FINE \
+                    and self._joint_way_is_clear():
+                # the planner found the tip line unfollowable where the check here did not
+                # (a joint at its limit by a fraction of a milliradian at the line's end): the
+                # joint-space way back goes to the step's own target configuration
+                return [self._way_back('recover_joint')]
             return self._abort(f'{self.stage or self.phase.name.lower()} trajectory failed: '
                                f'{message}', now)
         if self.stage == 'lifting':  # the next tick, with fresh joints, starts the coarse motion
@@ -549,6 +557,7 @@ class StepSequencer:
                     ) -> TrajectoryRequest:
         self._deadline = math.inf  # set by trajectory_started
         self._requested, self._requested_at = purpose, None
+        self._last_purpose = purpose
         return TrajectoryRequest(purpose, np.array(start, dtype=float),
                                  np.array(goal, dtype=float), np.array(start_point, dtype=float),
                                  np.array(goal_point, dtype=float), sweep,
@@ -608,13 +617,15 @@ class StepSequencer:
         ``recover_joint`` (a joint-space line) if the tip stays at least half the approach
         height above the truss along it (:mod:`walker_supervisor.core.way_back`).
         """
-        t = self._targets
-        if line_is_followable(self.kinematics, self._theta, t.point_above_to):
+        if line_is_followable(self.kinematics, self._theta, self._targets.point_above_to):
             return line
+        return 'recover_joint' if self._joint_way_is_clear() else None
+
+    def _joint_way_is_clear(self) -> bool:
+        """Return True if the joint-space line to above the target keeps the tip up."""
+        t = self._targets
         floor = t.point_to[2] + 0.5 * (t.point_above_to[2] - t.point_to[2])
-        if lowest_tip_height(self.kinematics, self._theta, t.above_to) >= floor:
-            return 'recover_joint'
-        return None
+        return lowest_tip_height(self.kinematics, self._theta, t.above_to) >= floor
 
     def _way_back(self, purpose: str) -> TrajectoryRequest:
         tip = self.kinematics.forward(self._theta)[:3]
