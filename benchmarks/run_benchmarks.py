@@ -360,7 +360,8 @@ def part_soak(suite: Suite) -> dict:
     samples, legs = [], []
     suite._runs += 1
     began = time.monotonic()
-    with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, True, record=True) as run:
+    with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, True, record=True,
+                  probe=False) as run:
         client = run.clients[0]
         pids = run.pids()
 
