@@ -339,21 +339,34 @@ def test_resume_with_both_grippers_attached_returns_to_idle():
         world.sequencer.resume(0.2, world.theta, dict(world.grippers), {})
 
 
-def _hold_during(world, phase):
-    """Run a step until ``phase``, then hold (an operator's hold, or a fault)."""
-    step = possible_steps(TRUSS, world.stance)[0]
+def _hold_during(world, phase, step=None, ticks=20, reason='a fault'):
+    """Run a step until ``ticks`` into ``phase``, then hold (an operator's hold, or a fault)."""
+    step = step or possible_steps(TRUSS, world.stance)[0]
     targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
                                 TRUSS.position(step.to_node), world.theta, 0.03)
     world.targets = targets
     world.execute(world.sequencer.start(step, targets, world.now, dict(world.grippers)))
     while world.sequencer.phase != phase:
         world.advance()
-    for _ in range(20):
+    for _ in range(ticks):
         world.advance()
-    world.execute(world.sequencer.hold('a fault', world.now))
+    world.execute(world.sequencer.hold(reason, world.now))
     world.motion = None  # the stream stops where the arm is
     assert world.sequencer.phase == Phase.SAFE_HOLD
     return step
+
+
+def _resume(world):
+    """Resume the held step (gripper b free); return the motion the resume asked for."""
+    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                         {'a': 'n1_1', 'b': ''}))
+    return [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+
+
+def _run_to_the_end(world):
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success, world.sequencer.outcome.message
 
 
 @pytest.mark.parametrize('accepted', [True, False])
@@ -376,14 +389,10 @@ def test_resume_mid_step_recovers_to_the_target_and_completes_the_step(phase):
     world = World()
     step = _hold_during(world, phase)
     assert world.grippers[step.moving_gripper] == 'free'
-    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
-                                         {'a': 'n1_1', 'b': ''}))
-    recover = [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+    recover = _resume(world)
     assert recover.purpose == 'recover' and recover.mode == 'fine'
     np.testing.assert_allclose(recover.goal_point, world.targets.point_above_to)
-    while world.sequencer.busy:
-        world.advance()
-    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+    _run_to_the_end(world)
     assert world.grippers == {'a': 'attached', 'b': 'attached'}
     assert world.sequencer.base_gripper == 'b'
 
@@ -410,13 +419,8 @@ def test_a_step_completed_after_resume_has_its_outcome_taken_once():
 def test_resume_in_the_hole_lifts_out_first():
     world = World()
     _hold_during(world, Phase.EXTRACTION)
-    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
-                                         {'a': 'n1_1', 'b': ''}))
-    assert [c for c in world.log if isinstance(c, TrajectoryRequest)][-1].purpose == \
-        'extraction'
-    while world.sequencer.busy:
-        world.advance()
-    assert world.sequencer.outcome.success
+    assert _resume(world).purpose == 'extraction'
+    _run_to_the_end(world)
 
 
 @pytest.mark.parametrize('grippers, words', [
@@ -564,29 +568,17 @@ def _folded_mid_sweep(world, radius, height=0.03, turned=0.9):
 def _hold_a_half_turn_in_coarse_motion(world):
     step = next(s for s in possible_steps(TRUSS, world.stance)
                 if abs(abs(s.sweep) - math.pi) < 1e-9)
-    targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
-                                TRUSS.position(step.to_node), world.theta, 0.03)
-    world.targets = targets
-    world.execute(world.sequencer.start(step, targets, world.now, dict(world.grippers)))
-    while world.sequencer.phase != Phase.COARSE:
-        world.advance()
-    world.execute(world.sequencer.hold('controllers held mid-sweep', world.now))
-    world.motion = None
-    return step
+    return _hold_during(world, Phase.COARSE, step, ticks=0, reason='controllers held mid-sweep')
 
 
 def test_resume_where_the_arm_folded_mid_sweep_goes_back_in_joint_space_and_completes():
     world = World()
     _hold_a_half_turn_in_coarse_motion(world)
     world.theta = _folded_mid_sweep(world, 0.205)  # no straight tip line from here
-    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
-                                         {'a': 'n1_1', 'b': ''}))
-    back = [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+    back = _resume(world)
     assert back.purpose == 'recover_joint' and back.mode == 'fine'
     np.testing.assert_allclose(back.goal, world.targets.above_to)
-    while world.sequencer.busy:
-        world.advance()
-    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+    _run_to_the_end(world)
 
 
 def test_resume_with_no_safe_way_back_is_refused_and_changes_nothing():
@@ -606,24 +598,18 @@ def test_resume_in_the_hole_lifts_straight_up_from_where_the_gripper_drifted():
     world.theta = world.theta + np.array([0.003, 0.0, 0.0, 0.0, 0.0])  # ~2.7 mm sideways
     tip = KIN.forward(world.theta)[:3]
     assert np.linalg.norm(tip[:2] - world.targets.point_above_from[:2]) > 0.002
-    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
-                                         {'a': 'n1_1', 'b': ''}))
-    lift = [c for c in world.log if isinstance(c, TrajectoryRequest)][-1]
+    lift = _resume(world)
     assert lift.purpose == 'extraction'
     np.testing.assert_allclose(lift.goal_point[:2], tip[:2], atol=1e-9)  # vertical
     assert lift.goal_point[2] == pytest.approx(world.targets.point_above_from[2])
     np.testing.assert_allclose(KIN.forward(lift.goal)[:3], lift.goal_point, atol=1e-9)
-    while world.sequencer.busy:
-        world.advance()
-    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+    _run_to_the_end(world)
 
 
 def test_a_way_back_the_planner_refuses_is_taken_again_in_joint_space_once():
     world = World()
     _hold_during(world, Phase.COARSE)
-    world.execute(world.sequencer.resume(world.now, world.theta, dict(world.grippers),
-                                         {'a': 'n1_1', 'b': ''}))
-    assert world.motion[0].purpose == 'recover'
+    assert _resume(world).purpose == 'recover' == world.motion[0].purpose
     world.motion = None
     world.execute(world.sequencer.trajectory_done(False, 'the path leaves the workspace',
                                                   world.now))

@@ -20,14 +20,18 @@ Rules it enforces:
   takes it there from where it settled, up to ``MAX_FINE_LINES`` times before insertion is
   tried anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
-  ``max_insertion_attempts`` times, then the step is aborted to SAFE_HOLD;
+  ``max_insertion_attempts`` times (each lift goes straight up from where the gripper jammed),
+  then the step is aborted to SAFE_HOLD;
 * any failure, a phase that overruns its planned time by ``phase_timeout``, or a trajectory that
   has not started ``phase_timeout`` after its request (the planner gone) ends in SAFE_HOLD:
   trajectories cancelled, controllers holding, grippers untouched (the base stays attached);
 * :meth:`StepSequencer.resume` leaves SAFE_HOLD: with both grippers attached it returns to IDLE;
-  with the moving gripper free it completes the interrupted step from where the arm is (out of
-  the hole it was leaving if it is still in it, then to the point above the target, settling,
-  insertion).
+  with the moving gripper free it completes the interrupted step from where the arm is (straight
+  up out of the hole it was leaving if it is still in it, then to the point above the target,
+  settling, insertion). The way back above the target is a straight tip line where the arm can
+  follow one, else a joint-space line that keeps the tip above the truss
+  (:mod:`walker_supervisor.core.way_back`), also when the planner refuses the tip line; with
+  neither, resume is refused and nothing changes.
 """
 
 from __future__ import annotations
