@@ -408,7 +408,10 @@ def figure6_experiment(make_plant: Callable[[], PlantCore], settings, ka: float,
 
     The five joint controllers (base gripper ``a``) run at the control rate on the plant;
     joint 1 follows a smooth move of ``distance`` rad in ``move_time`` s in COARSE mode with
-    ``Ka = ka`` (the rest of the parameter file unchanged), the other joints HOLD.
+    ``Ka = ka``, the other joints HOLD. The controllers are the paper's (Figure 3): the
+    reference shaping and the friction feed-forward the walker adds
+    (``control.filter.reference``, ``control.friction_compensation.feedforward_speed``) are
+    off, so that Ka alone makes the difference; the rest of the parameter file is unchanged.
 
     Raises
     ------
@@ -423,7 +426,10 @@ def figure6_experiment(make_plant: Callable[[], PlantCore], settings, ka: float,
 
     coarse_ka = list(settings.control.coarse.acceleration_feedback)
     coarse_ka[0] = float(ka)
-    settings = replace_in_section(settings, {'control.coarse.acceleration_feedback': coarse_ka})
+    settings = replace_in_section(settings, {'control.coarse.acceleration_feedback': coarse_ka,
+                                             'control.filter.reference': False,
+                                             'control.friction_compensation.feedforward_speed':
+                                                 0.0})
     plant = make_plant()
     plant.reset()
     controllers = [JointController(settings, name, 'a') for name in PHYSICAL_JOINT_NAMES]

@@ -26,4 +26,5 @@ def walk_bag(tmp_path_factory) -> Path:
 def report(walk_bag, tmp_path_factory):
     """Make the report of the synthetic walk once, with a small animation."""
     return make_report(walk_bag, tmp_path_factory.mktemp('report') / 'report',
-                       options=ReportOptions(animation_options=SMALL_ANIMATION))
+                       options=ReportOptions(animation_options=SMALL_ANIMATION,
+                                              settle_time=1.0))  # the synthetic walk's window

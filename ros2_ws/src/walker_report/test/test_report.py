@@ -159,7 +159,8 @@ def test_a_bag_without_poses_states_or_phases_still_gives_a_report(tmp_path):
 
 def test_what_cannot_be_measured_is_null_in_the_json_not_nan(tmp_path):
     bag = build_walk_bag(tmp_path / 'bag', leave_out=('tip_pose',))
-    result = make_report(bag, tmp_path / 'out', options=ReportOptions(animation=False))
+    result = make_report(bag, tmp_path / 'out',  # the synthetic walk's 1 s settling window
+                         options=ReportOptions(animation=False, settle_time=1.0))
     assert all(math.isnan(v.amplitude) for v in result.content.vibrations.values())
 
     def refuse(constant):

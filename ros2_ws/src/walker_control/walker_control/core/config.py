@@ -101,6 +101,11 @@ class FilterSettings:
     corner: tuple[float, ...] = parameter(
         'filter corner frequency wf of roles J1..J5 (ignored when unfiltered)', 'rad/s',
         0.0, 1000.0, read_only=False)
+    reference: bool = parameter(
+        'shape the position, velocity and acceleration of each setpoint with the role filter '
+        'too, so the '
+        'feedback compares the joint with the motion the filtered feed-forward produces',
+        read_only=False)
 
     def __post_init__(self) -> None:
         _require_five(self, 'order', 'corner')
@@ -123,6 +128,10 @@ class FrictionCompensationSettings:
     ramp: tuple[float, ...] = parameter(
         'error range of roles J1..J5 over which the compensation rises to its full level',
         'rad', 1e-6, 1.0, read_only=False)
+    feedforward_speed: float = parameter(
+        'setpoint speed at which the friction feed-forward reaches tanh(1) of the Coulomb '
+        'friction robot.drive.*.friction_torque (0: no friction feed-forward)', 'rad/s',
+        0.0, 10.0, read_only=False)
 
     def __post_init__(self) -> None:
         _require_five(self, 'deadband', 'ramp')

@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-__all__ = ['FrictionCompensator']
+__all__ = ['FrictionCompensator', 'friction_feedforward']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,3 +58,28 @@ class FrictionCompensator:
         if excess <= 0.0:
             return 0.0
         return math.copysign(self.level * min(1.0, excess / self.ramp), error)
+
+
+def friction_feedforward(coulomb: float, reference_velocity: float, speed_scale: float) -> float:
+    """Coulomb friction the reference motion will meet [N*m], signed by the reference velocity.
+
+    ``coulomb tanh(omega_r / speed_scale)``: part of the model-based feed-forward, so that a
+    tracking joint does not first have to fall behind by the compensator's deadband and ramp
+    before the friction it meets is cancelled (on the walker, joint 1's 1.5 N*m of friction
+    would otherwise cost it the compensator's whole ramp of error on every move). Smooth through
+    zero velocity (the reference passes zero at the start and end of every move); zero at rest,
+    where the error-signed compensator above takes over.
+
+    Parameters
+    ----------
+    coulomb : float
+        Coulomb friction torque of the drive [N*m], >= 0.
+    reference_velocity : float
+        Setpoint velocity [rad/s].
+    speed_scale : float
+        Reference speed [rad/s] at which the feed-forward reaches tanh(1) = 76 % of
+        ``coulomb``; 0 turns the feed-forward off.
+    """
+    if speed_scale <= 0.0 or coulomb == 0.0:
+        return 0.0
+    return coulomb * math.tanh(reference_velocity / speed_scale)

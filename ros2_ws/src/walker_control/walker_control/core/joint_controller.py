@@ -3,10 +3,11 @@
 Structure (one sample, ``I = I_ii(q)`` the rigid-model inertia of the joint's role at the
 current configuration, eqs (9)-(13))::
 
-    e   = theta_r - theta,  de = omega_r - omega
-    v   = I a_r + effort_r                    feed-forward (rigid model)
+    e   = F theta_r - theta,  de = F omega_r - omega   (reference shaped by the filter F)
+    v   = I a_r + effort_r + f(omega_r)       feed-forward (rigid model, Coulomb friction)
         + I wc^2 e + integral + 2 zc wc I de  PID (integral only with Ti > 0)
-        - Ka I a_measured                     acceleration feedback (coarse, joint 1)
+        - Ka I (a_measured - F a_r)           acceleration feedback (coarse, joint 1; F a_r = 0
+                                          without reference shaping, as in the paper)
         + transfer                            bumpless-transfer offset (decays)
     y   = F(z) clamp(v, +-tau_max)            low-pass filter (joints 1-3)
     tau = clamp(y + friction(e) + friction transfer, +-tau_max)
@@ -14,9 +15,14 @@ current configuration, eqs (9)-(13))::
 The filter sits on the whole command, feed-forward and acceleration feedback included, exactly
 where the paper's eq (14) puts it: ``s^2 theta = F(s) [u - Ka s^2 theta]``; so the analysis of
 section 4 and the stability check describe the loop that runs, and no part of the command can
-excite the structural modes that the filter is there to keep out. The friction compensator is
-added after the filter: it cancels a plant nonlinearity, and the filter's delay (about 0.5 s for
-joint 1) would keep it pushing long after the error changed sign.
+excite the structural modes that the filter is there to keep out. The feedback compares the
+joint with the setpoint shaped by the same filter (``control.filter.reference``,
+:mod:`~walker_control.core.reference_shaping`): the motion the filtered feed-forward produces,
+so the filter's delay is not an error to fight. The Coulomb friction the setpoint's velocity will
+meet is part of the feed-forward (``control.friction_compensation.feedforward_speed``,
+:func:`~walker_control.core.friction_compensation.friction_feedforward`). The friction
+compensator is added after the filter: it cancels a plant nonlinearity, and the filter's delay
+(about 0.5 s for joint 1) would keep it pushing long after the error changed sign.
 
 Modes (:class:`~walker_control.core.modes.Mode`): OFF (zero torque), HOLD (hold the position at
 which HOLD was entered; no integral action), COARSE and FINE (follow the setpoint; before the
@@ -44,11 +50,12 @@ from walker_core.joint_roles import physical_to_roles, role_of_joint, validate_g
 from walker_control.core.accel_feedback import acceleration_feedback_torque
 from walker_control.core.config import ControllerSettings
 from walker_control.core.feedforward import RigidFeedForward
-from walker_control.core.friction_compensation import FrictionCompensator
+from walker_control.core.friction_compensation import FrictionCompensator, friction_feedforward
 from walker_control.core.inputs import Setpoint
 from walker_control.core.lowpass import LowPassFilter
 from walker_control.core.modes import Mode
 from walker_control.core.pid import Pid, PidGains
+from walker_control.core.reference_shaping import ReferenceShaper
 
 __all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
            'MissingAccelerationError', 'JointController']
@@ -95,7 +102,9 @@ class ControlOutput:
 
     Torques in N*m, angles in rad, rates in rad/s. ``feedforward`` to ``acceleration_feedback``
     and ``transfer`` are before the filter; ``friction_compensation`` (with its transfer offset)
-    and ``effort`` after it.
+    and ``effort`` after it. ``reference`` is the setpoint in force as commanded;
+    ``shaped_reference`` the same after reference shaping, which ``position_error`` is measured
+    from (equal to ``reference`` when shaping is off).
     """
 
     effort: float
@@ -113,6 +122,7 @@ class ControlOutput:
     filtered: float
     friction_compensation: float
     saturated: bool
+    shaped_reference: Setpoint | None = None
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -150,6 +160,7 @@ class JointController:
         self._pid = Pid(PidGains(0.0, 0.0, 0.0, limit, limit))
         self._filter = self._new_filter(self.role)
         self._filter.reset_to(0.0)
+        self._shaper: ReferenceShaper | None = None
         self._key: tuple[int, Mode] | None = None
         self._design: object = None
         self._hold_position = 0.0
@@ -285,9 +296,10 @@ class JointController:
         if transition:
             self._hold_position = measurement.position
         if setpoint is not None and mode.tracks_setpoints:
-            reference = setpoint
+            commanded = setpoint
         else:
-            reference = Setpoint(position=self._hold_position)
+            commanded = Setpoint(position=self._hold_position)
+        reference = self._shape(role, transition, measurement, commanded)
 
         inertia = self._feedforward.inertia(role, configuration)
         limit = settings.drive(role).torque_limit
@@ -296,8 +308,14 @@ class JointController:
                                      integral_limit=limit))
         error = reference.position - measurement.position
         error_rate = reference.velocity - measurement.velocity
-        feedforward = self._feedforward.torque(inertia, reference.acceleration, reference.effort)
+        feedforward = self._feedforward.torque(
+            inertia, commanded.acceleration,
+            commanded.effort + friction_feedforward(
+                settings.drive(role).friction_torque, commanded.velocity,
+                settings.control.friction_compensation.feedforward_speed))
         acceleration = measurement.acceleration if measurement.acceleration is not None else 0.0
+        if self._shaper is not None:  # feed back the acceleration error (reference_shaping)
+            acceleration -= reference.acceleration
         accel_term = acceleration_feedback_torque(design.acceleration_feedback, inertia,
                                                   acceleration)
         compensator = FrictionCompensator(*friction_design)
@@ -328,12 +346,13 @@ class JointController:
         else:
             self._saturation = 0.0
         output = ControlOutput(
-            effort=effort, mode=mode, role=role, reference=reference, position_error=error,
+            effort=effort, mode=mode, role=role, reference=commanded, position_error=error,
             inertia=inertia, feedforward=feedforward, proportional=terms.proportional,
             integral=terms.integral, derivative=terms.derivative,
             acceleration_feedback=accel_term, transfer=self._transfer, filtered=filtered,
             friction_compensation=friction_total,
-            saturated=clamped_input or clamped_output or terms.saturated)
+            saturated=clamped_input or clamped_output or terms.saturated,
+            shaped_reference=reference)
         decay = math.exp(-dt / settings.control.bumpless_time_constant)
         self._transfer *= decay
         self._friction_transfer *= decay
@@ -353,6 +372,28 @@ class JointController:
             raise MeasurementError(f'{self._joint_name}: measurement refused, not finite or not '
                                    f'5 joint positions: {measurement!r}')
         return physical_to_roles(positions, self._base)
+
+    def _shape(self, role: int, transition: bool, measurement: Measurement,
+               commanded: Setpoint) -> Setpoint:
+        """Return the setpoint the feedback compares with: shaped by the role's filter, if on.
+
+        The shaper keeps running through a change between tracking modes of the same role (a
+        moving setpoint goes on moving); it restarts at the joint's measured state on the way
+        into or out of HOLD, on a role change and when the filter's design changes.
+        """
+        control = self._settings.control
+        if not control.filter.reference:
+            self._shaper = None
+            return commanded
+        shaper = ReferenceShaper(control.filter.order[role - 1], control.filter.corner[role - 1],
+                                 self._settings.sample_time, control.filter.kind)
+        keeps_tracking = not transition or (
+            self._key is not None and self._key[0] == role and self._key[1].tracks_setpoints
+            and self.mode.tracks_setpoints)
+        if self._shaper is None or not self._shaper.same_design(shaper) or not keeps_tracking:
+            shaper.reset_to(measurement.position, measurement.velocity)
+            self._shaper = shaper
+        return self._shaper.update(commanded)
 
     def _new_filter(self, role: int) -> LowPassFilter:
         settings = self._settings
@@ -377,6 +418,7 @@ class JointController:
 
     def _off(self, measurement: Measurement) -> ControlOutput:
         self._filter.reset_to(0.0)
+        self._shaper = None
         self._pid.reset(0.0)
         self._transfer = self._friction_transfer = 0.0
         self._last_input = self._last_friction = 0.0
