@@ -96,6 +96,10 @@ _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMod
 TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
 _FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
 _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
+#: [s] (wall) a plan or follow request the planner has not answered this long is sent again,
+#: over a new client: a planner restarted after a crash was seen never to answer the old
+#: client (its requests or its answers lost in discovery), while a new one was answered at once.
+_ANSWER_WAIT = 4.0
 _WATCHDOG_PERIOD = 0.1  # [s] steady clock
 _DIAGNOSTICS_PERIOD = 1.0  # [s] steady clock
 _CONTROLLER_STATES = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
@@ -160,6 +164,8 @@ class SupervisorNode(TeleopServer, Node):
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
+        # the planner request waiting for its answer: (deadline, service, future, send again)
+        self._awaited: tuple[float, str, object, object] | None = None
         self.stop_client = self.create_client(Trigger, 'stop_trajectory')
         self.step_server = ActionServer(
             self, Step, 'step', execute_callback=self._execute_step,
@@ -532,6 +538,7 @@ class SupervisorNode(TeleopServer, Node):
             self._adopt_interrupted_step()
         self._release_measurement_waiters()
         self._send_waiting_requests()
+        self._ask_again_if_unanswered()
         if self._positions is not None:
             self._execute(self.sequencer.tick(now, self._theta_roles(),
                                               physical_to_roles(self._velocities,
@@ -723,6 +730,7 @@ class SupervisorNode(TeleopServer, Node):
             if generation != self._trajectory_generation:
                 return  # cancelled while waiting
             future = self.plan_client.call_async(plan_request(request, self.kinematics))
+            self._await_answer('plan_trajectory', future, send)
             future.add_done_callback(lambda f: self._on_planned(f, request, generation))
 
         def unavailable() -> None:
@@ -751,8 +759,46 @@ class SupervisorNode(TeleopServer, Node):
                 self._waiting_requests.remove(entry)
                 unavailable()
 
+    def _await_answer(self, service: str, future, send_again) -> None:
+        """Watch a request to the planner; unanswered after _ANSWER_WAIT, it is sent again."""
+        self._awaited = (time.monotonic() + _ANSWER_WAIT, service, future, send_again)
+
+    def _answered(self, future) -> bool:
+        """Return True for the answer awaited (and stop awaiting it); False for a stale one."""
+        if self._awaited is None or self._awaited[2] is not future:
+            return False
+        self._awaited = None
+        return True
+
+    def _ask_again_if_unanswered(self) -> None:
+        """Send an unanswered planner request again, over a new client (see _ANSWER_WAIT)."""
+        if self._awaited is None:
+            return
+        deadline, service, future, send_again = self._awaited
+        if future.done() or time.monotonic() < deadline:
+            return
+        self._awaited = None
+        self.get_logger().warning(f'no answer from the planner to {service} within '
+                                  f'{_ANSWER_WAIT:g} s: asking again over a new connection')
+        if service == 'plan_trajectory':
+            self.destroy_client(self.plan_client)
+            self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
+            ready = self.plan_client.service_is_ready
+        else:
+            self.follow_client.destroy()
+            self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
+            ready = self.follow_client.server_is_ready
+        generation = self._trajectory_generation
+
+        def unavailable() -> None:
+            if generation == self._trajectory_generation:
+                self._execute(self.sequencer.trajectory_done(
+                    False, f'the planner {service} is not available', self._now()))
+
+        self._when_ready(ready, send_again, unavailable)
+
     def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
-        if generation != self._trajectory_generation:
+        if not self._answered(future) or generation != self._trajectory_generation:
             return
         response = future.result()
         if response is None or not response.success:
@@ -768,13 +814,24 @@ class SupervisorNode(TeleopServer, Node):
             self._step_bound += response.time_optimal_bound
         goal = FollowTrajectory.Goal(trajectory=response.trajectory)
         self._publish_mode(request.mode, request.base_gripper)  # clears a latched hold
-        send = self.follow_client.send_goal_async(goal)
-        send.add_done_callback(
-            lambda f: self._on_follow_accepted(f, generation, response.duration, request.purpose))
+
+        def send_goal() -> None:
+            if generation != self._trajectory_generation:
+                return  # cancelled while waiting
+            sent = self.follow_client.send_goal_async(goal)
+            self._await_answer('follow_trajectory', sent, send_goal)
+            sent.add_done_callback(lambda f: self._on_follow_accepted(
+                f, generation, response.duration, request.purpose))
+
+        send_goal()
 
     def _on_follow_accepted(self, future, generation: int, duration: float,
                             purpose: str) -> None:
         handle = future.result()
+        if not self._answered(future):
+            if handle is not None and handle.accepted:  # a late answer to a request sent again
+                handle.cancel_goal_async()
+            return
         if generation != self._trajectory_generation:
             if handle is not None and handle.accepted:
                 handle.cancel_goal_async()
@@ -801,6 +858,7 @@ class SupervisorNode(TeleopServer, Node):
 
     def _cancel_trajectory(self) -> None:
         self._trajectory_generation += 1
+        self._awaited = None
         if self._follow_handle is not None:
             self._follow_handle.cancel_goal_async()
             self._follow_handle = None
