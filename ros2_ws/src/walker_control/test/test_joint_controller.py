@@ -19,12 +19,17 @@ from walker_control.core.joint_controller import (
     JointController, Measurement, MeasurementError, RoleChangeError)
 from walker_control.core.modes import Mode
 
-#: The parameter file as shipped: reference shaping and friction feed-forward on.
-SHIPPED = load_controller_settings()
 #: The terms of Figure 3 alone (no reference shaping, no friction feed-forward), so each term
 #: can be checked against the design; the two additions are checked on their own below.
-SETTINGS = replace_in_section(SHIPPED, {'control.filter.reference': False,
-                                        'control.friction_compensation.feedforward_speed': 0.0})
+SETTINGS = replace_in_section(load_controller_settings(),
+                              {'control.filter.reference': False,
+                               'control.friction_compensation.feedforward_speed': 0.0})
+#: With reference shaping and friction feed-forward on, J1's compensator deadband and ramp
+#: 0.2 and 0.3 mrad: the sim-time walk's settings of the README.
+SHAPED = replace_in_section(SETTINGS, {
+    'control.filter.reference': True, 'control.friction_compensation.feedforward_speed': 0.02,
+    'control.friction_compensation.deadband': [0.0002, 0.0005, 0.0005, 0.005, 0.005],
+    'control.friction_compensation.ramp': [0.0003, 0.0005, 0.0005, 0.005, 0.005]})
 T = SETTINGS.sample_time
 STANCE = np.array([0.0, 0.85, 1.45, 0.85, 0.0])  # physical joint angles [rad]
 
@@ -395,9 +400,10 @@ def sweep(start, distance, duration):
     return setpoint
 
 
-def test_shaping_and_friction_feedforward_are_on_as_shipped():
-    assert SHIPPED.control.filter.reference
-    assert SHIPPED.control.friction_compensation.feedforward_speed > 0.0
+def test_shaping_and_friction_feedforward_are_off_as_shipped():
+    shipped = load_controller_settings()
+    assert not shipped.control.filter.reference
+    assert shipped.control.friction_compensation.feedforward_speed == 0.0
 
 
 def test_shaped_reference_makes_joint1_follow_a_fast_sweep_without_fighting_its_filter():
@@ -409,7 +415,7 @@ def test_shaped_reference_makes_joint1_follow_a_fast_sweep_without_fighting_its_
     hundred times that.
     """
     results = {}
-    for name, settings in (('shipped', SHIPPED), ('figure 3', SETTINGS)):
+    for name, settings in (('shipped', SHAPED), ('figure 3', SETTINGS)):
         controller = JointController(settings, 'a_yaw_joint', 'a')
         plant = RigidJoint('a_yaw_joint', position=0.0)
         controller.command(Mode.COARSE)
@@ -421,11 +427,11 @@ def test_shaped_reference_makes_joint1_follow_a_fast_sweep_without_fighting_its_
     paper_error, _, _ = results['figure 3']
     assert shipped_error < 3e-3
     assert paper_error > 100 * shipped_error
-    assert abs(shipped_end - 1.2) < SHIPPED.control.in_position_tolerance[0]
+    assert abs(shipped_end - 1.2) < SHAPED.control.in_position_tolerance[0]
 
 
 def test_shaped_reference_is_reported_beside_the_commanded_setpoint():
-    controller = JointController(SHIPPED, 'a_yaw_joint', 'a')
+    controller = JointController(SHAPED, 'a_yaw_joint', 'a')
     plant = RigidJoint('a_yaw_joint', position=0.0)
     controller.command(Mode.COARSE)
     _, outputs = run(controller, plant, 200, sweep(0.0, 0.5, 1.0))
@@ -439,7 +445,7 @@ def test_shaped_reference_is_reported_beside_the_commanded_setpoint():
 
 
 def test_shaping_starts_at_the_measured_joint_and_passes_a_hold_unchanged():
-    controller = JointController(SHIPPED, 'a_yaw_joint', 'a')
+    controller = JointController(SHAPED, 'a_yaw_joint', 'a')
     plant = RigidJoint('a_yaw_joint', position=0.4)
     _, outputs = run(controller, plant, 500)
     shaped = np.array([out.shaped_reference.position for out in outputs])
@@ -453,7 +459,7 @@ def test_shaping_runs_on_through_coarse_to_fine_and_restarts_after_a_hold():
     The sequencer switches to FINE while a move is still streaming: the shaped reference goes
     on moving smoothly; after HOLD it starts again from where the joint is.
     """
-    controller = JointController(SHIPPED, 'a_yaw_joint', 'a')
+    controller = JointController(SHAPED, 'a_yaw_joint', 'a')
     plant = RigidJoint('a_yaw_joint', position=0.0)
     controller.command(Mode.COARSE)
     move = sweep(0.0, 0.8, 2.0)
@@ -477,9 +483,28 @@ def test_friction_feedforward_follows_the_setpoint_velocity():
     assert friction_feedforward(1.5, 0.02, 0.02) == pytest.approx(1.5 * math.tanh(1.0))
     assert friction_feedforward(1.5, -1.0, 0.02) == pytest.approx(-1.5)
     assert friction_feedforward(1.5, 1.0, 0.0) == 0.0  # off
-    controller = JointController(SHIPPED, 'vertex_joint', 'a')
+    controller = JointController(SHAPED, 'vertex_joint', 'a')
     plant = RigidJoint('vertex_joint', position=1.45)
     controller.command(Mode.FINE)
     out = controller.update(plant.measurement(), Setpoint(1.45, velocity=0.5), T)
-    coulomb = SHIPPED.drive(3).friction_torque
+    coulomb = SHAPED.drive(3).friction_torque
     assert out.feedforward == pytest.approx(coulomb * math.tanh(0.5 / 0.02))
+
+
+def test_shaping_keeps_time_when_samples_are_missed():
+    """A controller that sees every fifth state shapes its reference on the time that passed.
+
+    A starved process in real time misses states; its reference must not lag on that account.
+    """
+    every, skipping = (JointController(SHAPED, 'a_yaw_joint', 'a') for _ in range(2))
+    for controller in (every, skipping):
+        controller.command(Mode.COARSE)
+    plant = RigidJoint('a_yaw_joint', position=0.0)
+    measurement = plant.measurement()
+    step = Setpoint(position=0.1)
+    for k in range(500):
+        out_every = every.update(measurement, step, T)
+        if k % 5 == 4:
+            out_skipping = skipping.update(measurement, step, 5 * T)
+    assert out_skipping.shaped_reference.position == pytest.approx(
+        out_every.shaped_reference.position, abs=1e-12)

@@ -31,13 +31,16 @@ class World:
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
-                 gripper_never=False, lift_lag=None, jam_seen_first=False):
+                 gripper_never=False, lift_lag=None, jam_seen_first=False, stale_states=0.0):
         self.stance = stance
         # (joint, lag [rad], time [s]): after the extraction line's stream ends, that joint is
         # still ``lag`` short of the line's end, and catches up only ``time`` later
         self.lift_lag = lift_lag
         self.lagging = None
         self.jam_seen_first = jam_seen_first  # the jammed state arrives before the answer
+        # [s] a screw-in's first state change reaches the sequencer this late (a starved
+        # process in real time): until then it still sees the previous attempt's state
+        self.stale_states = stale_states
         self.late_answers = []
         self.sequencer = StepSequencer(SUPERVISOR, KIN, stance.base_gripper)
         self.now = 0.0
@@ -96,7 +99,10 @@ class World:
                     return
                 self.execute(self.sequencer.gripper_done(False, 'jammed 3 mm off', self.now))
                 return
-            self.grippers[request.gripper] = 'screwing'
+            if self.stale_states:
+                self.pending.append((self.now + self.stale_states, request.gripper, 'screwing'))
+            else:
+                self.grippers[request.gripper] = 'screwing'
             self.later(request.gripper, 'attached')
             self.execute(self.sequencer.gripper_done(True, '', self.now))
 
@@ -227,6 +233,19 @@ def test_a_jam_seen_in_the_gripper_states_before_its_answer_counts_once(jams, at
         assert not outcome.success and f'jammed {attempts} times' in outcome.message
         assert world.sequencer.phase == Phase.SAFE_HOLD
     assert world.late_answers == []
+
+
+def test_a_retry_is_not_judged_by_the_last_attempts_jammed_state():
+    """A retried screw-in that succeeds is not a second jam while the old state lingers.
+
+    For a while the sequencer still sees the gripper reported jammed (the plant's new state is
+    late): that is the last attempt's state, not a second jam.
+    """
+    world = World(jams=1, jam_seen_first=True, stale_states=0.1, gripper_delay=0.3)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    screw_ins = [c for c in world.log if c == GripperRequest('b', 'screw_in')]
+    assert outcome.success, outcome.message
+    assert outcome.insertion_attempts == 2 and len(screw_ins) == 2
 
 
 def test_an_answer_that_nobody_waits_for_is_refused():

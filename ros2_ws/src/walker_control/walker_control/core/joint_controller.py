@@ -125,6 +125,11 @@ class ControlOutput:
     shaped_reference: Setpoint | None = None
 
 
+#: Most control periods the reference shaper catches up in one sample (0.2 s at 500 Hz: longer
+#: gaps are stale inputs, and the controller holds).
+_MAX_SHAPER_PERIODS = 100
+
+
 def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
@@ -299,7 +304,7 @@ class JointController:
             commanded = setpoint
         else:
             commanded = Setpoint(position=self._hold_position)
-        reference = self._shape(role, transition, measurement, commanded)
+        reference = self._shape(role, transition, measurement, commanded, dt)
 
         inertia = self._feedforward.inertia(role, configuration)
         limit = settings.drive(role).torque_limit
@@ -374,12 +379,15 @@ class JointController:
         return physical_to_roles(positions, self._base)
 
     def _shape(self, role: int, transition: bool, measurement: Measurement,
-               commanded: Setpoint) -> Setpoint:
+               commanded: Setpoint, dt: float) -> Setpoint:
         """Return the setpoint the feedback compares with: shaped by the role's filter, if on.
 
         The shaper keeps running through a change between tracking modes of the same role (a
         moving setpoint goes on moving); it restarts at the joint's measured state on the way
-        into or out of HOLD, on a role change and when the filter's design changes.
+        into or out of HOLD, on a role change and when the filter's design changes. It advances
+        by the control periods ``dt`` spans (at most ``_MAX_SHAPER_PERIODS``), holding the
+        setpoint over them: a controller that missed states (a starved process in real time)
+        must not see its reference lag more than the filter's own delay.
         """
         control = self._settings.control
         if not control.filter.reference:
@@ -393,6 +401,9 @@ class JointController:
         if self._shaper is None or not self._shaper.same_design(shaper) or not keeps_tracking:
             shaper.reset_to(measurement.position, measurement.velocity)
             self._shaper = shaper
+        periods = min(_MAX_SHAPER_PERIODS, max(1, round(dt / self._settings.sample_time)))
+        for _ in range(periods - 1):
+            self._shaper.update(commanded)
         return self._shaper.update(commanded)
 
     def _new_filter(self, role: int) -> LowPassFilter:

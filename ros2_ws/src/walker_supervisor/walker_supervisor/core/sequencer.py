@@ -233,6 +233,9 @@ class StepSequencer:
         self._insertion_error = math.nan
         self._trajectory_running = False
         self._gripper_answers_due = 0  # gripper commands sent and not answered yet
+        # the moving gripper's reported state when the current screw-in was requested, until
+        # it reports another (None: what it reports is about this attempt)
+        self._state_before_screwing: str | None = None
         self._requested: str | None = None  # purpose of a trajectory requested, not started
         self._last_purpose = ''  # purpose of the last trajectory requested
         self._requested_at: float | None = None  # [s] first tick after the request
@@ -458,6 +461,8 @@ class StepSequencer:
                 self._deadline = math.inf
                 self._gripper_deadline = now + self._screw_allowance
                 self._gripper_answers_due += 1
+                # a retry starts from 'jammed': that report is the last attempt's, not this one's
+                self._state_before_screwing = grippers.get(self._step.moving_gripper, '')
                 return [GripperRequest(self._step.moving_gripper, 'screw_in')]
         return []
 
@@ -465,9 +470,11 @@ class StepSequencer:
         """Move on once the moving gripper reports free (unscrewed) or attached (screwed)."""
         if self.stage == 'unscrewing' and state == 'free':
             return self._unscrewed(now)
+        if self.stage == 'screwing' and state != self._state_before_screwing:
+            self._state_before_screwing = None  # the gripper has reported on this attempt
         if self.stage == 'screwing' and state == 'attached':
             return self._finish(now)
-        if self.stage == 'screwing' and state == 'jammed':
+        if self.stage == 'screwing' and state == 'jammed' and self._state_before_screwing is None:
             return self._jammed('the screw-in jammed', now)
         if now > self._gripper_deadline:
             action = 'unscrew' if self.stage == 'unscrewing' else 'screw in'
