@@ -45,10 +45,6 @@ class ReferenceShaper:
         self._velocity = LowPassFilter(order, corner, sample_time, kind)
         self._acceleration = LowPassFilter(order, corner, sample_time, kind)
 
-    def same_design(self, other: 'ReferenceShaper') -> bool:
-        """Tell whether ``other`` filters with the same coefficients."""
-        return self._position.same_design(other._position)
-
     def reset_to(self, position: float, velocity: float = 0.0) -> None:
         """Start in the steady state of a joint at ``position`` [rad], ``velocity`` [rad/s].
 
