@@ -125,9 +125,9 @@ class ControlOutput:
     shaped_reference: Setpoint | None = None
 
 
-#: Most control periods the reference shaper catches up in one sample (0.2 s at 500 Hz: longer
-#: gaps are stale inputs, and the controller holds).
-_MAX_SHAPER_PERIODS = 100
+#: Most control periods the filters catch up in one sample (0.2 s at 500 Hz: longer gaps are
+#: stale inputs, and the controller holds).
+_MAX_CATCH_UP_PERIODS = 100
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -305,7 +305,8 @@ class JointController:
             commanded = setpoint
         else:
             commanded = Setpoint(position=self._hold_position)
-        reference = self._shape(role, transition, measurement, commanded, dt)
+        periods = self._periods(dt)
+        reference = self._shape(role, transition, measurement, commanded, periods)
 
         inertia = self._feedforward.inertia(role, configuration)
         limit = settings.drive(role).torque_limit
@@ -337,7 +338,7 @@ class JointController:
         terms = self._pid.compute_command(error, error_rate, dt, hold_integral=hold_integral)
         command = feedforward + terms.command + accel_term + self._transfer
         filter_input = _clamp(command, limit)
-        filtered = self._filter.update(filter_input)
+        filtered = self._filter.update(filter_input, periods)
         friction_total = friction + self._friction_transfer
         total = filtered + friction_total
         effort = _clamp(total, limit)
@@ -379,16 +380,26 @@ class JointController:
                                    f'5 joint positions: {measurement!r}')
         return physical_to_roles(positions, self._base)
 
+    def _periods(self, dt: float) -> int:
+        """Control periods a sample of ``dt`` seconds spans (1 to ``_MAX_CATCH_UP_PERIODS``).
+
+        The filters are discrete at the control period. A controller that missed states (a
+        starved process in real time) advances them over every period that passed, its input
+        held, as the plant held the last effort: run once per sample instead, a filter would
+        slow down with the controller (joint 1's 0.5 s delay doubling when every other state
+        is missed) and the loop would lose the phase margin its stability check counted on.
+        """
+        return min(_MAX_CATCH_UP_PERIODS, max(1, round(dt / self._settings.sample_time)))
+
     def _shape(self, role: int, transition: bool, measurement: Measurement,
-               commanded: Setpoint, dt: float) -> Setpoint:
+               commanded: Setpoint, periods: int) -> Setpoint:
         """Return the setpoint the feedback compares with: shaped by the role's filter, if on.
 
         The shaper keeps running through a change between tracking modes of the same role (a
         moving setpoint goes on moving); it restarts at the joint's measured state on the way
         into or out of HOLD, on a role change and when the filter's design changes. It advances
-        by the control periods ``dt`` spans (at most ``_MAX_SHAPER_PERIODS``), holding the
-        setpoint over them: a controller that missed states (a starved process in real time)
-        must not see its reference lag more than the filter's own delay.
+        by ``periods`` control periods (:meth:`_periods`), holding the setpoint over them, as
+        the command filter does.
         """
         control = self._settings.control
         if not control.filter.reference:
@@ -405,10 +416,7 @@ class JointController:
             self._shaper = ReferenceShaper(*design)
             self._shaper.reset_to(measurement.position, measurement.velocity)
             self._shaper_design = design
-        periods = min(_MAX_SHAPER_PERIODS, max(1, round(dt / self._settings.sample_time)))
-        for _ in range(periods - 1):
-            self._shaper.update(commanded)
-        return self._shaper.update(commanded)
+        return self._shaper.update(commanded, periods)
 
     def _new_filter(self, role: int) -> LowPassFilter:
         settings = self._settings

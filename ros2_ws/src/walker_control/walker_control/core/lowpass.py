@@ -17,7 +17,8 @@ pre-warped so that the digital filter has its analog counterpart's gain at the c
     corner for n = 2) and lags more for the same attenuation. Used to reproduce eq (14).
 
 Order 0 is a pass-through (joints 4-5). The filter runs second-order sections in transposed
-direct form II (as :func:`scipy.signal.sosfilt`), one sample per :meth:`LowPassFilter.update`.
+direct form II (as :func:`scipy.signal.sosfilt`), one sample (or several of a held input) per
+:meth:`LowPassFilter.update`.
 """
 
 from __future__ import annotations
@@ -147,16 +148,22 @@ class LowPassFilter:
         self._state = [[float(a) * value, float(b) * value] for a, b in self._unit_state]
         self._output = value
 
-    def update(self, value: float) -> float:
-        """Filter one sample and return the output."""
-        x = float(value)
-        for (b0, b1, b2, _, a1, a2), z in zip(self._coefficients, self._state, strict=True):
-            y = b0 * x + z[0]
-            z[0] = b1 * x - a1 * y + z[1]
-            z[1] = b2 * x - a2 * y
-            x = y
-        self._output = x
-        return x
+    def update(self, value: float, samples: int = 1) -> float:
+        """Filter ``samples`` samples of the input ``value`` (held) and return the last output.
+
+        ``samples > 1`` advances the filter over sample periods in which the input could not be
+        taken (a controller that missed states), holding it as a zero-order hold would, so that
+        the filter keeps its designed dynamics in time.
+        """
+        for _ in range(samples):
+            x = float(value)
+            for (b0, b1, b2, _, a1, a2), z in zip(self._coefficients, self._state, strict=True):
+                y = b0 * x + z[0]
+                z[0] = b1 * x - a1 * y + z[1]
+                z[1] = b2 * x - a2 * y
+                x = y
+            self._output = x
+        return self._output
 
     def frequency_response(self, frequencies: np.ndarray) -> np.ndarray:
         """Complex gain at angular frequencies [rad/s] (of the digital filter)."""

@@ -54,9 +54,9 @@ class ReferenceShaper:
         self._velocity.reset_to(velocity)
         self._acceleration.reset_to(0.0)
 
-    def update(self, setpoint: Setpoint) -> Setpoint:
-        """Shape one sample: position, velocity and acceleration filtered, effort as given."""
-        return Setpoint(position=self._position.update(setpoint.position),
-                        velocity=self._velocity.update(setpoint.velocity),
-                        acceleration=self._acceleration.update(setpoint.acceleration),
+    def update(self, setpoint: Setpoint, samples: int = 1) -> Setpoint:
+        """Shape ``samples`` samples of the (held) setpoint; effort passes as given."""
+        return Setpoint(position=self._position.update(setpoint.position, samples),
+                        velocity=self._velocity.update(setpoint.velocity, samples),
+                        acceleration=self._acceleration.update(setpoint.acceleration, samples),
                         effort=setpoint.effort)
