@@ -25,7 +25,7 @@ SETTINGS = replace_in_section(load_controller_settings(),
                               {'control.filter.reference': False,
                                'control.friction_compensation.feedforward_speed': 0.0})
 #: With reference shaping and friction feed-forward on, J1's compensator deadband and ramp
-#: 0.2 and 0.3 mrad: the sim-time walk's settings of the README.
+#: 0.2 and 0.3 mrad: the controller as shipped.
 SHAPED = replace_in_section(SETTINGS, {
     'control.filter.reference': True, 'control.friction_compensation.feedforward_speed': 0.02,
     'control.friction_compensation.deadband': [0.0002, 0.0005, 0.0005, 0.005, 0.005],
@@ -400,10 +400,11 @@ def sweep(start, distance, duration):
     return setpoint
 
 
-def test_shaping_and_friction_feedforward_are_off_as_shipped():
+def test_shaping_and_friction_feedforward_are_on_as_shipped():
     shipped = load_controller_settings()
-    assert not shipped.control.filter.reference
-    assert shipped.control.friction_compensation.feedforward_speed == 0.0
+    assert shipped.control.filter.reference
+    assert shipped.control.friction_compensation.feedforward_speed > 0.0
+    assert SHAPED == shipped  # the tests below check the shipped controller
 
 
 def test_shaped_reference_makes_joint1_follow_a_fast_sweep_without_fighting_its_filter():
@@ -523,9 +524,10 @@ def test_lowpass_filter_advances_over_missed_samples_as_over_held_ones():
 
 @pytest.mark.parametrize('settings', [SETTINGS, SHAPED], ids=['figure 3', 'shaped'])
 def test_a_controller_that_misses_every_other_state_still_tracks_joint1_sweep(settings):
-    """A starved controller (every other state missed, the plant holding its last effort) keeps
-    the loop it was designed for: its filter keeps time, so joint 1 ends the sweep as close to
-    the target as a controller seeing every state, with no more overshoot.
+    """A controller that misses every other state keeps the loop it was designed for.
+
+    The plant holds the last effort over the missed states; the controller's filter keeps time,
+    so joint 1 ends the sweep as close to the target as with every state, overshooting no more.
 
     Run once per sample instead, joint 1's filter would double its delay, and the joint would
     overshoot the target by tenths of a radian (seen on the walker in real time).
