@@ -36,6 +36,7 @@ from walker_msgs.msg import ControlMode, ControllerState, JointAccelerations, Jo
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.realtime import log_realtime_request
 from walker_core.spinning import spin_nodes
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
@@ -139,6 +140,8 @@ class JointControllerNode(Node):
         self.get_logger().info(
             f'controlling {joint} (role J{self._controller.role} with base gripper a) at '
             f'{self._settings.timing.control_rate:g} Hz; holding until a mode is commanded')
+        if not self.get_parameter('use_sim_time').value:  # a loop with deadlines
+            log_realtime_request(self.get_logger(), self._settings.timing.realtime_priority)
 
     # ------------------------------------------------------------------------- parameters
     def _create_watchdog_timer(self):

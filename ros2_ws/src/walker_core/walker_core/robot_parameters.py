@@ -185,6 +185,10 @@ class TimingParameters:
     control_rate: float = parameter(
         'rate of joint states, effort commands and setpoints (the control period is its '
         'inverse)', 'Hz', 10.0, 5000.0)
+    realtime_priority: int = parameter(
+        "SCHED_FIFO priority the control loop's processes (the plant and the joint "
+        'controllers) ask for when they run on the wall clock (0: default scheduling; ignored '
+        'in sim time, where the lock-step has no deadlines)', '', 0, 99)
 
 
 @dataclasses.dataclass(frozen=True)

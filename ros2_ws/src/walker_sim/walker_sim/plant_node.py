@@ -42,6 +42,7 @@ from std_msgs.msg import String
 from walker_core.joint_roles import GRIPPERS
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf
 from walker_core.spinning import spin_nodes
@@ -123,6 +124,8 @@ class PlantNode(Node):
         self.get_logger().info(
             f'plant ready: {self.sim.clock_mode}, control {self.params.timing.control_rate:g} '
             f'Hz, physics {self.sim.physics_rate:g} Hz, base gripper {self.plant.state().base}')
+        if not self.sim_time:
+            log_realtime_request(self.get_logger(), self.params.timing.realtime_priority)
         if not self.sim_time and self.get_parameter('use_sim_time').value:
             self.get_logger().warning(
                 'use_sim_time is true but sim.clock_mode is real_time: nobody publishes /clock '

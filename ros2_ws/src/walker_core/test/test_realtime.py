@@ -1,0 +1,76 @@
+"""Real-time scheduling requests: refusals of bad priorities, and what a granted one does.
+
+The requests run in child processes, so the test process keeps its own scheduling.
+"""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from walker_core.realtime import log_realtime_request, request_realtime_priority
+
+
+@pytest.mark.parametrize('priority', [-1, 100, 1.5, True, '50', None])
+def test_a_priority_outside_0_to_99_is_refused_and_nothing_changes(priority):
+    before = os.sched_getscheduler(0)
+    with pytest.raises(ValueError, match='0..99'):
+        request_realtime_priority(priority)
+    assert os.sched_getscheduler(0) == before
+
+
+def test_priority_0_leaves_the_scheduling_alone():
+    before = os.sched_getscheduler(0), os.sched_getparam(0).sched_priority
+    assert request_realtime_priority(0) == (False, 'default scheduling (real-time priority 0)')
+    assert (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority) == before
+
+
+_CHILD = """
+import os, threading, time
+from walker_core.realtime import request_realtime_priority
+early = threading.Thread(target=time.sleep, args=(1.0,)); early.start()
+granted, report = request_realtime_priority(7)
+late = threading.Thread(target=time.sleep, args=(0.5,)); late.start()
+policies = set()
+for task in os.listdir(f'/proc/{os.getpid()}/task'):
+    policies.add((os.sched_getscheduler(int(task)), os.sched_getparam(int(task)).sched_priority))
+print(granted, sorted(policies) == [(os.SCHED_FIFO, 7)], sorted(policies) == [(os.SCHED_OTHER, 0)])
+print(report)
+"""
+
+
+def test_a_granted_request_moves_every_thread_and_a_refused_one_none():
+    """A granted request moves every thread; a refused one none, and says why.
+
+    Threads started before and after the request all run under SCHED_FIFO when it is granted;
+    when it is refused (no privilege), none does.
+    """
+    child = subprocess.run([sys.executable, '-c', _CHILD], capture_output=True, text=True,
+                           env=os.environ, timeout=60)
+    assert child.returncode == 0, child.stderr
+    first, report = child.stdout.splitlines()[:2]
+    granted, all_fifo, all_default = first.split()
+    if granted == 'True':
+        assert all_fifo == 'True', child.stdout
+        assert report == f'SCHED_FIFO priority 7 on {report.split()[-2]} threads'
+    else:
+        assert all_default == 'True', child.stdout
+        assert 'refused' in report and 'default scheduling' in report
+
+
+class _Logger:
+    def __init__(self):
+        self.lines = []
+
+    def info(self, text):
+        self.lines.append(('info', text))
+
+    def warning(self, text):
+        self.lines.append(('warning', text))
+
+
+def test_the_outcome_is_logged_and_priority_0_is_not_a_warning():
+    logger = _Logger()
+    assert log_realtime_request(logger, 0) is False
+    assert logger.lines == [('info', 'default scheduling (real-time priority 0)')]

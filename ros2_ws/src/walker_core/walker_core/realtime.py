@@ -1,0 +1,90 @@
+"""Real-time scheduling of the control-loop processes (the plant and the joint controllers).
+
+On a machine shared with other work, a controller that is ready to answer a joint state waits
+for the scheduler: on the 2-core development machine that wait, not the control law, makes
+most of the control loop's p99 round trip (README, Performance). Like ``ros2_control``'s
+controller manager (its ``thread_priority``), a loop process may ask the kernel for the
+``SCHED_FIFO`` policy, under which it runs as soon as it is ready, ahead of every ordinary
+process. Every thread of the process is moved, the middleware's receive threads included, and
+threads started later inherit the policy.
+
+The request needs the privilege to set real-time priorities (root, ``CAP_SYS_NICE``, or an
+``rtprio`` limit in ``/etc/security/limits.conf``); without it the process keeps the default
+policy and says so, as ``ros2_control`` does. The kernel's real-time throttling
+(``/proc/sys/kernel/sched_rt_runtime_us``, by default 95 % of each second) keeps a busy
+real-time process from locking the machine up.
+
+This module talks to the operating system only; it does not import rclpy.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+__all__ = ['MAX_PRIORITY', 'request_realtime_priority', 'log_realtime_request']
+
+#: Highest ``SCHED_FIFO`` priority Linux accepts.
+MAX_PRIORITY = 99
+
+
+def _threads(pid: int) -> list[int]:
+    try:
+        return sorted(int(entry.name) for entry in Path(f'/proc/{pid}/task').iterdir())
+    except OSError:
+        return [pid]
+
+
+def request_realtime_priority(priority: int) -> tuple[bool, str]:
+    """Run every thread of this process under ``SCHED_FIFO`` at ``priority``, if permitted.
+
+    Parameters
+    ----------
+    priority : int
+        1..99: the ``SCHED_FIFO`` priority; 0: leave the scheduling as it is.
+
+    Returns
+    -------
+    tuple of (bool, str)
+        Whether the process now runs under ``SCHED_FIFO``, and a one-line report for the log
+        (why not, when it does not).
+
+    Raises
+    ------
+    ValueError
+        For a priority outside 0..99; nothing changes.
+    """
+    if isinstance(priority, bool) or not isinstance(priority, int) \
+            or not 0 <= priority <= MAX_PRIORITY:
+        raise ValueError(f'real-time priority must be an integer 0..{MAX_PRIORITY} '
+                         f'(0: the default scheduler), got {priority!r}')
+    if priority == 0:
+        return False, 'default scheduling (real-time priority 0)'
+    if not hasattr(os, 'sched_setscheduler'):
+        return False, 'real-time priority not available on this platform; default scheduling'
+    param = os.sched_param(priority)
+    moved = 0
+    for thread in _threads(os.getpid()):
+        try:
+            os.sched_setscheduler(thread, os.SCHED_FIFO, param)
+            moved += 1
+        except PermissionError:
+            return False, (f'SCHED_FIFO priority {priority} refused (no permission: needs root, '
+                           f'CAP_SYS_NICE or an rtprio limit); default scheduling')
+        except ProcessLookupError:  # a thread that ended meanwhile
+            continue
+        except OSError as error:
+            return False, f'SCHED_FIFO priority {priority} refused ({error}); default scheduling'
+    return True, f'SCHED_FIFO priority {priority} on {moved} threads'
+
+
+def log_realtime_request(logger, priority: int) -> bool:
+    """Request ``priority`` (:func:`request_realtime_priority`) and log the outcome.
+
+    ``logger`` is anything with ``info`` and ``warning`` methods (a node's logger). A refused
+    request is a warning, not an error: the process runs on under the default policy.
+    Returns whether the process now runs under ``SCHED_FIFO``.
+    """
+    granted, report = request_realtime_priority(priority)
+    (logger.info if granted or priority == 0 else logger.warning)(report)
+    return granted
