@@ -34,7 +34,7 @@ from walker_planner.core.errors import LimitError
 from walker_planner.core.trajectory import CARTESIAN, Samples, Trajectory
 
 __all__ = ['PlanarModel', 'NodeToNodeSolution', 'NodeToNodeTrajectory', 'solve_node_to_node',
-           'SWEEP_TYPE_NAME']
+           'SWEEP_TYPE_NAME', 'polar_samples']
 
 SWEEP_TYPE_NAME = 'bang_bang_node'
 _GRID_POINTS = 48
@@ -294,12 +294,22 @@ class NodeToNodeTrajectory(Trajectory):
                 d * omega ** 2 * p.theta_dd)
 
     def _sample(self, t: np.ndarray) -> Samples:
-        r, r_d, r_dd, theta, theta_d, theta_dd = self.polar(t)
-        radial = np.column_stack([-np.sin(theta), np.cos(theta), np.zeros_like(theta)])
-        circular = np.column_stack([-np.cos(theta), -np.sin(theta), np.zeros_like(theta)])
-        position = r[:, None] * radial
-        position[:, 2] = self.height
-        velocity = r_d[:, None] * radial + (r * theta_d)[:, None] * circular
-        acceleration = ((r_dd - r * theta_d ** 2)[:, None] * radial
-                        + (r * theta_dd + 2.0 * r_d * theta_d)[:, None] * circular)
-        return Samples(position, velocity, acceleration)
+        return polar_samples(*self.polar(t), self.height)
+
+
+def polar_samples(r: np.ndarray, r_d: np.ndarray, r_dd: np.ndarray, theta: np.ndarray,
+                  theta_d: np.ndarray, theta_dd: np.ndarray, height: float) -> Samples:
+    """Tip position, velocity and acceleration from polar coordinates about the base yaw axis.
+
+    ``(X, Y) = r (-sin Theta, cos Theta)`` (eq (1) with J1 = Theta) at height ``Z``, and the
+    polar kinematics ``a = (r'' - r Theta'^2) e_r + (r Theta'' + 2 r' Theta') e_Theta`` that
+    eqs (19) and (20) are built on. Arrays of one shape ``(N,)``: m, rad and s.
+    """
+    radial = np.column_stack([-np.sin(theta), np.cos(theta), np.zeros_like(theta)])
+    circular = np.column_stack([-np.cos(theta), -np.sin(theta), np.zeros_like(theta)])
+    position = r[:, None] * radial
+    position[:, 2] = height
+    velocity = r_d[:, None] * radial + (r * theta_d)[:, None] * circular
+    acceleration = ((r_dd - r * theta_d ** 2)[:, None] * radial
+                    + (r * theta_dd + 2.0 * r_d * theta_d)[:, None] * circular)
+    return Samples(position, velocity, acceleration)

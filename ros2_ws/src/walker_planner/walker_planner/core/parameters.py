@@ -82,6 +82,10 @@ class BangBangPlanning:
     min_radius: float = _writable(
         'smallest distance of the tip from the base yaw axis at the midpoint (r_min = '
         '2 l2 rho_min)', 'm', 0.01, 10.0)
+    coast: bool = _writable(
+        'when the J1/J5 rate limit, not the torque, sets a fastest plan (a pure rotation), '
+        'accelerate at tau_ref over whole periods of the joint-1 mode and coast at the rate cap '
+        "(bang-coast-bang) instead of the paper's bang-bang triangle")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -102,7 +102,8 @@ class Plan:
     path : Trajectory or None
         The Cartesian tip trajectory of Cartesian types.
     solution : NodeToNodeSolution or None
-        The bang-bang solution of ``bang_bang_node``.
+        The bang-bang solution of ``bang_bang_node`` (when the plan coasts,
+        ``planner.bang_bang.coast``, the rate-bound solution it replaced).
     times : ndarray, shape (N,)
         Sample times [s]: every control period, and the end.
     samples : Samples

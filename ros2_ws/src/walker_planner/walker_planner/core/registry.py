@@ -15,6 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from walker_planner.core.errors import InvalidRequestError, LimitError, NoSolutionError
+from walker_planner.core.coasting import coasting_sweep
 from walker_planner.core.node_to_node import (
     SWEEP_TYPE_NAME, NodeToNodeTrajectory, PlanarModel, solve_node_to_node)
 from walker_planner.core.profiles import (
@@ -232,6 +233,11 @@ def _bang_bang_node(request, context):
     # Theta of the start, continuous with the start's J1 (forward reach: J1 = Theta)
     yaw = request.start_joints[0]
     theta_start = theta_start + 2.0 * math.pi * round((yaw - theta_start) / (2.0 * math.pi))
+    if planning.coast and not request.duration and solution.profile.pure_rotation \
+            and solution.binding_limit == 'the J1/J5 rate limit':
+        trajectory = coasting_sweep(model, radius, float(start[2]), theta_start, direction,
+                                    abs(sweep), context.robot.robot.flexibility.joint1_mode)
+        return Built(trajectory, solution)
     return Built(NodeToNodeTrajectory(solution, theta_start, direction, float(start[2])),
                  solution)
 
