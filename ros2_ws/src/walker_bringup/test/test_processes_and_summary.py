@@ -38,6 +38,10 @@ def test_the_graph_has_every_node_with_its_arguments():
                if not n.name.startswith('controller_'))
     assert all('use_sim_time:=false' in n.command('/bin/true')
                for n in walker_graph('/tmp/walker.yaml') if not n.name.startswith('controller_'))
+    # they cannot tell the clock mode: a sim-time graph keeps them off real-time scheduling
+    assert 'timing.realtime_priority:=0' in command
+    assert not any('realtime_priority' in arg
+                   for n in walker_graph('/tmp/walker.yaml') for arg in n.command('/bin/true'))
     assert controller_node_name('vertex_joint') == 'controller_vertex'
 
 

@@ -296,6 +296,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         graph = ComposedGraph(specs, context)
         print(f'[composed_graph] {len(graph.nodes)} nodes in one process: '
               + ', '.join(spec.full_name for spec, _, _ in graph.nodes), flush=True)
+        # the process is the loop's: on the wall clock it asks for the plant's real-time
+        # priority, as the plant's own process does (its other nodes share the interpreter)
+        for _, _, node in graph.nodes:
+            if hasattr(node, 'request_realtime_scheduling') and node.get_name() == 'plant':
+                node.request_realtime_scheduling()
         graph.spin(stop.is_set)
     except CompositionError as error:
         print(f'[composed_graph] {error}', file=sys.stderr, flush=True)

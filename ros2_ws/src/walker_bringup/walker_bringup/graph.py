@@ -169,12 +169,15 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         plant += start.parameters()
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
                           plant + parameters, remaps))
+    # The controllers run on the plant's state stream and its stamps (watchdogs on the steady
+    # clock): use_sim_time would only add a /clock subscription every period. So they cannot
+    # tell the clock mode themselves, and a sim-time graph, lock-stepped and without deadlines,
+    # tells them to leave their scheduling alone (timing.realtime_priority 0).
+    controller = (('timing.realtime_priority', '0'),) if sim_time else ()
     for joint in PHYSICAL_JOINT_NAMES:
-        # The controllers run on the plant's state stream and its stamps (watchdogs on the
-        # steady clock): use_sim_time would only add a /clock subscription every period.
         nodes.append(NodeSpec('walker_control', 'joint_controller_node',
                               controller_node_name(joint), namespace, params_file,
-                              (('joint_name', joint),) + parameters, remaps))
+                              (('joint_name', joint),) + controller + parameters, remaps))
     nodes.append(NodeSpec('walker_planner', 'planner_node', 'planner', namespace, params_file,
                           common + parameters, remaps))
     nodes.append(NodeSpec('walker_supervisor', 'supervisor_node', 'supervisor', namespace,

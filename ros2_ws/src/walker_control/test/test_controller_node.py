@@ -339,3 +339,27 @@ def test_controller_states_come_at_the_state_rate_and_efforts_every_period(ros_e
         assert len(stamps) == 20
         assert 3 <= len(published) <= 5, published  # 20 periods of 2 ms at 100 Hz
         assert all(b - a == 10_000_000 for a, b in zip(published, published[1:], strict=False))
+
+
+@pytest.mark.parametrize('priority', [50, 0])
+def test_the_controller_process_asks_for_its_real_time_priority(ros_env, priority):
+    """On the wall clock the process runs under SCHED_FIFO at timing.realtime_priority.
+
+    Where the machine refuses the privilege the node says so and keeps the default policy;
+    at 0 (what a sim-time graph gives the controllers) it leaves the scheduling alone.
+    """
+    import os
+    import subprocess
+    import sys
+
+    trial = 'import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))'
+    permitted = subprocess.run([sys.executable, '-c', trial], env=ros_env).returncode == 0
+    with start_controller(ros_env, '-p', f'timing.realtime_priority:={priority}') as controller:
+        assert controller.wait_for_output('controlling', WAIT), controller.output
+        assert controller.wait_for_output('scheduling' if priority == 0 else 'SCHED_FIFO',
+                                          WAIT), controller.output
+        policy = os.sched_getscheduler(controller.process.pid)
+        if priority and permitted:
+            assert policy == os.SCHED_FIFO and 'SCHED_FIFO priority 50 on' in controller.output
+        else:
+            assert policy == os.SCHED_OTHER, controller.output

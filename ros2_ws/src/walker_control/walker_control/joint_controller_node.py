@@ -140,8 +140,19 @@ class JointControllerNode(Node):
         self.get_logger().info(
             f'controlling {joint} (role J{self._controller.role} with base gripper a) at '
             f'{self._settings.timing.control_rate:g} Hz; holding until a mode is commanded')
-        if not self.get_parameter('use_sim_time').value:  # a loop with deadlines
-            log_realtime_request(self.get_logger(), self._settings.timing.realtime_priority)
+
+    def request_realtime_scheduling(self) -> bool:
+        """Ask for ``SCHED_FIFO`` (``timing.realtime_priority``) on the wall clock, and log it.
+
+        Called by :func:`main`, for the process the node owns: a node built inside another
+        process (a composed graph, a test) leaves that process's scheduling alone. The
+        controller runs on the plant's stamps and cannot tell the clock mode: with
+        ``use_sim_time`` true, or ``timing.realtime_priority`` 0 (what a sim-time graph of
+        ``walker_bringup`` gives it), nothing is asked.
+        """
+        if self.get_parameter('use_sim_time').value:
+            return False
+        return log_realtime_request(self.get_logger(), self._settings.timing.realtime_priority)
 
     # ------------------------------------------------------------------------- parameters
     def _create_watchdog_timer(self):
@@ -374,6 +385,7 @@ def main(args: list[str] | None = None) -> int:
     code = 0
     try:
         node = JointControllerNode(default_node_name(argv))
+        node.request_realtime_scheduling()
         spin_nodes(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

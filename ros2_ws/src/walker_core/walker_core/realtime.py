@@ -6,7 +6,11 @@ most of the control loop's p99 round trip (README, Performance). Like ``ros2_con
 controller manager (its ``thread_priority``), a loop process may ask the kernel for the
 ``SCHED_FIFO`` policy, under which it runs as soon as it is ready, ahead of every ordinary
 process. Every thread of the process is moved, the middleware's receive threads included, and
-threads started later inherit the policy.
+threads started later inherit the policy, and so would processes it started (the node
+processes start none). The nodes therefore ask in their executables' ``main``, for the process
+they own: a node built inside another process (a composed graph, a test) leaves that process's
+scheduling alone, since every process started from it afterwards would inherit the priority.
+(``SCHED_RESET_ON_FORK`` is no way out: it also resets the threads the process starts later.)
 
 The request needs the privilege to set real-time priorities (root, ``CAP_SYS_NICE``, or an
 ``rtprio`` limit in ``/etc/security/limits.conf``); without it the process keeps the default

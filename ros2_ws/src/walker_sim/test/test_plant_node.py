@@ -4,6 +4,7 @@ Each test starts the real node (``plant_node``, as ``ros2 run`` would) in a proc
 in a ROS domain of its own, and talks to it from this process.
 """
 
+import os
 import time
 import xml.etree.ElementTree as ElementTree
 from collections import Counter
@@ -266,6 +267,9 @@ def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_cont
 
     node = PlantNode(context=rclpy_context, namespace=NAMESPACE)
     try:
+        # built in this process, the node leaves its scheduling alone (only main() asks)
+        assert (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority) == (
+            os.SCHED_OTHER, 0)
         applied = node.set_parameters([Parameter('sim.lockstep_timeout', value=2.5)])[0]
         assert applied.successful and node.lockstep.timeout == 2.5
         refused = node.set_parameters([Parameter('sim.command_timeout', value=-1.0)])[0]
@@ -319,8 +323,6 @@ def _fifo_permitted(env) -> bool:
 
 
 def _policies(pid):
-    import os
-
     policies = set()
     for task in Path(f'/proc/{pid}/task').iterdir():
         try:
@@ -339,8 +341,6 @@ def test_the_plant_runs_under_real_time_scheduling_on_the_wall_clock_only(ros_en
     middleware's included, runs under it where the machine permits it, and the plant says why
     not where it does not.
     """
-    import os
-
     with start_plant(ros_env, f'sim.clock_mode:={clock_mode}') as plant:
         assert plant.wait_for_output('plant ready', START_TIMEOUT), plant.output
         time.sleep(0.5)  # the middleware's threads, started with the node, have inherited it

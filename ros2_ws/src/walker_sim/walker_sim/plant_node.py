@@ -124,12 +124,20 @@ class PlantNode(Node):
         self.get_logger().info(
             f'plant ready: {self.sim.clock_mode}, control {self.params.timing.control_rate:g} '
             f'Hz, physics {self.sim.physics_rate:g} Hz, base gripper {self.plant.state().base}')
-        if not self.sim_time:
-            log_realtime_request(self.get_logger(), self.params.timing.realtime_priority)
         if not self.sim_time and self.get_parameter('use_sim_time').value:
             self.get_logger().warning(
                 'use_sim_time is true but sim.clock_mode is real_time: nobody publishes /clock '
                 'and the stamps are wall-clock time; set sim.clock_mode:=sim_time for sim time')
+
+    def request_realtime_scheduling(self) -> bool:
+        """Ask for ``SCHED_FIFO`` (``timing.realtime_priority``) on the wall clock, and log it.
+
+        Called by :func:`main`, for the process the node owns: a node built inside another
+        process (a composed graph, a test) leaves that process's scheduling alone.
+        """
+        if self.sim_time:
+            return False
+        return log_realtime_request(self.get_logger(), self.params.timing.realtime_priority)
 
     def destroy_node(self) -> None:
         """Release the simulator with the node."""
@@ -327,6 +335,7 @@ def main(args=None) -> int:
     node = None
     try:
         node = PlantNode()
+        node.request_realtime_scheduling()
         spin_nodes(node)
     except (ParameterError, ParameterException) as error:
         get_logger('plant').fatal(f'refusing to start: {error}')
