@@ -74,3 +74,28 @@ def test_the_outcome_is_logged_and_priority_0_is_not_a_warning():
     logger = _Logger()
     assert log_realtime_request(logger, 0) is False
     assert logger.lines == [('info', 'default scheduling (real-time priority 0)')]
+
+
+def test_a_request_refused_part_way_puts_the_threads_it_moved_back(monkeypatch):
+    """Refused on the second of three threads: the first is back as it was, nothing half-applied.
+
+    The scheduler calls are replaced, so the test process's own scheduling is not touched.
+    """
+    import walker_core.realtime as realtime
+
+    policies = {1: (os.SCHED_OTHER, 0), 2: (os.SCHED_OTHER, 0), 3: (os.SCHED_BATCH, 0)}
+
+    def set_scheduler(thread, policy, param):
+        if policy == os.SCHED_FIFO and thread == 2:
+            raise PermissionError('not permitted')
+        policies[thread] = (policy, param.sched_priority)
+
+    monkeypatch.setattr(realtime, '_threads', lambda pid: [1, 2, 3])
+    monkeypatch.setattr(realtime.os, 'sched_setscheduler', set_scheduler)
+    monkeypatch.setattr(realtime.os, 'sched_getscheduler', lambda thread: policies[thread][0])
+    monkeypatch.setattr(realtime.os, 'sched_getparam',
+                        lambda thread: os.sched_param(policies[thread][1]))
+    granted, report = request_realtime_priority(50)
+    assert not granted and 'no permission' in report and 'default scheduling' in report
+    assert policies == {1: (os.SCHED_OTHER, 0), 2: (os.SCHED_OTHER, 0),
+                        3: (os.SCHED_BATCH, 0)}

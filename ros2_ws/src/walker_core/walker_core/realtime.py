@@ -67,19 +67,30 @@ def request_realtime_priority(priority: int) -> tuple[bool, str]:
     if not hasattr(os, 'sched_setscheduler'):
         return False, 'real-time priority not available on this platform; default scheduling'
     param = os.sched_param(priority)
-    moved = 0
+    moved: list[tuple[int, int, int]] = []  # (thread, policy, priority) before the change
     for thread in _threads(os.getpid()):
         try:
+            before = (thread, os.sched_getscheduler(thread),
+                      os.sched_getparam(thread).sched_priority)
             os.sched_setscheduler(thread, os.SCHED_FIFO, param)
-            moved += 1
-        except PermissionError:
-            return False, (f'SCHED_FIFO priority {priority} refused (no permission: needs root, '
-                           f'CAP_SYS_NICE or an rtprio limit); default scheduling')
+            moved.append(before)
         except ProcessLookupError:  # a thread that ended meanwhile
             continue
         except OSError as error:
-            return False, f'SCHED_FIFO priority {priority} refused ({error}); default scheduling'
-    return True, f'SCHED_FIFO priority {priority} on {moved} threads'
+            _restore(moved)  # refused part-way: every thread back as it was
+            reason = ('no permission: needs root, CAP_SYS_NICE or an rtprio limit'
+                      if isinstance(error, PermissionError) else str(error))
+            return False, f'SCHED_FIFO priority {priority} refused ({reason}); default scheduling'
+    return True, f'SCHED_FIFO priority {priority} on {len(moved)} threads'
+
+
+def _restore(moved: list[tuple[int, int, int]]) -> None:
+    """Put threads back under the policy and priority they had (lowering is always allowed)."""
+    for thread, policy, priority in moved:
+        try:
+            os.sched_setscheduler(thread, policy, os.sched_param(priority))
+        except OSError:  # a thread that ended meanwhile
+            continue
 
 
 def log_realtime_request(logger, priority: int) -> bool:
