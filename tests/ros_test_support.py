@@ -21,7 +21,7 @@ from collections.abc import Iterator
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
-           'processes_with', 'running_graph']
+           'processes_with', 'running_graph', 'realtime_permitted', 'thread_policies']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 # Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
@@ -244,6 +244,28 @@ def processes_with(marker: str) -> list[int]:
         except OSError:
             continue
     return [pid for pid in found if pid != os.getpid()]
+
+
+def realtime_permitted() -> bool:
+    """Tell whether a process started from here may set SCHED_FIFO (root, CAP_SYS_NICE, rtprio).
+
+    The trial runs in a child, so this process keeps its own scheduling.
+    """
+    trial = 'import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))'
+    return subprocess.run([sys.executable, '-c', trial], capture_output=True,
+                          timeout=60).returncode == 0
+
+
+def thread_policies(pid: int) -> set[tuple[int, int]]:
+    """Return the ``(scheduling policy, priority)`` pairs of a process's threads."""
+    policies = set()
+    for task in Path(f'/proc/{pid}/task').iterdir():
+        try:
+            policies.add((os.sched_getscheduler(int(task.name)),
+                          os.sched_getparam(int(task.name)).sched_priority))
+        except ProcessLookupError:  # a thread that ended meanwhile
+            continue
+    return policies
 
 
 @contextlib.contextmanager

@@ -349,17 +349,16 @@ def test_the_controller_process_asks_for_its_real_time_priority(ros_env, priorit
     at 0 (what a sim-time graph gives the controllers) it leaves the scheduling alone.
     """
     import os
-    import subprocess
-    import sys
 
-    trial = 'import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))'
-    permitted = subprocess.run([sys.executable, '-c', trial], env=ros_env).returncode == 0
+    from ros_test_support import realtime_permitted, thread_policies
+
     with start_controller(ros_env, '-p', f'timing.realtime_priority:={priority}') as controller:
         assert controller.wait_for_output('controlling', WAIT), controller.output
         assert controller.wait_for_output('scheduling' if priority == 0 else 'SCHED_FIFO',
                                           WAIT), controller.output
-        policy = os.sched_getscheduler(controller.process.pid)
-        if priority and permitted:
-            assert policy == os.SCHED_FIFO and 'SCHED_FIFO priority 50 on' in controller.output
+        policies = thread_policies(controller.process.pid)
+        if priority and realtime_permitted():
+            assert policies == {(os.SCHED_FIFO, 50)}, (policies, controller.output)
+            assert 'SCHED_FIFO priority 50 on' in controller.output
         else:
-            assert policy == os.SCHED_OTHER, controller.output
+            assert policies == {(os.SCHED_OTHER, 0)}, (policies, controller.output)

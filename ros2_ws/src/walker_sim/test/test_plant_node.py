@@ -313,26 +313,6 @@ def test_an_injected_fouled_thread_jams_screw_ins_and_the_parameter_counts_down(
         node.destroy_node()
 
 
-def _fifo_permitted(env) -> bool:
-    import subprocess
-    import sys
-
-    trial = 'import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))'
-    return subprocess.run([sys.executable, '-c', trial], env=env,
-                          capture_output=True).returncode == 0
-
-
-def _policies(pid):
-    policies = set()
-    for task in Path(f'/proc/{pid}/task').iterdir():
-        try:
-            policies.add((os.sched_getscheduler(int(task.name)),
-                          os.sched_getparam(int(task.name)).sched_priority))
-        except ProcessLookupError:
-            continue
-    return policies
-
-
 @pytest.mark.parametrize('clock_mode', ['real_time', 'sim_time'])
 def test_the_plant_runs_under_real_time_scheduling_on_the_wall_clock_only(ros_env, clock_mode):
     """On the wall clock the plant runs under SCHED_FIFO; in sim time under the default policy.
@@ -341,13 +321,15 @@ def test_the_plant_runs_under_real_time_scheduling_on_the_wall_clock_only(ros_en
     middleware's included, runs under it where the machine permits it, and the plant says why
     not where it does not.
     """
+    from ros_test_support import realtime_permitted, thread_policies
+
     with start_plant(ros_env, f'sim.clock_mode:={clock_mode}') as plant:
         assert plant.wait_for_output('plant ready', START_TIMEOUT), plant.output
         time.sleep(0.5)  # the middleware's threads, started with the node, have inherited it
-        policies = _policies(plant.process.pid)
+        policies = thread_policies(plant.process.pid)
         if clock_mode == 'sim_time':
             assert policies == {(os.SCHED_OTHER, 0)}, policies
-        elif _fifo_permitted(ros_env):
+        elif realtime_permitted():
             assert policies == {(os.SCHED_FIFO, 50)}, (policies, plant.output)
             assert 'SCHED_FIFO priority 50 on' in plant.output
         else:
