@@ -26,6 +26,7 @@ context down).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import importlib
 import signal
@@ -298,9 +299,8 @@ def main(argv: Sequence[str] | None = None) -> int:
               + ', '.join(spec.full_name for spec, _, _ in graph.nodes), flush=True)
         # the process is the loop's: on the wall clock it asks for the plant's real-time
         # priority, as the plant's own process does (its other nodes share the interpreter)
-        for _, _, node in graph.nodes:
-            if hasattr(node, 'request_realtime_scheduling') and node.get_name() == 'plant':
-                node.request_realtime_scheduling()
+        with contextlib.suppress(KeyError):  # a graph without its plant asks nothing
+            graph.node('plant').request_realtime_scheduling()
         graph.spin(stop.is_set)
     except CompositionError as error:
         print(f'[composed_graph] {error}', file=sys.stderr, flush=True)
