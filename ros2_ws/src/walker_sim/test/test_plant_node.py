@@ -325,7 +325,8 @@ def test_the_plant_runs_under_real_time_scheduling_on_the_wall_clock_only(ros_en
 
     with start_plant(ros_env, f'sim.clock_mode:={clock_mode}') as plant:
         assert plant.wait_for_output('plant ready', START_TIMEOUT), plant.output
-        time.sleep(0.5)  # the middleware's threads, started with the node, have inherited it
+        if clock_mode == 'real_time':  # main() asks after the node is built, and logs it
+            assert plant.wait_for_output('SCHED_FIFO', START_TIMEOUT), plant.output
         policies = thread_policies(plant.process.pid)
         if clock_mode == 'sim_time':
             assert policies == {(os.SCHED_OTHER, 0)}, policies
