@@ -10,7 +10,11 @@ environment like the other scripts, runs in well under a minute, prints a table 
    at a time, gripper a attached and gripper b swinging under torques that beat friction,
    as in a step. Reports the real-time factor and the cost of a control step and of a physics
    step (median and 99th percentile), and the same at rest.
-2. Real-time mode over DDS: the plant node runs in its own process (isolated ROS domain, loopback
+2. Accuracy of the shipped physics settings: each of joints 1-3, friction on, is driven by half
+   its torque limit for 0.3 s and left free for 0.7 s; its speed and the tip's path are
+   compared with those of a converged reference (4 kHz physics, 300 solver iterations). Reports
+   the largest speed difference relative to the peak speed, and the largest tip difference.
+3. Real-time mode over DDS: the plant node runs in its own process (isolated ROS domain, loopback
    discovery) and a subscriber here records the period between JointState messages: by their
    stamps (the plant's timer) and by their arrival (what a controller sees).
 
@@ -100,6 +104,63 @@ def physics_benchmark(seconds: float) -> dict:
     return results
 
 
+# Converged reference for the accuracy check: physics rate [Hz], solver iterations, residual.
+_REFERENCE_PHYSICS = (4000.0, 300, 1e-12)
+
+
+def _pulse_response(params, sim, joint: int, iterations: int, residual: float,
+                    seconds: float = 1.0, pulse: float = 0.3):
+    """Speed of ``joint`` and tip path under a torque pulse (half the limit), friction on."""
+    import numpy as np
+
+    from walker_sim.core.config import StartConfiguration
+    from walker_sim.core.plant import WalkerPlant
+
+    period = 1.0 / params.timing.control_rate
+    with WalkerPlant(params, sim) as plant:
+        plant.set_solver(iterations, residual)
+        plant.reset(StartConfiguration('a', sim.start.base_node, sim.start.other_node, False,
+                                       0.0))
+        torque = np.zeros(5)
+        speed, tip = [], []
+        for k in range(round(seconds / period)):
+            torque[joint] = 0.5 * plant.drive.torque_limit[joint] if k * period < pulse else 0.0
+            state = plant.step(torque, period)
+            speed.append(state.velocity[joint])
+            tip.append(state.tip_position)
+    return np.array(speed), np.array(tip)
+
+
+def accuracy_benchmark() -> dict:
+    """Compare the shipped physics settings with a converged reference (joints 1-3)."""
+    import dataclasses
+
+    import numpy as np
+
+    from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+    from walker_core.robot_parameters import load_walker_parameters
+    from walker_sim.core.config import load_sim_parameters
+    from walker_sim.core.plant import SOLVER_ITERATIONS, SOLVER_RESIDUAL
+
+    params, sim = load_walker_parameters(), load_sim_parameters()
+    rate, iterations, residual = _REFERENCE_PHYSICS
+    reference_sim = dataclasses.replace(sim, physics_rate=rate)
+    joints = {}
+    for joint in range(3):
+        speed, tip = _pulse_response(params, sim, joint, SOLVER_ITERATIONS, SOLVER_RESIDUAL)
+        ref_speed, ref_tip = _pulse_response(params, reference_sim, joint, iterations,
+                                             residual)
+        joints[PHYSICAL_JOINT_NAMES[joint]] = {
+            'speed_error_relative': float(np.abs(speed - ref_speed).max()
+                                          / np.abs(ref_speed).max()),
+            'tip_error_m': float(np.linalg.norm(tip - ref_tip, axis=1).max()),
+            'tip_travel_m': float(np.linalg.norm(ref_tip[-1] - ref_tip[0])),
+        }
+    return {'physics_rate_hz': sim.physics_rate, 'solver_iterations': SOLVER_ITERATIONS,
+            'reference': {'physics_rate_hz': rate, 'solver_iterations': iterations},
+            'joints': joints}
+
+
 def jitter_benchmark(seconds: float) -> dict:
     """Run the plant node in real time and measure the JointState period at a subscriber."""
     import numpy as np
@@ -180,9 +241,11 @@ def main() -> int:
                'python': platform.python_version(), 'pybullet': version('pybullet'),
                'date': time.strftime('%Y-%m-%d %H:%M:%S %Z')}
     physics = physics_benchmark(args.seconds)
+    accuracy = accuracy_benchmark()
     jitter = jitter_benchmark(args.jitter_seconds)
     machine['load_average_after'] = list(os.getloadavg())
-    document = {'machine': machine, 'physics': physics, 'real_time_jitter': jitter}
+    document = {'machine': machine, 'physics': physics, 'accuracy': accuracy,
+                'real_time_jitter': jitter}
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps(document, indent=2) + '\n')
 
@@ -201,6 +264,13 @@ def main() -> int:
               f'{step["p50"]:>10.0f} / {step["p99"]:<5.0f} us '
               f'{engine["p50"]:>5.0f} / {engine["p99"]:<5.0f} us '
               f'{row["engine_only_real_time_factor"]:>7.1f}')
+    reference = accuracy['reference']
+    print(f'accuracy: {accuracy["physics_rate_hz"]:g} Hz, {accuracy["solver_iterations"]} '
+          f'iterations against {reference["physics_rate_hz"]:g} Hz, '
+          f'{reference["solver_iterations"]} iterations (torque pulse, friction on)')
+    for name, row in accuracy['joints'].items():
+        print(f'  {name:<14} speed {100 * row["speed_error_relative"]:.2f} % of peak, tip '
+              f'{1e3 * row["tip_error_m"]:.3f} mm of {1e3 * row["tip_travel_m"]:.0f} mm travel')
     print(f'real time, JointState over DDS ({jitter["measured_s"]:g} s, '
           f'{jitter["published_rate_hz"]:.1f} Hz published, '
           f'{jitter["messages_received"]} received):')

@@ -211,12 +211,16 @@ class Suite:
 
 # ----------------------------------------------------------------------------- the parts
 def part_plant(suite: Suite) -> dict:
-    """Measure the plant core alone, in sim time (``plant_benchmark.physics_benchmark``)."""
-    from plant_benchmark import physics_benchmark
+    """Measure the plant core alone, in sim time, and the accuracy of its physics settings.
+
+    ``plant_benchmark.physics_benchmark`` and ``plant_benchmark.accuracy_benchmark``.
+    """
+    from plant_benchmark import accuracy_benchmark, physics_benchmark
 
     seconds = suite.seconds(10.0, 3.0)
-    suite.say(f'plant core: {seconds:g} s simulated, moving and at rest')
-    return physics_benchmark(seconds)
+    suite.say(f'plant core: {seconds:g} s simulated, moving and at rest; accuracy against a '
+              'converged reference')
+    return {**physics_benchmark(seconds), 'accuracy': accuracy_benchmark()}
 
 
 def part_planner(suite: Suite) -> dict:
@@ -498,11 +502,20 @@ def figures(results: dict) -> list[dict]:
     if plant:
         for case in ('moving', 'at_rest'):
             row = plant[case]
-            add(f'plant core alone ({case.replace("_", " ")}): real-time factor; control step '
-                'p50 / p99',
-                f'{row["real_time_factor"]:.1f}; {row["control_step_us"]["p50"]:.0f} / '
+            add(f'plant core alone ({case.replace("_", " ")}): real-time factor of step() '
+                '(of pybullet alone); control step p50 / p99',
+                f'{row["real_time_factor"]:.1f} ({row["engine_only_real_time_factor"]:.1f}); '
+                f'{row["control_step_us"]["p50"]:.0f} / '
                 f'{row["control_step_us"]["p99"]:.0f} us', '>= 20 (physics alone)',
                 row['real_time_factor'] >= 20)
+        accuracy = plant.get('accuracy')
+        if accuracy:
+            worst = max(accuracy['joints'].values(), key=lambda j: j['speed_error_relative'])
+            tip = max(j['tip_error_m'] for j in accuracy['joints'].values())
+            add(f'plant accuracy ({accuracy["physics_rate_hz"]:g} Hz, '
+                f'{accuracy["solver_iterations"]} iterations) against a converged reference: '
+                'largest joint speed error; tip error',
+                f'{100 * worst["speed_error_relative"]:.2f} % of peak; {1e3 * tip:.2f} mm')
     planner = results.get('planner')
     if planner:
         for case in planner['results']:

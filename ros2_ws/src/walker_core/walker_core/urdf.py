@@ -199,7 +199,8 @@ class _Builder:
         return '\n'.join([*self.parts, '</robot>', ''])
 
 
-def robot_urdf(params, *, flexible: bool = True, rotors: bool = True) -> str:
+def robot_urdf(params, *, flexible: bool = True, rotors: bool = True,
+               out_of_plane_first: bool = False) -> str:
     """Generate the walker's URDF from :class:`walker_core.robot_parameters.WalkerParameters`.
 
     Parameters
@@ -210,6 +211,11 @@ def robot_urdf(params, *, flexible: bool = True, rotors: bool = True) -> str:
         True: passive bending joints are revolute (the plant model); False: they are fixed.
     rotors : bool
         Add a rotor link (inertia ``I_m`` about the joint axis) beside each actuated joint.
+    out_of_plane_first : bool
+        Order of the two bending joints of a bend, from the root: in-plane first (False) or
+        out-of-plane first. The body the plant roots at gripper b is this URDF read from the
+        other end; with the order reversed it bends exactly as the body rooted at a (two
+        rotations about different axes do not commute).
 
     Returns
     -------
@@ -288,10 +294,14 @@ def robot_urdf(params, *, flexible: bool = True, rotors: bool = True) -> str:
                 build.link(name, body, visuals)
                 kind = 'revolute' if flexible else 'fixed'
                 limits = (-_BEND_LIMIT, _BEND_LIMIT, 1e6, 1e3) if flexible else None
-                build.joint(f'{bend}_in_plane_joint', kind, parent, bend, origin,
-                            axis=(-1.0, 0.0, 0.0) if flexible else None, limits=limits)
-                build.joint(f'{bend}_out_of_plane_joint', kind, bend, name,
-                            axis=(0.0, 1.0, 0.0) if flexible else None, limits=limits)
+                planes = [('in_plane', (-1.0, 0.0, 0.0)), ('out_of_plane', (0.0, 1.0, 0.0))]
+                if out_of_plane_first:
+                    planes.reverse()
+                (first, first_axis), (second, second_axis) = planes
+                build.joint(f'{bend}_{first}_joint', kind, parent, bend, origin,
+                            axis=first_axis if flexible else None, limits=limits)
+                build.joint(f'{bend}_{second}_joint', kind, bend, name,
+                            axis=second_axis if flexible else None, limits=limits)
             parent, origin = name, (0.0, 0.0, segment_length)
 
     wrist_b = _Inertial()
@@ -308,9 +318,12 @@ def robot_urdf(params, *, flexible: bool = True, rotors: bool = True) -> str:
     return build.text()
 
 
-def plant_urdf(params) -> str:
-    """URDF the pybullet plant loads: bending joints revolute, rotor links present."""
-    return robot_urdf(params, flexible=True, rotors=True)
+def plant_urdf(params, *, out_of_plane_first: bool = False) -> str:
+    """URDF the pybullet plant loads: bending joints revolute, rotor links present.
+
+    ``out_of_plane_first``: see :func:`robot_urdf` (the body rooted at gripper b).
+    """
+    return robot_urdf(params, flexible=True, rotors=True, out_of_plane_first=out_of_plane_first)
 
 
 def description_urdf(params) -> str:

@@ -192,11 +192,11 @@ def test_energy_stays_bounded_without_structural_damping(make_plant, one_attache
     undamped = dataclasses.replace(tuning, in_plane_damping=0.0, out_of_plane_damping=0.0)
     plant = make_plant(one_attached(), flexibility=undamped)
     excite(plant)
-    energy = energy_record(plant, 4.0, 40)
-    # the integrator's energy error oscillates with the stiffest mode (omega h = 0.36);
-    # it must not grow
-    assert energy.max() < 1.2 * energy[0]
-    assert energy[-1] <= energy[0]
+    energy = energy_record(plant, 8.0, 80)
+    # nothing dissipates: the integrator's energy error oscillates with the stiffest mode
+    # (omega h = 0.36) by a few per cent; it must stay bounded and not drift upwards
+    assert energy.max() < 1.05 * energy[0]
+    assert energy[-20:].mean() <= 1.01 * energy[:20].mean()
 
 
 def test_the_plant_is_deterministic(make_plant, one_attached):

@@ -10,9 +10,10 @@ What it simulates (zero gravity, headless DIRECT client, explicit client id):
   (9)-(13));
 * the drives of :mod:`walker_sim.core.motor`: torque limits, refusal of non-finite commands,
   Coulomb friction with stiction; hard end stops at the joint limits;
-* the truss and the grippers of :mod:`walker_sim.core.grippers`: a screwed-in gripper is a
-  rigid pybullet constraint to its node, so either gripper can hold the robot (the root link is
-  gripper a, whose base is otherwise free: zero gravity, nothing else holds it).
+* the truss and the grippers of :mod:`walker_sim.core.grippers`: the base gripper is the fixed
+  base of the body being stepped (:mod:`walker_sim.core.rooted`: one body rooted at each
+  gripper, the walker carried over from one to the other when the base lets go), and the other
+  gripper, once screwed in, is a rigid pybullet constraint to its node.
 
 All per-joint arrays are in physical joint order (``a_yaw_joint`` ... ``b_yaw_joint``), SI
 units. Time advances only by :meth:`WalkerPlant.step`; the physics is deterministic.
@@ -28,33 +29,33 @@ from collections.abc import Callable
 import numpy as np
 import pybullet
 
-from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, other_gripper
-from walker_core.kinematics import WalkerKinematics, invert_transform
+from walker_core.joint_roles import GRIPPERS, other_gripper
+from walker_core.kinematics import WalkerKinematics
 from walker_core.parameter_schema import ParameterError
 from walker_core.truss import Truss
-from walker_core.urdf import GRIPPER_LINKS, flex_joints, plant_urdf, rotor_joint_name
-from walker_sim.core.bullet import free_dynamics, index_body, load_urdf_text
+from walker_core.urdf import flex_joints
 from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
 from walker_sim.core.flexibility import FlexTuning, tune_flexibility
 from walker_sim.core.grippers import (
     GripperCommandError, GripperLogic, GripperMode, GripperStatus, HoleAlignment,
     ScrewOutcome, hole_alignment)
 from walker_sim.core.motor import DriveCommand, DriveModel
+from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
 
 __all__ = ['PlantError', 'Pose', 'GripperReport', 'PlantState', 'WalkerPlant',
            'SOLVER_ITERATIONS', 'SOLVER_RESIDUAL']
 
-# Largest force [N] and torque [N*m] the rigid constraints (attachments, gears) may apply:
+# Largest force [N] and torque [N*m] an attachment constraint may apply:
 # far above anything the drives can produce, so they never give way.
 _CONSTRAINT_FORCE = 1.0e6
 # Torque [N*m] a held joint's brake may apply (identification holds joints still with it).
 _HOLD_TORQUE = 1.0e6
-# Largest spring torque [N*m] of a bending joint (pybullet's PD needs a bound).
-_BEND_TORQUE = 1.0e6
-#: Constraint solver (attachments, gears, friction) iterations and residual: pybullet's
-#: defaults. More change the walker's motion by far less than anything a controller sees
-#: (measured), and cost up to twice the time per step when the robot moves.
-SOLVER_ITERATIONS = 50
+#: Constraint solver (gears, friction, the tip's attachment) iterations and residual. With
+#: the base gripper as the fixed base, 30 iterations at 1 kHz keep every joint's response to a
+#: torque step within 0.7 % of the converged one (friction on; benchmarks/plant_benchmark.py
+#: measures it); pybullet's default of 50 costs 12 % more per step and is no closer at 1 kHz,
+#: where the time step, not the solver, is the larger error.
+SOLVER_ITERATIONS = 30
 SOLVER_RESIDUAL = 1e-7
 
 
@@ -229,7 +230,6 @@ class WalkerPlant:
         self.truss = Truss.from_parameters(params)
         self.kinematics = WalkerKinematics.from_parameters(params)
         self._grippers = GripperLogic.from_parameters(params)
-        self.client = pybullet.connect(pybullet.DIRECT)
         try:
             self._build()
             self.reset()
@@ -239,38 +239,16 @@ class WalkerPlant:
 
     # ------------------------------------------------------------------ set-up
     def _build(self) -> None:
-        client = self.client
-        pybullet.setGravity(0.0, 0.0, 0.0, physicsClientId=client)
-        pybullet.setPhysicsEngineParameter(fixedTimeStep=self.physics_step, numSubSteps=1,
-                                           physicsClientId=client)
+        self._bodies: dict[str, RootedBody] = {}
+        for root in GRIPPERS:
+            self._bodies[root] = load_rooted_body(root, self.params, self.flexibility,
+                                                  self.physics_step)
+        self._active = self._bodies['a']
         self.set_solver(SOLVER_ITERATIONS, SOLVER_RESIDUAL)
-        self.body = load_urdf_text(client, plant_urdf(self.params), fixed_base=False)
-        self.index = index_body(client, self.body)
-        free_dynamics(client, self.body, self.index)
-        self._joints = [self.index.joints[name] for name in PHYSICAL_JOINT_NAMES]
-        self._gripper_links = {g: self.index.links[GRIPPER_LINKS[g]] for g in GRIPPERS}
         bends = flex_joints(self.params.robot.flexibility.segments_per_link)
-        self._bends = [self.index.joints[bend.name] for bend in bends]
         self._bend_stiffness = np.array([self.flexibility.stiffness_of(b.plane) for b in bends])
-        if self._bends:
-            pybullet.setJointMotorControlArray(
-                self.body, self._bends, pybullet.PD_CONTROL,
-                targetPositions=[0.0] * len(bends), targetVelocities=[0.0] * len(bends),
-                positionGains=self._bend_stiffness.tolist(),
-                velocityGains=[self.flexibility.damping_of(b.plane) for b in bends],
-                forces=[_BEND_TORQUE] * len(bends), physicsClientId=client)
-        self._rotors = []
-        gears = self.params.robot.drive.role_array('gear_ratio')
-        for name, joint, ratio in zip(PHYSICAL_JOINT_NAMES, self._joints, gears, strict=True):
-            rotor = self.index.joints[rotor_joint_name(name)]
-            self._rotors.append(rotor)
-            gear = pybullet.createConstraint(self.body, rotor, self.body, joint,
-                                             pybullet.JOINT_GEAR, [0.0, 0.0, 1.0],
-                                             [0.0, 0.0, 0.0], [0.0, 0.0, 0.0],
-                                             physicsClientId=client)
-            pybullet.changeConstraint(gear, gearRatio=-float(ratio), maxForce=_CONSTRAINT_FORCE,
-                                      erp=0.0, physicsClientId=client)
-        self._gear_ratio = np.asarray(gears, dtype=float)
+        self._gear_ratio = np.asarray(self.params.robot.drive.role_array('gear_ratio'),
+                                      dtype=float)
         self._attachments: dict[str, int] = {}
         self._pull: dict[str, tuple[Pose, Pose]] = {}
         self._held = np.zeros(5, dtype=bool)
@@ -278,10 +256,25 @@ class WalkerPlant:
         self._level_override: tuple[float | None, ...] | None = None
         self._motor_levels: tuple[float, ...] | None = None
 
+    @property
+    def client(self) -> int:
+        """Pybullet client of the body being stepped (the one rooted at the base gripper)."""
+        return self._active.client
+
+    @property
+    def body(self) -> int:
+        """Pybullet id of the body being stepped."""
+        return self._active.body
+
+    @property
+    def index(self):
+        """Joint and link names of the body being stepped."""
+        return self._active.index
+
     def close(self) -> None:
-        """Disconnect the physics client (the plant cannot be used afterwards)."""
-        if getattr(self, 'client', None) is not None and pybullet.isConnected(self.client):
-            pybullet.disconnect(physicsClientId=self.client)
+        """Disconnect the physics clients (the plant cannot be used afterwards)."""
+        for rooted in getattr(self, '_bodies', {}).values():
+            rooted.disconnect()
 
     def __enter__(self) -> 'WalkerPlant':
         return self
@@ -325,29 +318,26 @@ class WalkerPlant:
         """
         start = self.sim.start if start is None else start
         angles, base_pose = self.start_angles(start)
-        for constraint in self._attachments.values():
-            pybullet.removeConstraint(constraint, physicsClientId=self.client)
-        self._attachments.clear()
+        for gripper in list(self._attachments):
+            self._detach(gripper)
         self._pull.clear()
-        root = base_pose
-        if start.base_gripper == 'b':
-            root = base_pose @ invert_transform(self.kinematics.forward_transform(angles))
-        root_pose = Pose.from_matrix(root)
-        pybullet.resetBasePositionAndOrientation(self.body, root_pose.position.tolist(),
+        self._active = rooted = self._bodies[start.base_gripper]
+        root_pose = Pose.from_matrix(base_pose)
+        pybullet.resetBasePositionAndOrientation(rooted.body, root_pose.position.tolist(),
                                                  root_pose.orientation.tolist(),
-                                                 physicsClientId=self.client)
-        pybullet.resetBaseVelocity(self.body, [0.0] * 3, [0.0] * 3, physicsClientId=self.client)
-        for joint in self.index.movable:
-            pybullet.resetJointState(self.body, joint, 0.0, 0.0, physicsClientId=self.client)
-        for joint, angle in zip(self._joints, angles, strict=True):
-            pybullet.resetJointState(self.body, joint, float(angle), 0.0,
-                                     physicsClientId=self.client)
+                                                 physicsClientId=rooted.client)
+        for joint in rooted.index.movable:
+            pybullet.resetJointState(rooted.body, joint, 0.0, 0.0, physicsClientId=rooted.client)
+        for joint, angle in zip(rooted.joints, angles, strict=True):
+            pybullet.resetJointState(rooted.body, joint, float(angle), 0.0,
+                                     physicsClientId=rooted.client)
         attached = {start.base_gripper: start.base_node}
         if start.other_attached:
             attached[other_gripper(start.base_gripper)] = start.other_node
         self._grippers.reset(attached, start.base_gripper)
         for gripper in attached:
-            self._attach(gripper, self._gripper_pose(gripper))
+            if gripper != rooted.root:
+                self._attach(gripper, self._gripper_pose(gripper))
         self._time_steps = 0
         self._command = DriveCommand(np.zeros(5), np.zeros(5, bool), np.zeros(5, bool))
         self._acceleration = np.zeros(5)
@@ -387,9 +377,11 @@ class WalkerPlant:
         torque_list = command.torque.tolist()
         for _ in range(steps):
             self._set_friction_motors()
-            pybullet.setJointMotorControlArray(self.body, self._joints, pybullet.TORQUE_CONTROL,
-                                               forces=torque_list, physicsClientId=self.client)
-            pybullet.stepSimulation(physicsClientId=self.client)
+            rooted = self._active
+            pybullet.setJointMotorControlArray(rooted.body, rooted.joints,
+                                               pybullet.TORQUE_CONTROL, forces=torque_list,
+                                               physicsClientId=rooted.client)
+            pybullet.stepSimulation(physicsClientId=rooted.client)
             self._time_steps += 1
             self._read_joints()
             if self._grippers.busy:
@@ -414,14 +406,15 @@ class WalkerPlant:
             level = tuple(own if override is None else override
                           for own, override in zip(level, self._level_override, strict=True))
         if level != self._motor_levels:
-            pybullet.setJointMotorControlArray(self.body, self._joints,
+            pybullet.setJointMotorControlArray(self.body, self._active.joints,
                                                pybullet.VELOCITY_CONTROL,
                                                targetVelocities=[0.0] * 5, forces=list(level),
                                                physicsClientId=self.client)
             self._motor_levels = level
 
     def _read_joints(self) -> None:
-        states = pybullet.getJointStates(self.body, self._joints, physicsClientId=self.client)
+        states = pybullet.getJointStates(self.body, self._active.joints,
+                                         physicsClientId=self.client)
         self._position = [s[0] for s in states]
         self._velocity = [s[1] for s in states]
         self._friction = [s[3] for s in states]
@@ -443,7 +436,7 @@ class WalkerPlant:
                               self.params.truss.hole_depth)
 
     def _gripper_pose(self, gripper: str) -> Pose:
-        link = self._gripper_links[gripper]
+        link = self._active.gripper_links[gripper]
         if link == -1:
             position, orientation = pybullet.getBasePositionAndOrientation(
                 self.body, physicsClientId=self.client)
@@ -533,7 +526,7 @@ class WalkerPlant:
 
     def _attach(self, gripper: str, pose: Pose) -> None:
         constraint = pybullet.createConstraint(
-            self.body, self._gripper_links[gripper], -1, -1, pybullet.JOINT_FIXED,
+            self.body, self._active.gripper_links[gripper], -1, -1, pybullet.JOINT_FIXED,
             [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], pose.position.tolist(),
             childFrameOrientation=pose.orientation.tolist(), physicsClientId=self.client)
         pybullet.changeConstraint(constraint, maxForce=_CONSTRAINT_FORCE,
@@ -549,8 +542,23 @@ class WalkerPlant:
                 start, seat = self._pull.pop(status.name)
                 self._move_attachment(status.name, start, seat, 1.0)
             elif status.mode == GripperMode.FREE:
-                constraint = self._attachments.pop(status.name)
-                pybullet.removeConstraint(constraint, physicsClientId=self.client)
+                if status.name == self._active.root:
+                    self._reroot(other_gripper(status.name))
+                else:
+                    self._detach(status.name)
+
+    def _detach(self, gripper: str) -> None:
+        """Remove a gripper's attachment constraint."""
+        constraint = self._attachments.pop(gripper)
+        pybullet.removeConstraint(constraint, physicsClientId=self.client)
+
+    def _reroot(self, root: str) -> None:
+        """Carry the walker over to the body rooted at ``root`` (its weld becomes the base)."""
+        self._detach(root)
+        target = self._bodies[root]
+        carry_state(self._active, target)
+        self._active = target
+        self._motor_levels = None
 
     def _move_attachment(self, gripper: str, start: Pose, seat: Pose, progress: float) -> None:
         position = start.position + progress * (seat.position - start.position)
@@ -570,9 +578,10 @@ class WalkerPlant:
         if iterations < 1 or not residual > 0:
             raise PlantError(f'solver needs iterations >= 1 and a positive residual, got '
                              f'{iterations}, {residual}')
-        pybullet.setPhysicsEngineParameter(numSolverIterations=int(iterations),
-                                           solverResidualThreshold=float(residual),
-                                           physicsClientId=self.client)
+        for rooted in self._bodies.values():
+            pybullet.setPhysicsEngineParameter(numSolverIterations=int(iterations),
+                                               solverResidualThreshold=float(residual),
+                                               physicsClientId=rooted.client)
 
     def hold_joints(self, held) -> None:
         """Hold some joints still with a brake far stronger than the drives (identification).
@@ -608,8 +617,9 @@ class WalkerPlant:
 
     def bending(self) -> np.ndarray:
         """Angles [rad] of the bending joints, in :func:`~walker_core.urdf.flex_joints` order."""
-        states = pybullet.getJointStates(self.body, self._bends, physicsClientId=self.client)
-        return np.array([s[0] for s in states])
+        rooted = self._active
+        states = pybullet.getJointStates(rooted.body, rooted.bends, physicsClientId=rooted.client)
+        return rooted.bend_signs * np.array([s[0] for s in states])
 
     def energy(self) -> float:
         """Mechanical energy [J] of the robot.
