@@ -19,9 +19,10 @@ same URDF read from the other end: its ``a_yaw_joint`` is the physical ``b_yaw_j
 in the other order (out of the plane first), since read backwards the bend's two rotations are
 applied in reverse. Joint angles keep their sign under this mirror (the role convention of
 :mod:`walker_core.kinematics`), in-plane bending angles too, and out-of-plane bending angles
-change sign (their axis, y, is the one the gripper's ``Ry(pi)`` leaves in place). One thing differs between the two bodies: each rotor sits on the side of its
-joint nearer the root, so the few terms of the rotor's own inertia ``I_m`` (not the reflected
-``n^2 I_m``) that depend on which link carries the stator move with the base.
+change sign (their axis, y, is the one the gripper's ``Ry(pi)`` leaves in place). One thing
+differs between the two bodies: each rotor sits on the side of its joint nearer the root, so
+the few terms of the rotor's own inertia ``I_m`` (not the reflected ``n^2 I_m``) that depend on
+which link carries the stator move with the base.
 """
 
 from __future__ import annotations
