@@ -105,11 +105,10 @@ def test_a_rate_bound_plan_coasts_and_is_shorter_than_the_paper_triangle(
                                atol=1e-9)
 
 
-def test_the_paper_profile_is_shipped_and_a_timed_plan_keeps_it(robot, planner_parameters):
-    assert not planner_parameters.bang_bang.coast
-    context = PlanningContext.from_parameters(robot, dataclasses.replace(
-        planner_parameters, bang_bang=dataclasses.replace(planner_parameters.bang_bang,
-                                                          coast=True)))
+def test_coasting_is_shipped_and_a_timed_plan_keeps_the_paper_profile(robot,
+                                                                      planner_parameters):
+    assert planner_parameters.bang_bang.coast
+    context = PlanningContext.from_parameters(robot, planner_parameters)
     timed = plan(PlanRequest('bang_bang_node', 'a', ABOVE, (-0.9, 0.0, H), duration=4.0),
                  context)
     assert not isinstance(timed.path, CoastingSweep)
