@@ -162,3 +162,17 @@ def test_a_report_that_cannot_be_made_is_said_and_leaves_nothing(tmp_path, capsy
     printed = capsys.readouterr().out
     assert '[walker] error: no walk report:' in printed and '--recover' in printed
     assert not (tmp_path / 'report').exists()
+
+
+@pytest.mark.parametrize('walkers, taken', [(1, 'bag'), (2, 'bag_walker_2')])
+def test_an_output_directory_holding_a_bag_is_refused_before_anything_starts(
+        tmp_path, capsys, walkers, taken):
+    from walker_bringup.run import main
+
+    (tmp_path / taken).mkdir()
+    code = main(['--sim-time', '--quiet', '--walkers', str(walkers), '--out', str(tmp_path)])
+    printed = capsys.readouterr().out
+    assert code == 2
+    assert f'[walker] error: {tmp_path / taken} already exists' in printed  # said, even quiet
+    assert '--no-record' in printed
+    assert not list(tmp_path.rglob('*.log'))  # no node was started

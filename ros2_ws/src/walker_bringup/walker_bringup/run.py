@@ -126,10 +126,18 @@ class _Progress:
             print(text, flush=True)
 
     def say(self, text: str) -> None:
+        """Print a line of progress (not with ``--quiet``)."""
+        self._print(text, always=False)
+
+    def error(self, text: str) -> None:
+        """Print a line that says what went wrong: also with ``--quiet``."""
+        self._print(text, always=True)
+
+    def _print(self, text: str, always: bool) -> None:
         if self.tty and self.last:
             print()
         self.last = ''
-        if not self.quiet:
+        if always or not self.quiet:
             print(text, flush=True)
 
 
@@ -174,6 +182,17 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
     return walkers
 
 
+def _bag_paths(walkers: list[_Walker]) -> list[Path]:
+    """List the bag directory each walker's recorder will write (none when not recording)."""
+    bags = []
+    for walker in walkers:
+        for spec in walker.nodes:
+            if spec.executable == 'recorder_node':
+                params = dict(spec.parameters)
+                bags.append(Path(params['recorder.directory']) / params['recorder.bag_name'])
+    return bags
+
+
 def _launch(walker: _Walker, args, params_file: Path) -> None:
     """Start a walker's graph: one process per node, or one composed process."""
     if not args.composed:
@@ -181,13 +200,9 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
             walker.group.start(spec)
         return
     plant = next(n for n in walker.nodes if n.executable == 'plant_node')
-    recorder = next((n for n in walker.nodes if n.executable == 'recorder_node'), None)
-    bag = None
-    if recorder is not None:
-        params = dict(recorder.parameters)
-        bag = Path(params['recorder.directory']) / params['recorder.bag_name']
+    bags = _bag_paths([walker])
     command = composed_command(params_file, walker.namespace, args.sim_time,
-                               recorder is not None, bag, walker.start,
+                               bool(bags), bags[0] if bags else None, walker.start,
                                dict(plant.remaps).get('/clock'))
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', walker.namespace,
                                 str(params_file)), command)
@@ -206,17 +221,22 @@ def main(argv: list[str] | None = None) -> int:
     env = dict(os.environ)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     if args.walkers > 1 and args.namespace != '/walker':
-        progress.say('[walker] error: --walkers names the namespaces itself (/walker, '
+        progress.error('[walker] error: --walkers names the namespaces itself (/walker, '
                      '/walker_2, ...): leave --namespace out')
         return 2
     if args.walkers > 1 and args.serve:
-        progress.say('[walker] error: --serve keeps one walker up for walkerctl: leave --walkers '
-                     'out')
+        progress.error('[walker] error: --serve keeps one walker up for walkerctl: leave '
+                       '--walkers out')
         return 2
     try:
         walkers = _describe_walkers(args, params_file, out, env)
     except ValueError as error:
-        progress.say(f'[walker] error: {error}')
+        progress.error(f'[walker] error: {error}')
+        return 2
+    taken = [bag for bag in _bag_paths(walkers) if bag.exists()]
+    if taken:
+        progress.error(f'[walker] error: {", ".join(map(str, taken))} already exists and a '
+                       'recording never overwrites a bag: choose another --out, or --no-record')
         return 2
     count = sum(len(w.nodes) for w in walkers)
     progress.say(f'[walker] output in {out}')
@@ -272,7 +292,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             code = _walk_several(walkers, args, progress, should_stop, out)
     except GraphNotReadyError as error:
-        progress.say(f'[walker] error: {error}')
+        progress.error(f'[walker] error: {error}')
         code = 3
     except WalkInterruptedError:
         code = _report_interruption([w.client for w in walkers if w.client is not None],
@@ -291,7 +311,7 @@ def main(argv: list[str] | None = None) -> int:
             codes.update({prefix + n: c for n, c in walker.group.stop_all().items()})
             left += [prefix + p.spec.name for p in walker.group.processes if p.alive]
         if left:
-            progress.say(f'[walker] error: still running after shutdown: {", ".join(left)}')
+            progress.error(f'[walker] error: still running after shutdown: {", ".join(left)}')
             code = code or 4
         elif not args.quiet:
             progress.say(f'[walker] all {"processes" if args.composed else "node processes"} '
@@ -409,7 +429,7 @@ def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop
 
 def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
     for process in deaths:
-        progress.say(f'[walker] error: node {process.spec.full_name} died '
+        progress.error(f'[walker] error: node {process.spec.full_name} died '
                      f'(exit code {process.popen.returncode}); the end of its log:\n'
                      f'{process.log_tail()}')
     if signum is not None:
@@ -419,6 +439,6 @@ def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
             response = client.call_trigger('hold', timeout=2.0)
             progress.say(f'[walker] supervisor {client.namespace}: {response.message}')
         except Exception as error:  # reporting only: shutting down anyway
-            progress.say(f'[walker] could not ask the supervisor {client.namespace} to hold: '
+            progress.error(f'[walker] could not ask the supervisor {client.namespace} to hold: '
                          f'{error}')
     return 130 if signum is not None and not deaths else 5
