@@ -418,10 +418,11 @@ def part_soak(suite: Suite) -> dict:
         if values.size < 6:
             return None
         third = values.size // 3
-        slope = np.polyfit(np.arange(values.size), values, 1)[0]
+        (slope, _), covariance = np.polyfit(np.arange(values.size), values, 1, cov=True)
         return {'first_third_mean': float(values[:third].mean()),
                 'last_third_mean': float(values[-third:].mean()),
-                'slope_per_step': float(slope)}
+                'slope_per_step': float(slope),
+                'slope_standard_error': float(np.sqrt(covariance[0, 0]))}
 
     return {'minutes_walked': round(walked / 60, 2), 'wall_minutes':
             round((time.monotonic() - began) / 60, 2), 'legs': legs, 'steps': len(rows),
@@ -433,7 +434,10 @@ def part_soak(suite: Suite) -> dict:
             'fastdds_shm_files_change': (last['fastdds_shm_files']
                                          - samples[0]['fastdds_shm_files']),
             'drift': {'duration_s': drift(durations), 'insertion_error_m': drift(errors),
-                      'residual_vibration_m': drift(vibration)}}
+                      'residual_vibration_m': drift(vibration)},
+            'step_rows': [{'from': r.from_node, 'to': r.to_node, 'success': r.success,
+                           'duration_s': r.duration, 'insertion_error_m': r.insertion_error,
+                           'residual_vibration_m': r.residual_vibration} for r in rows]}
 
 
 def part_profile(suite: Suite) -> dict:
