@@ -11,8 +11,8 @@ from walker_core.robot_parameters import load_walker_parameters
 from walker_core.truss import Truss
 from walker_supervisor.core.route import PlannedStep, Stance, plan_route, possible_steps
 from walker_supervisor.core.sequencer import (
-    CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode, StepSequencer,
-    SupervisorParameters, TrajectoryRequest)
+    MAX_FINE_LINES, CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode,
+    StepSequencer, SupervisorParameters, TrajectoryRequest)
 from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
 
 PARAMS = load_walker_parameters()
@@ -31,7 +31,8 @@ class World:
 
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
-                 gripper_never=False, lift_lag=None, jam_seen_first=False, stale_states=0.0):
+                 gripper_never=False, lift_lag=None, jam_seen_first=False, stale_states=0.0,
+                 descent_miss=0.0, mouth_lines_miss=False):
         self.stance = stance
         # (joint, lag [rad], time [s]): after the extraction line's stream ends, that joint is
         # still ``lag`` short of the line's end, and catches up only ``time`` later
@@ -51,6 +52,8 @@ class World:
         self.frame = BaseFrame.from_stance(KIN, self.theta, base, other)
         self.jams, self.refuse_unscrew, self.stall = jams, refuse_unscrew, stall_trajectories
         self.coarse_miss = coarse_miss  # [rad] J1 stops this short of the coarse goal
+        self.descent_miss = descent_miss  # [rad] J1 stops this short of the descent's end
+        self.mouth_lines_miss = mouth_lines_miss  # lines at the mouth stop as short
         self.gripper_delay = gripper_delay  # [s] screwing/unscrewing time the plant takes
         self.gripper_never = gripper_never  # the plant accepts but never completes
         self.pending = []  # (time, gripper, state) changes the plant will report
@@ -123,6 +126,10 @@ class World:
             goal = request.goal.copy()
             if request.purpose == 'coarse':
                 goal[0] -= self.coarse_miss * math.copysign(1.0, request.sweep)
+            at_mouth = request.purpose == 'fine' and np.allclose(request.goal_point,
+                                                                 self.targets.point_to)
+            if request.purpose == 'insertion' or (at_mouth and self.mouth_lines_miss):
+                goal[0] -= self.descent_miss
             self.theta = request.start + fraction * (goal - request.start)
             velocities = (self.theta - previous) / DT
             if fraction >= 1.0 and request.purpose == 'extraction' and self.lift_lag:
@@ -165,6 +172,33 @@ def test_a_step_runs_the_four_phases_in_order_and_swaps_the_base(to_node):
     assert outcome.insertion_error <= SUPERVISOR.insertion_alignment
     tip = KIN.forward(world.theta)[:3]
     np.testing.assert_allclose(world.frame.to_truss(tip), TRUSS.position(to_node), atol=1e-9)
+
+
+def test_a_tip_that_settles_off_the_hole_axis_after_the_descent_is_aligned_at_the_mouth():
+    world = World(descent_miss=0.0015)  # 1.35 mm off the axis at 0.9 m
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    purposes = [c.purpose if isinstance(c, TrajectoryRequest) else c.action
+                for c in world.log if isinstance(c, (TrajectoryRequest, GripperRequest))]
+    assert purposes == ['unscrew', 'extraction', 'coarse', 'insertion', 'fine', 'screw_in']
+    line = next(c for c in world.log if isinstance(c, TrajectoryRequest) and c.purpose == 'fine')
+    settled_tip = KIN.forward(line.start)[:3]
+    assert np.linalg.norm(settled_tip[:2] - line.goal_point[:2]) > SUPERVISOR.insertion_alignment
+    np.testing.assert_allclose(line.goal_point, world.targets.point_to)
+    np.testing.assert_allclose(line.goal, world.targets.at_to)
+    assert world.sequencer.mouth_offset() < 1e-9  # screwed in on the axis
+
+
+def test_a_mouth_that_will_not_align_is_screwed_into_after_a_bounded_number_of_lines():
+    world = World(descent_miss=0.0015, mouth_lines_miss=True)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message  # the screw-in itself is the final check
+    lines = [i for i, c in enumerate(world.log)
+             if isinstance(c, TrajectoryRequest) and c.purpose == 'fine']
+    assert len(lines) == MAX_FINE_LINES
+    screw = next(i for i, c in enumerate(world.log)
+                 if isinstance(c, GripperRequest) and c.action == 'screw_in')
+    assert screw > lines[-1]
 
 
 def test_controller_modes_follow_the_phases():

@@ -19,7 +19,11 @@ Rules it enforces:
   of the point above the hole; if it is not, a constant-velocity fine line (paper section 5)
   takes it there from where it settled, up to ``MAX_FINE_LINES`` times before insertion is
   tried anyway (the screw-in itself is the final check);
-* insertion descends along the hole axis and screws in; a jammed screw-in is retried up to
+* insertion descends along the hole axis to its mouth; the descent moves the joints, which
+  stop in their friction again, so once they have settled the tip is checked again, now
+  across the hole's axis: more than ``insertion_alignment`` off it, a fine line at the mouth
+  takes it there (up to ``MAX_FINE_LINES`` times), and only then is the gripper screwed in; a
+  jammed screw-in is retried up to
   ``max_insertion_attempts`` times (each lift goes straight up from where the gripper jammed),
   then the step is aborted to SAFE_HOLD;
 * any failure, a phase that overruns its planned time by ``phase_timeout``, or a trajectory that
@@ -230,6 +234,7 @@ class StepSequencer:
         self._attempts = 0
         self._durations: dict[str, float] = {}
         self._fine_lines = 0
+        self._mouth_lines = 0
         self._insertion_error = math.nan
         self._trajectory_running = False
         self._gripper_answers_due = 0  # gripper commands sent and not answered yet
@@ -412,7 +417,7 @@ class StepSequencer:
         if self.stage == 'retry_lift':  # above the hole again: settle, check, insert again
             self._fine_lines = 0
             return self._enter_fine(now, correction=False)
-        if self.stage == 'descending':
+        if self.stage in ('descending', 'aligning'):  # at the mouth: settle, check, screw in
             self.stage = 'settling'
             self._settled_since = None
             self._deadline = now + self.parameters.phase_timeout
@@ -457,6 +462,9 @@ class StepSequencer:
                     return self._enter_insertion(now)
                 return self._enter_fine(now, correction=True)  # settled, not aligned: a line
             if self.phase == Phase.INSERTION:
+                if self.mouth_offset() > self.parameters.insertion_alignment \
+                        and self._mouth_lines < MAX_FINE_LINES:
+                    return self._align_at_mouth()
                 self.stage = 'screwing'
                 self._deadline = math.inf
                 self._gripper_deadline = now + self._screw_allowance
@@ -667,8 +675,24 @@ class StepSequencer:
                 f'a straight tip line nor a joint-space line keeps the arm in its workspace '
                 f'and above the truss; jog the arm nearer and resume')
 
+    def mouth_offset(self) -> float:
+        """Horizontal distance [m] of the tip (forward kinematics) from the hole's axis."""
+        if self._targets is None:
+            return math.nan
+        tip = self.kinematics.forward(self._theta)[:3]
+        return float(np.linalg.norm(tip[:2] - self._targets.point_to[:2]))
+
+    def _align_at_mouth(self) -> list:
+        """Run a fine line at the mouth, from where the tip settled onto the hole's axis."""
+        self._mouth_lines += 1
+        self.stage = 'aligning'
+        tip = self.kinematics.forward(self._theta)[:3]
+        return [self._trajectory('fine', self._theta, self._targets.at_to, tip,
+                                 self._targets.point_to)]
+
     def _enter_insertion(self, now: float) -> list:
         self._insertion_error = self.tip_error()
+        self._mouth_lines = 0
         self._enter(Phase.INSERTION, now, 'descending')
         return [self._trajectory('insertion', self._theta, self._targets.at_to,
                                  self._targets.point_above_to, self._targets.point_to)]
