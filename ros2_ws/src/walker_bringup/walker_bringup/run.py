@@ -222,7 +222,7 @@ def main(argv: list[str] | None = None) -> int:
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     if args.walkers > 1 and args.namespace != '/walker':
         progress.error('[walker] error: --walkers names the namespaces itself (/walker, '
-                     '/walker_2, ...): leave --namespace out')
+                       '/walker_2, ...): leave --namespace out')
         return 2
     if args.walkers > 1 and args.serve:
         progress.error('[walker] error: --serve keeps one walker up for walkerctl: leave '

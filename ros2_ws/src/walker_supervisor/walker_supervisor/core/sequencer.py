@@ -85,7 +85,8 @@ class SupervisorParameters:
         'tip distance from the point above the target at which coarse motion hands over to '
         'fine motion', 'm', 0.001, 0.5, read_only=False)
     insertion_alignment: float = parameter(
-        'largest tip distance from the point above the hole at which insertion may start',
+        'largest tip distance from the point above the hole at which insertion may start, '
+        "and from the hole's axis at its mouth at which the screw-in may start",
         'm', 1e-5, 0.05, read_only=False)
     settle_velocity: float = parameter(
         'every joint speed must stay below this for settle_time before insertion and screw-in',
