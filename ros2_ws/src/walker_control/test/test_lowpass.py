@@ -10,7 +10,7 @@ from walker_control.core.config import load_controller_settings
 from walker_control.core.lowpass import FilterDesignError, LowPassFilter, design_lowpass_sos
 
 T = 0.002
-DESIGNS = [(kind, order, corner) for kind in ('butterworth', 'critical')
+DESIGNS = [(kind, order, corner) for kind in ('butterworth', 'critical', 'bessel')
            for order in (1, 2, 3, 4, 6) for corner in (3.0, 8.0, 30.0, 300.0)]
 
 
@@ -25,8 +25,8 @@ def test_dc_gain_is_one(kind, order, corner):
 def test_gain_at_the_designed_corner(kind, order, corner):
     sos = design_lowpass_sos(order, corner, T, kind)
     _, response = signal.freqz_sos(sos, worN=[corner * T])
-    # Butterworth: half power at the corner; critically damped: n poles at the corner.
-    expected = math.sqrt(0.5) if kind == 'butterworth' else 2.0 ** (-order / 2.0)
+    # Butterworth and Bessel: half power at the corner; critically damped: n poles at it.
+    expected = 2.0 ** (-order / 2.0) if kind == 'critical' else math.sqrt(0.5)
     assert abs(abs(response[0]) - expected) < 1e-9
 
 
@@ -38,6 +38,37 @@ def test_gain_falls_above_the_corner(kind, order, corner):
     assert np.all(np.diff(np.abs(response)) <= 1e-12)
 
 
+def _settling_after(lowpass: LowPassFilter, tolerance: float) -> float:
+    """Time [s] from the end of a 90 deg move until its filtered copy stays near the end.
+
+    The move: 1.8 s rest to rest, a trapezoidal speed with 0.55 s ramps (a coarse sweep);
+    near: within ``tolerance`` [rad].
+    """
+    t = np.arange(0.0, 5.0, T)
+    speed = np.clip(np.minimum(t, 1.8 - t) / 0.55, 0.0, 1.0)
+    position = np.cumsum(speed) * T
+    position *= (math.pi / 2) / position[-1]
+    filtered = np.array([lowpass.update(v) for v in position])
+    outside = np.nonzero(np.abs(filtered - position[-1]) > tolerance)[0]
+    return t[outside[-1]] - 1.8
+
+
+def test_the_files_joint_1_filter_settles_sooner_for_the_same_attenuation_of_its_mode():
+    """Why joint 1 uses a Bessel filter: the attenuation, about half the settling.
+
+    As much attenuation at the held arm's 18 rad/s mode as the critically damped 4th-order
+    filter at 8 rad/s of eq (14), and about half its settling after a sweep.
+    """
+    settings = load_controller_settings().control.filter
+    bessel = LowPassFilter(settings.order[0], settings.corner[0], T, settings.kind)
+    critical = LowPassFilter(4, 8.0, T, 'critical')
+    assert settings.kind == 'bessel'
+    gains = [20 * math.log10(abs(f.frequency_response(np.array([18.0]))[0]))
+             for f in (bessel, critical)]
+    assert gains[0] <= gains[1] + 0.5
+    assert _settling_after(bessel, 1e-3) < 0.6 * _settling_after(critical, 1e-3)
+
+
 def test_update_matches_scipy_sosfilt():
     lowpass = LowPassFilter(4, 8.0, T, 'critical')
     x = np.random.default_rng(1).normal(size=500)
@@ -45,7 +76,7 @@ def test_update_matches_scipy_sosfilt():
     np.testing.assert_allclose(ours, signal.sosfilt(lowpass.sos, x), rtol=1e-12, atol=1e-12)
 
 
-@pytest.mark.parametrize('kind', ['butterworth', 'critical'])
+@pytest.mark.parametrize('kind', ['butterworth', 'critical', 'bessel'])
 def test_reset_to_passes_a_constant_without_transient(kind):
     lowpass = LowPassFilter(4, 8.0, T, kind)
     lowpass.reset_to(3.7)

@@ -6,8 +6,8 @@ and per joint role J1..J5 (lists of five), not raw gains:
 * ``control.<mode>.bandwidth`` ``wc`` [rad/s], ``damping`` ``zc`` and ``integral_time`` ``Ti``
   [s] (0: no integral action) for the modes ``coarse``, ``fine`` and ``hold``;
   ``control.coarse.acceleration_feedback`` ``Ka`` (paper: joint 1 only);
-* ``control.filter``: ``kind`` (``critical`` or ``butterworth``), ``order`` and ``corner``
-  ``wf`` [rad/s] per role;
+* ``control.filter``: ``kind`` (``bessel``, ``critical`` or ``butterworth``), ``order``
+  and ``corner`` ``wf`` [rad/s] per role;
 * ``control.friction_compensation``: the fraction of the identified breakaway friction
   (``robot.drive.*.stiction_torque``) to apply, and the deadband and ramp per role [rad];
 * ``control.stability``: the inertia mismatch the loops must tolerate and the minimum damping;

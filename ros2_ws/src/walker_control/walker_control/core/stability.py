@@ -10,8 +10,8 @@ gives, besides positive coefficients, ``b1 = wf^2 (1 + Ka) - zc wc wf > 0`` and
 ``zc = 1`` gives eq (16). All three are right as printed.
 
 The controller that runs is discrete and more general than eq (14): PID (integral action in fine
-mode), a Butterworth (or critically damped) filter of any order designed with scipy.signal and
-discretised at the control rate, the measured acceleration of the last period, a zero-order
+mode), a Bessel, Butterworth or critically damped filter of any order designed with scipy.signal
+and discretised at the control rate, the measured acceleration of the last period, a zero-order
 hold, and possibly one period of transport delay. :func:`discrete_loop_matrix` builds that loop
 as a discrete state-space system on the rigid model and :func:`check_loop` refuses a design
 whose closed-loop poles are not inside the unit circle with a minimum damping, for a range of
@@ -63,7 +63,7 @@ class LoopDesign:
     filter_corner : float
         ``wf`` [rad/s] (ignored for order 0).
     filter_kind : str
-        ``'butterworth'`` or ``'critical'``.
+        ``'butterworth'``, ``'critical'`` or ``'bessel'`` (:mod:`walker_control.core.lowpass`).
     """
 
     bandwidth: float
