@@ -183,8 +183,9 @@ class StepOutcome:
     duration : float
         Step time [s] from start to the end of the screw-in.
     insertion_error : float
-        Tip distance [m] from the point above the hole when insertion started (forward
-        kinematics of the measured joints), NaN if insertion never started.
+        Tip distance [m] from the hole's axis when the screw-in was requested, at the mouth
+        (forward kinematics of the measured joints: what the walker knows); before that, from
+        the point above the hole when the descent started; NaN if insertion never started.
     insertion_attempts : int
     """
 
@@ -467,6 +468,7 @@ class StepSequencer:
                         and self._mouth_lines < MAX_FINE_LINES:
                     return self._align_at_mouth()
                 self.stage = 'screwing'
+                self._insertion_error = self.mouth_offset()  # the same moment as the plant's
                 self._deadline = math.inf
                 self._gripper_deadline = now + self._screw_allowance
                 self._gripper_answers_due += 1
