@@ -430,8 +430,8 @@ def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop
 def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
     for process in deaths:
         progress.error(f'[walker] error: node {process.spec.full_name} died '
-                     f'(exit code {process.popen.returncode}); the end of its log:\n'
-                     f'{process.log_tail()}')
+                       f'(exit code {process.popen.returncode}); the end of its log:\n'
+                       f'{process.log_tail()}')
     if signum is not None:
         progress.say(f'[walker] interrupted ({signal.Signals(signum).name}): stopping safely')
     for client in clients:
@@ -439,6 +439,6 @@ def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
             response = client.call_trigger('hold', timeout=2.0)
             progress.say(f'[walker] supervisor {client.namespace}: {response.message}')
         except Exception as error:  # reporting only: shutting down anyway
-            progress.error(f'[walker] could not ask the supervisor {client.namespace} to hold: '
-                         f'{error}')
+            progress.error(f'[walker] could not ask the supervisor {client.namespace} to '
+                           f'hold: {error}')
     return 130 if signum is not None and not deaths else 5
