@@ -274,6 +274,58 @@ def test_a_stopped_state_stream_is_reported_stale(ros_env, plant):
                                             for s in plant.states[count:]))
 
 
+def _subscriptions_of_controller(plant, topic):
+    return [info for info in plant.node.get_subscriptions_info_by_topic(topic)
+            if info.node_name == NODE]
+
+
+def test_a_state_stream_silent_for_long_is_subscribed_anew_and_followed_again(ros_env, plant):
+    """A subscription that stopped receiving (a restarted plant not matched) heals itself."""
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env, timeouts=STRICT) as controller:
+        plant.step()
+        plant.command(ControlMode.COARSE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        # two state timeouts of silence: the subscription is made anew, once per interval
+        assert controller.wait_for_output('no joint_states for', WAIT), controller.output
+        assert plant.spin_until(
+            lambda: len(_subscriptions_of_controller(plant, '/walker/joint_states')) == 1)
+        # the new subscription is answered, and the controller reports fresh inputs again
+        count = len(plant.states)
+        plant.step()
+        plant.command(ControlMode.FINE, 'a')
+        state = plant.step_until(lambda s: s.mode == ControlMode.FINE)
+        assert not state.stale and len(plant.states) > count
+
+
+def test_a_setpoint_stream_silent_for_long_is_subscribed_anew_and_followed_again(ros_env,
+                                                                                  plant):
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env, timeouts=STRICT) as controller:
+        plant.step()
+        plant.command(ControlMode.COARSE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        plant.setpoint(plant.stamp_ns + PERIOD_NS, 0.01)
+        plant.step()
+        deadline = time.monotonic() + WAIT  # states go on, setpoints do not
+        while 'subscription made anew' not in controller.output \
+                and time.monotonic() < deadline:
+            plant.step()
+        assert 'subscription made anew' in controller.output, controller.output
+        assert plant.spin_until(lambda: len(_subscriptions_of_controller(
+            plant, f'/walker/controllers/{JOINT}/setpoint')) == 1)
+        # the stream resumes on the new subscription and is tracked after a mode command
+        plant.command(ControlMode.COARSE, 'a')
+        target = STANCE[0] + 0.002
+        state = plant.step_until(
+            lambda s: s.mode == ControlMode.COARSE and not s.stale
+            and s.position_setpoint == pytest.approx(target, abs=1e-5),
+            setpoints=lambda stamp_ns: target)
+        assert state.position_setpoint == pytest.approx(target, abs=1e-5)
+
+
 def _parameter_call(plant, service_type, name, request):
     client = plant.node.create_client(service_type, f'/walker/{NODE}/{name}')
     assert plant.spin_until(lambda: client.service_is_ready())

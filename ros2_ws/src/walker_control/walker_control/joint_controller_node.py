@@ -40,7 +40,8 @@ from walker_core.realtime import log_realtime_request
 from walker_core.spinning import spin_nodes
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
-    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StaleInputs, validate_setpoint)
+    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
+    validate_setpoint)
 from walker_control.core.joint_controller import (
     ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,
     RoleChangeError)
@@ -61,6 +62,9 @@ MODE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                       reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _WATCHDOG_CHECKS_PER_TIMEOUT = 4
+# A stream silent for this many of its timeouts has its subscription made anew, and again
+# as often while the silence lasts (see Resubscription).
+_RESUBSCRIBE_AFTER_TIMEOUTS = 2.0
 
 
 def _seconds(stamp) -> float:
@@ -105,6 +109,10 @@ class JointControllerNode(Node):
         self._setpoints = SetpointBuffer()
         control = self._settings.control
         self._watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout)
+        self._state_resubscription = Resubscription(
+            _RESUBSCRIBE_AFTER_TIMEOUTS * control.state_timeout)
+        self._setpoint_resubscription = Resubscription(
+            _RESUBSCRIBE_AFTER_TIMEOUTS * control.setpoint_timeout)
         self._stale = StaleInputs()
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._names: tuple[str, ...] = ()
@@ -122,7 +130,6 @@ class JointControllerNode(Node):
         # QoS event handlers (incompatible QoS or type warnings) stay on the low-rate topics;
         # on the control-rate ones each handler would cost the executor on every wake-up.
         quiet_pub = PublisherEventCallbacks(use_default_callbacks=False)
-        quiet_sub = SubscriptionEventCallbacks(use_default_callbacks=False)
         self._effort_pub = self.create_publisher(JointState, 'effort_commands', COMMAND_QOS,
                                                  event_callbacks=quiet_pub)
         self._state_pub = self.create_publisher(ControllerState, f'controllers/{joint}/state',
@@ -130,12 +137,10 @@ class JointControllerNode(Node):
         # The executor serves ready subscriptions in creation order: the mode, the setpoint and
         # the acceleration that arrived with a state are taken before the state itself.
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, MODE_QOS)
-        self.create_subscription(JointCommand, f'controllers/{joint}/setpoint',
-                                 self._on_setpoint, COMMAND_QOS)
+        self._setpoint_sub = self._subscribe_setpoints()
         self._acceleration_sub = None
         self._update_acceleration_subscription()
-        self.create_subscription(JointState, 'joint_states', self._on_joint_state, STATE_QOS,
-                                 event_callbacks=quiet_sub)
+        self._state_sub = self._subscribe_states()
         self._watchdog_timer = self._create_watchdog_timer()
         self.get_logger().info(
             f'controlling {joint} (role J{self._controller.role} with base gripper a) at '
@@ -161,6 +166,34 @@ class JointControllerNode(Node):
             / _WATCHDOG_CHECKS_PER_TIMEOUT
         return self.create_timer(period, self._on_watchdog, clock=self._steady)
 
+    def _subscribe_setpoints(self):
+        return self.create_subscription(JointCommand, f'controllers/{self._joint}/setpoint',
+                                        self._on_setpoint, COMMAND_QOS)
+
+    def _subscribe_states(self):
+        return self.create_subscription(
+            JointState, 'joint_states', self._on_joint_state, STATE_QOS,
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+
+    def _resubscribe_silent_streams(self, now: float) -> None:
+        """Make anew the subscription of a stream silent for long (see Resubscription)."""
+        if self._state_resubscription.due(now, self._watchdog.last_state):
+            self.destroy_subscription(self._state_sub)
+            self._state_sub = self._subscribe_states()
+            self.get_logger().warning(
+                f'no joint_states for {now - self._watchdog.last_state:.1f} s: subscription '
+                'made anew (a restarted or resumed plant is matched again)')
+        if self._setpoint_resubscription.due(now, self._watchdog.last_setpoint):
+            # the state's subscription is made after it again: it stays last in the
+            # executor's order (a setpoint that arrived with a state is taken first)
+            self.destroy_subscription(self._setpoint_sub)
+            self.destroy_subscription(self._state_sub)
+            self._setpoint_sub = self._subscribe_setpoints()
+            self._state_sub = self._subscribe_states()
+            self.get_logger().warning(
+                f'no setpoint for {now - self._watchdog.last_setpoint:.1f} s while tracking: '
+                'subscription made anew')
+
     def _update_acceleration_subscription(self) -> None:
         """Subscribe to joint_accelerations only while a role of this joint feeds it back."""
         roles = {role_of_joint(self._joint, base) for base in GRIPPERS}
@@ -181,6 +214,10 @@ class JointControllerNode(Node):
         self._update_acceleration_subscription()
         self._watchdog.state_timeout = settings.control.state_timeout
         self._watchdog.setpoint_timeout = settings.control.setpoint_timeout
+        self._state_resubscription.after = \
+            _RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.state_timeout
+        self._setpoint_resubscription.after = \
+            _RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.setpoint_timeout
         self.destroy_timer(self._watchdog_timer)
         self._watchdog_timer = self._create_watchdog_timer()
         self.get_logger().info('controller parameters updated (stability check passed)')
@@ -266,7 +303,8 @@ class JointControllerNode(Node):
         self._publish(msg, measurement, output)
 
     def _on_watchdog(self) -> None:
-        stale = self._watchdog.check(self._steady.now().nanoseconds * 1e-9)
+        now = self._steady.now().nanoseconds * 1e-9
+        stale = self._watchdog.check(now)
         if stale.any and not self._stale.any:
             self.get_logger().warning(f'input stale: {stale.reason}; holding')
         elif self._stale.any and not stale.any:
@@ -276,6 +314,7 @@ class JointControllerNode(Node):
             self._controller.hold(f'input stale: {stale.reason}')
             if stale.state:
                 self._publish_stale_report()
+            self._resubscribe_silent_streams(now)
 
     # ---------------------------------------------------------------------------- helpers
     def _measurement(self, msg: JointState, stamp: float) -> Measurement | None:

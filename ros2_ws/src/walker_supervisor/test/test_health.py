@@ -3,7 +3,7 @@
 import pytest
 
 from walker_supervisor.core.health import (
-    HealthMonitor, Level, SourceStatus, reason_naming_silent_sources)
+    HealthMonitor, Level, ModeRepetition, SourceStatus, reason_naming_silent_sources)
 
 
 def test_silence_after_the_timeout_is_a_fault_and_trouble_a_warning():
@@ -80,3 +80,18 @@ def test_the_sources_not_heard_from_yet_are_listed_until_each_is_heard():
     assert monitor.unheard() == []
     assert monitor.faults(10.0, include_trouble=False)  # heard once, silent since: a fault
     assert monitor.unheard() == []
+
+
+def test_the_mode_publisher_is_renewed_after_repetitions_in_vain_and_not_before():
+    repetition = ModeRepetition(renew_after=3)
+    assert not repetition.repeat() and not repetition.repeat()
+    repetition.heard()  # the controller followed: the count starts over
+    assert not repetition.repeat() and not repetition.repeat()
+    assert repetition.repeat()  # the third in a row
+    assert repetition.renewals == 1 and repetition.repeated == 0
+    assert not repetition.repeat()  # the renewed publisher gets its own repetitions
+
+
+def test_a_mode_repetition_count_below_one_is_refused():
+    with pytest.raises(ValueError, match='at least 1'):
+        ModeRepetition(renew_after=0)

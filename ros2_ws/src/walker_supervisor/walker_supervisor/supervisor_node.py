@@ -46,7 +46,8 @@ from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler, spin_nodes
 from walker_supervisor.core.health import (
-    HealthMonitor, Level, controller_trouble, reason_naming_silent_sources, tell_mode_again)
+    HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
+    tell_mode_again)
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -181,6 +182,7 @@ class SupervisorNode(TeleopServer, Node):
         timeout = self.settings.watchdog_timeout
         self._commanded_mode = self._commanded_base = ''  # the last mode command sent
         self._mode_told_again = -math.inf  # [s] steady clock
+        self._mode_repetition = ModeRepetition()
         self._controller_states = {
             joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
                                            _CONTROLLER_STATES)
@@ -465,8 +467,17 @@ class SupervisorNode(TeleopServer, Node):
                                  controller_trouble(stale, holding, tracking))
                 if tell_mode_again(stale, holding, tracking):
                     fell_back.append(joint)
-        if fell_back and now - self._mode_told_again >= _TELL_MODE_AGAIN_PERIOD:
+        if not fell_back:
+            self._mode_repetition.heard()
+        elif now - self._mode_told_again >= _TELL_MODE_AGAIN_PERIOD:
             self._mode_told_again = now
+            if self._mode_repetition.repeat():
+                self.destroy_publisher(self.mode_pub)
+                self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODE_QOS)
+                self.get_logger().warning(
+                    f'controller {", ".join(fell_back)} still in HOLD after the mode was '
+                    f'repeated {self._mode_repetition.renew_after} times: control_mode '
+                    'publisher made anew')
             self.get_logger().warning(
                 f'controller {", ".join(fell_back)} fell back to HOLD on a stall of its inputs, '
                 f'which are fresh again: mode {self._commanded_mode.upper()} commanded again')

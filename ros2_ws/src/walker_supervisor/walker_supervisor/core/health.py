@@ -14,7 +14,7 @@ import dataclasses
 import enum
 
 __all__ = ['Level', 'SourceStatus', 'HealthMonitor', 'reason_naming_silent_sources',
-           'controller_trouble', 'tell_mode_again']
+           'controller_trouble', 'tell_mode_again', 'ModeRepetition']
 
 
 class Level(enum.IntEnum):
@@ -159,3 +159,40 @@ def tell_mode_again(stale: bool, holding: bool, tracking_commanded: bool) -> boo
     trouble becomes a fault after the watchdog's grace.
     """
     return holding and tracking_commanded and not stale
+
+
+class ModeRepetition:
+    """Counts the mode commands repeated in vain; says when to make the publisher anew.
+
+    A controller told its mode again (:func:`tell_mode_again`) that still reports HOLD after
+    several repetitions is not hearing ``control_mode``: seen with Fast DDS's shared-memory
+    transport after a process of the graph was killed and started again. A new publisher is
+    matched anew with every controller; those that did hear get the same mode once more, which
+    changes nothing for them.
+
+    Parameters
+    ----------
+    renew_after : int
+        Repetitions in a row, with some controller still holding, before the publisher is
+        made anew (>= 1).
+    """
+
+    def __init__(self, renew_after: int = 4) -> None:
+        if renew_after < 1:
+            raise ValueError(f'renew_after must be at least 1, got {renew_after!r}')
+        self.renew_after = int(renew_after)
+        self.repeated = 0
+        self.renewals = 0
+
+    def heard(self) -> None:
+        """No controller needs the mode again: the count starts over."""
+        self.repeated = 0
+
+    def repeat(self) -> bool:
+        """Note one more repetition; return True when the publisher should be made anew."""
+        self.repeated += 1
+        if self.repeated < self.renew_after:
+            return False
+        self.repeated = 0
+        self.renewals += 1
+        return True
