@@ -13,7 +13,7 @@ import pytest
 from walker_core.dynamics import RigidModel, diagonal_inertia
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_control.core.config import load_controller_settings
-from walker_core.parameter_schema import replace_in_section
+from walker_core.parameter_schema import ParameterError, replace_in_section
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import (
     JointController, Measurement, MeasurementError, RoleChangeError)
@@ -290,7 +290,8 @@ def test_mode_switch_is_bumpless(joint, first, second):
 
 def test_role_swap_while_holding_is_bumpless_and_changes_the_filter():
     joint = 'a_yaw_joint'
-    controller = JointController(SETTINGS, joint, 'a')
+    settings = replace_in_section(SETTINGS, {'control.relaxation.duration': 0.0})
+    controller = JointController(settings, joint, 'a')
     plant = RigidJoint(joint, 'a', disturbance=0.5, friction=False)  # against a steady torque
     efforts, _ = run(controller, plant, int(15.0 / T))
     assert controller.role == 1 and abs(efforts[-1]) > 0.3
@@ -548,3 +549,68 @@ def test_a_controller_that_misses_every_other_state_still_tracks_joint1_sweep(se
         end[every] = plant.position
     assert overshoot[2] < max(2.0 * overshoot[1], 5e-3), overshoot
     assert abs(end[2] - 1.2) < max(2.0 * abs(end[1] - 1.2), 5e-3), end
+
+
+def test_a_hold_that_changes_the_base_runs_the_relaxation_dither_then_holds_where_it_ends():
+    """The step's end: the dither alone for control.relaxation.duration, then HOLD afresh."""
+    joint = 'a_yaw_joint'
+    controller = JointController(SETTINGS, joint, 'a')
+    plant = RigidJoint(joint, 'a')
+    run(controller, plant, int(1.0 / T))  # holding under base a: no relaxation
+    assert not controller.relaxing
+    controller.command(Mode.HOLD, 'b')
+    assert controller.relaxing
+    dither = SETTINGS.relaxation(controller.role)
+    samples = round(SETTINGS.control.relaxation.duration / T)
+    efforts, outputs = run(controller, plant, samples)
+    expected = [dither.torque(k * T) for k in range(samples)]
+    assert efforts == pytest.approx(expected, abs=1e-9)
+    assert max(abs(e) for e in efforts) > SETTINGS.drive(controller.role).stiction_torque
+    assert all(o.mode == Mode.HOLD for o in outputs)
+    after, outputs = run(controller, plant, int(0.5 / T))
+    assert not controller.relaxing
+    assert outputs[0].reference.position == pytest.approx(plant.q[0])  # where it came to rest
+    assert abs(after[0]) < 1e-6  # HOLD starts from zero torque, bumpless
+
+
+def test_each_role_dithers_at_its_own_frequency_within_its_torque_limit():
+    frequencies = [SETTINGS.relaxation(role).frequency for role in range(1, 6)]
+    assert len(set(frequencies)) == 5
+    for role in range(1, 6):
+        assert SETTINGS.relaxation(role).amplitude <= SETTINGS.drive(role).torque_limit
+
+
+@pytest.mark.parametrize('case', ['same_base', 'latched_hold', 'tracking', 'off_by_parameter'])
+def test_no_relaxation_without_a_base_change_and_a_mode_change_ends_it(case):
+    settings = SETTINGS
+    if case == 'off_by_parameter':
+        settings = replace_in_section(SETTINGS, {'control.relaxation.duration': 0.0})
+    controller = JointController(settings, 'vertex_joint', 'a')
+    if case == 'same_base':
+        controller.command(Mode.HOLD, 'a')
+    else:
+        controller.command(Mode.HOLD, 'b')
+    if case == 'latched_hold':
+        controller.hold('input stale')
+    elif case == 'tracking':
+        controller.command(Mode.FINE, 'b')
+    assert not controller.relaxing
+    controller.command(Mode.HOLD, controller.base_gripper)  # HOLD, same base: nothing starts
+    assert not controller.relaxing
+
+
+def test_the_same_hold_again_leaves_a_relaxation_running():
+    controller = JointController(SETTINGS, 'vertex_joint', 'a')
+    controller.command(Mode.HOLD, 'b')
+    controller.command(Mode.HOLD, 'b')  # told again (a repeated mode command)
+    assert controller.relaxing
+
+
+@pytest.mark.parametrize('field, value, words', [
+    ('control.relaxation.frequency', 100.0, 'quarter of timing.control_rate'),
+    ('control.relaxation.amplitude', -1.0, 'amplitude'),
+    ('control.relaxation.duration', 9.0, 'duration'),
+])
+def test_bad_relaxation_settings_are_refused(field, value, words):
+    with pytest.raises(ParameterError, match=words):
+        replace_in_section(SETTINGS, {field: value})

@@ -1,5 +1,6 @@
 """The step-phase state machine, driven by a simulated world with ideal joint tracking."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -21,7 +22,7 @@ TRUSS = Truss.from_parameters(PARAMS)
 SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
-                                  coarse_start_tolerance=0.02)
+                                  coarse_start_tolerance=0.02, relaxation_wait=0.3)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -59,6 +60,7 @@ class World:
         self.pending = []  # (time, gripper, state) changes the plant will report
         self.log = []
         self.phases = []
+        self.stages = []  # (time [s], stage) at every tick
         self.motion = None
 
     def run_step(self, step, max_time=60.0):
@@ -146,6 +148,7 @@ class World:
                 self.theta[joint], self.lagging = end, None
         assert any(state == 'attached' for state in self.grippers.values())
         self.phases.append(self.sequencer.phase)
+        self.stages.append((self.now, self.sequencer.stage))
         late, self.late_answers = self.late_answers, []  # sent before this tick's states
         self.execute(self.sequencer.tick(self.now, self.theta, velocities, dict(self.grippers)))
         for message in late:
@@ -544,7 +547,7 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():
@@ -675,3 +678,29 @@ def test_a_way_back_the_planner_refuses_is_taken_again_in_joint_space_once():
     world.execute(world.sequencer.trajectory_done(False, 'refused again', world.now))
     assert world.sequencer.phase == Phase.SAFE_HOLD
     assert 'refused again' in world.sequencer.reason
+
+
+def test_the_step_ends_after_the_relaxation_under_the_new_base():
+    """Screwed in: HOLD under the new base at once (the controllers relax), IDLE after the wait."""
+    world = World()
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    holds = [i for i, c in enumerate(world.log) if c == SetControlMode('hold', 'b')]
+    assert len(holds) == 1, 'the new base is commanded once: a second HOLD is not needed'
+    screw_in = max(i for i, c in enumerate(world.log)
+                   if isinstance(c, GripperRequest) and c.action == 'screw_in')
+    assert holds[0] > screw_in
+    relaxing = [t for t, stage in world.stages if stage == 'relaxing']
+    assert relaxing, 'the step never waited for the relaxation'
+    assert relaxing[-1] - relaxing[0] == pytest.approx(SUPERVISOR.relaxation_wait - DT, abs=DT)
+    assert world.sequencer.phase == Phase.IDLE
+
+
+def test_without_a_relaxation_wait_the_step_ends_at_the_screw_in():
+    world = World()
+    world.sequencer = StepSequencer(dataclasses.replace(SUPERVISOR, relaxation_wait=0.0), KIN,
+                                    world.stance.base_gripper)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    assert not [t for t, stage in world.stages if stage == 'relaxing']
+    assert world.log[-1] == SetControlMode('hold', 'b')

@@ -10,6 +10,8 @@ and per joint role J1..J5 (lists of five), not raw gains:
   and ``corner`` ``wf`` [rad/s] per role;
 * ``control.friction_compensation``: the fraction of the identified breakaway friction
   (``robot.drive.*.stiction_torque``) to apply, and the deadband and ramp per role [rad];
+* ``control.relaxation``: the decaying dither that relaxes the closed chain when a HOLD command
+  changes the base gripper (a step's end: both grippers attached);
 * ``control.stability``: the inertia mismatch the loops must tolerate and the minimum damping;
 * tolerances, the bumpless transfer time constant and the input timeouts.
 
@@ -35,13 +37,15 @@ from walker_core.robot_parameters import (
     Drive, RobotParameters, TimingParameters, default_parameter_file)
 from walker_control.core.lowpass import FILTER_KINDS
 from walker_control.core.modes import GAIN_MODES, Mode
+from walker_control.core.relaxation import RelaxationDither
 from walker_control.core.stability import (
     LoopDesign, LoopReport, UnstableLoopError, check_loop, inertia_ratio_grid)
 
 __all__ = [
     'ROLES', 'UnstableControllerError', 'ModeGains', 'CoarseGains', 'FilterSettings',
-    'FrictionCompensationSettings', 'StabilitySettings', 'ControlParameters',
-    'ControllerSettings', 'check_controller_settings', 'load_controller_settings',
+    'FrictionCompensationSettings', 'RelaxationSettings', 'StabilitySettings',
+    'ControlParameters', 'ControllerSettings', 'check_controller_settings',
+    'load_controller_settings', 'relaxation_frequency_factor',
 ]
 
 ROLES = (1, 2, 3, 4, 5)
@@ -138,6 +142,22 @@ class FrictionCompensationSettings:
 
 
 @dataclasses.dataclass(frozen=True)
+class RelaxationSettings:
+    """The decaying dither after a base change (:mod:`walker_control.core.relaxation`)."""
+
+    amplitude: float = parameter(
+        'initial dither amplitude as a multiple of each joint\'s breakaway friction '
+        'robot.drive.*.stiction_torque (clamped at the torque limit)', '', 0.0, 10.0,
+        read_only=False)
+    frequency: float = parameter(
+        'dither frequency of role J1; role Jk dithers at (1 + (k - 1) / 4) times it, the '
+        'highest at most a quarter of the control rate', 'Hz', 0.1, 250.0, read_only=False)
+    duration: float = parameter(
+        'time over which the dither decays to zero after a HOLD command that changes the base '
+        'gripper (0: no relaxation)', 's', 0.0, 5.0, read_only=False)
+
+
+@dataclasses.dataclass(frozen=True)
 class StabilitySettings:
     """What the stability check demands of every loop."""
 
@@ -161,6 +181,7 @@ class ControlParameters:
     fine: ModeGains
     hold: ModeGains
     friction_compensation: FrictionCompensationSettings
+    relaxation: RelaxationSettings
     stability: StabilitySettings
     in_position_tolerance: tuple[float, ...] = parameter(
         'fine-motion position tolerance of roles J1..J5: the joint has arrived within it',
@@ -198,6 +219,13 @@ class ControllerSettings:
 
     def __post_init__(self) -> None:
         check_controller_settings(self)
+        relaxation = self.control.relaxation
+        highest = relaxation.frequency * relaxation_frequency_factor(ROLES[-1])
+        if relaxation.duration > 0.0 and highest > self.timing.control_rate / 4:
+            raise ParameterError(
+                f'control.relaxation.frequency ({relaxation.frequency:g} Hz) makes role '
+                f'J{ROLES[-1]} dither at {highest:g} Hz, above a quarter of timing.control_rate '
+                f'({self.timing.control_rate:g} Hz)')
 
     @classmethod
     def from_flat(cls, flat: Mapping[str, Any]) -> 'ControllerSettings':
@@ -229,6 +257,23 @@ class ControllerSettings:
     def friction_level(self, role: int) -> float:
         """Friction compensation torque of role ``role`` [N*m]."""
         return self.control.friction_compensation.fraction * self.drive(role).stiction_torque
+
+    def relaxation(self, role: int) -> RelaxationDither:
+        """The relaxation dither of role ``role`` (amplitude clamped at its torque limit).
+
+        Each role dithers at its own frequency, ``frequency * (1 + (role - 1) / 4)``: in the
+        closed chain, dithers in step push the links as one and no joint slides (measured on
+        the plant), while distinct frequencies let each joint in turn find a net torque.
+        """
+        drive, relax = self.drive(role), self.control.relaxation
+        amplitude = min(relax.amplitude * drive.stiction_torque, drive.torque_limit)
+        return RelaxationDither(amplitude, relax.frequency * relaxation_frequency_factor(role),
+                                relax.duration)
+
+
+def relaxation_frequency_factor(role: int) -> float:
+    """Ratio of role ``role``'s relaxation frequency to ``control.relaxation.frequency``."""
+    return 1.0 + (role - 1) / 4.0
 
 
 def _parameter_names(mode: Mode, role: int) -> str:

@@ -27,7 +27,10 @@ compensator is added after the filter: it cancels a plant nonlinearity, and the 
 Modes (:class:`~walker_control.core.modes.Mode`): OFF (zero torque), HOLD (hold the position at
 which HOLD was entered; no integral action), COARSE and FINE (follow the setpoint; before the
 first setpoint, hold the position at which the mode was entered). A latched hold (stale input,
-refused setpoint) forces HOLD until the next mode command.
+refused setpoint) forces HOLD until the next mode command. A HOLD command that changes the base
+gripper (a step's end, both grippers attached) first runs the relaxation dither of
+``control.relaxation`` (:mod:`~walker_control.core.relaxation`) alone, then holds where the joint
+came to rest.
 
 Bumpless transfer: on a change of mode, role or parameters, the integral is reset and an offset
 ``transfer = v_before - v_new`` makes the filter's input continuous; it then decays with the
@@ -176,6 +179,7 @@ class JointController:
         self._friction_transfer = 0.0
         self._saturation = 0.0
         self._last_output: ControlOutput | None = None
+        self._relaxing_for: float | None = None  # [s] into the relaxation dither, if on
 
     # ---------------------------------------------------------------------------- properties
     @property
@@ -240,6 +244,11 @@ class JointController:
                 f'{self._joint_name}: base gripper change {self._base!r} -> {base!r} refused '
                 f'from {self.mode.name} to {mode.name}: the role may change only while holding '
                 f'or off')
+        if mode == Mode.HOLD and base != self._base \
+                and self._settings.control.relaxation.duration > 0.0:
+            self._relaxing_for = 0.0
+        elif mode != Mode.HOLD:  # the same HOLD again leaves a relaxation running
+            self._relaxing_for = None
         self._base = base
         self._commanded = mode
         self._hold_reason = ''
@@ -248,6 +257,7 @@ class JointController:
         """Latch HOLD (a stale input, a refused setpoint) until the next :meth:`command`."""
         if not self._hold_reason:
             self._hold_reason = reason or 'hold requested'
+        self._relaxing_for = None
 
     def apply_settings(self, settings: ControllerSettings) -> None:
         """Use new (validated) parameters from the next sample on, with bumpless transfer."""
@@ -287,6 +297,10 @@ class JointController:
         mode = self.mode
         if mode == Mode.OFF:
             return self._off(measurement)
+        if self._relaxing_for is not None:
+            output = self._relax(measurement, dt)
+            if output is not None:
+                return output
         settings = self._settings
         role = self.role
         design = settings.loop_design(role, mode)
@@ -438,6 +452,29 @@ class JointController:
             self._pid.reset(0.0)
         self._transfer = target - (raw_without_integral + self._pid.integral_term)
         self._friction_transfer = self._last_friction - friction
+
+    def _relax(self, measurement: Measurement, dt: float) -> ControlOutput | None:
+        """One sample of the relaxation dither; None once it has ended (HOLD takes over).
+
+        The dither alone drives the joint: feedback would hold it against the bend it is to
+        slide out of. When it ends, HOLD starts afresh where the joint came to rest (as after
+        OFF, from a zero torque).
+        """
+        dither = self._settings.relaxation(self.role)
+        elapsed = self._relaxing_for
+        if dither.done(elapsed):
+            self._relaxing_for = None
+            return None
+        self._relaxing_for = elapsed + dt
+        output = self._off(measurement)
+        output = dataclasses.replace(output, effort=dither.torque(elapsed), mode=Mode.HOLD)
+        self._last_output = output
+        return output
+
+    @property
+    def relaxing(self) -> bool:
+        """True while the relaxation dither runs (after a HOLD that changed the base)."""
+        return self._relaxing_for is not None
 
     def _off(self, measurement: Measurement) -> ControlOutput:
         self._filter.reset_to(0.0)

@@ -108,6 +108,11 @@ class SupervisorParameters:
         'the lifted arm waits in EXTRACTION until it is there (keep it below '
         'planner.stream.start_tolerance, which refuses a stream that starts farther)', 'rad',
         1e-4, 0.5, read_only=False)
+    relaxation_wait: float = parameter(
+        'after the screw-in, the step waits this long under the new base before it ends: the '
+        "controllers' relaxation dither (control.relaxation.duration) frees the joints from "
+        'the bend the seat locked in, so that the next step measures its stance unbent (0: '
+        'no wait)', 's', 0.0, 5.0, read_only=False)
 
     def __post_init__(self) -> None:
         if self.insertion_alignment >= self.coarse_to_fine_region:
@@ -446,6 +451,8 @@ class StepSequencer:
                 return self._abort(f'the {self._requested} trajectory did not start within '
                                    f'{self.parameters.phase_timeout:g} s of its request (no '
                                    f'answer from the planner)', now)
+        if self.stage == 'relaxing':
+            return self._finish(now, mode_told=True) if now >= self._relaxed_at else []
         if self.stage in ('unscrewing', 'screwing'):
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.stage == 'lifted':
@@ -484,7 +491,7 @@ class StepSequencer:
         if self.stage == 'screwing' and state != self._state_before_screwing:
             self._state_before_screwing = None  # the gripper has reported on this attempt
         if self.stage == 'screwing' and state == 'attached':
-            return self._finish(now)
+            return self._relax(now)
         if self.stage == 'screwing' and state == 'jammed' and self._state_before_screwing is None:
             return self._jammed('the screw-in jammed', now)
         if now > self._gripper_deadline:
@@ -709,14 +716,29 @@ class StepSequencer:
             self._settled_since = now
         return now - self._settled_since >= self.parameters.settle_time
 
-    def _finish(self, now: float) -> list:
+    def _relax(self, now: float) -> list:
+        """Screwed in: HOLD under the new base, whose controllers relax the chain, then end.
+
+        The hole drew the gripper onto its axis while the joints stayed in their friction: the
+        links are bent, and the joint angles would misplace the base frame of the next step by
+        the bend (about a millimetre at the tip). The controllers' relaxation dither, started
+        by this base change, lets the joints slide out of it; the step ends when it is over.
+        """
+        if self.parameters.relaxation_wait <= 0.0:
+            return self._finish(now)
+        self.stage = 'relaxing'
+        self._relaxed_at = now + self.parameters.relaxation_wait
+        self._deadline = self._relaxed_at + self.parameters.phase_timeout
+        return [SetControlMode('hold', self._step.moving_gripper)]
+
+    def _finish(self, now: float, mode_told: bool = False) -> list:
         self._enter(Phase.IDLE, now, '')
         self._grippers[self._step.moving_gripper] = 'attached'
         self.base_gripper = self._step.moving_gripper
         self.outcome = StepOutcome(True, '', dict(self._durations), now - self._step_started,
                                    self._insertion_error, self._attempts + 1)
         self._outcome_taken = False
-        return [SetControlMode('hold', self._step.moving_gripper)]
+        return [] if mode_told else [SetControlMode('hold', self._step.moving_gripper)]
 
     def _abort(self, reason: str, now: float) -> list:
         if self.busy:
