@@ -53,10 +53,9 @@ def test_the_dither_releases_the_bend_a_seat_locks_in(relax):
     settings = SETTINGS if relax else replace_in_section(
         SETTINGS, {'control.relaxation.duration': 0.0})
     offset, seated, after = bend_after_seating(settings)
-    print(f'offset {offset * 1e3:.3f} mm, seated gap {seated * 1e3:.3f} mm, after {after * 1e3:.3f} mm')
     assert 0.7e-3 < offset < 1.6e-3, 'the tip was not aimed off the axis as the test needs'
     assert seated > 0.5e-3, 'screwed in off the axis, the links bend and the joints stay'
     if relax:
-        assert after < 0.2e-3, f'after the relaxation the joints are still {after * 1e3:.2f} mm off'
+        assert after < 0.2e-3, f'relaxed, the joints are still {after * 1e3:.2f} mm off'
     else:
         assert after > 0.5e-3, 'without the relaxation the bend stays'

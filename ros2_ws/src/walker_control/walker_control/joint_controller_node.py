@@ -63,8 +63,11 @@ MODE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _WATCHDOG_CHECKS_PER_TIMEOUT = 4
 # A stream silent for this many of its timeouts has its subscription made anew, and again
-# as often while the silence lasts (see Resubscription).
-_RESUBSCRIBE_AFTER_TIMEOUTS = 2.0
+# as often while the silence lasts (see Resubscription): 2 s by default, the supervisor's
+# watchdog, so that a publisher merely stalled by a loaded machine is not matched anew
+# (re-matching would lengthen the stall) while a walker held on a silent input has a fresh
+# subscription by the time it is resumed.
+_RESUBSCRIBE_AFTER_TIMEOUTS = 4.0
 
 
 def _seconds(stamp) -> float:

@@ -146,7 +146,7 @@ class RelaxationSettings:
     """The decaying dither after a base change (:mod:`walker_control.core.relaxation`)."""
 
     amplitude: float = parameter(
-        'initial dither amplitude as a multiple of each joint\'s breakaway friction '
+        "initial dither amplitude as a multiple of each joint's breakaway friction "
         'robot.drive.*.stiction_torque (clamped at the torque limit)', '', 0.0, 10.0,
         read_only=False)
     frequency: float = parameter(
@@ -259,7 +259,7 @@ class ControllerSettings:
         return self.control.friction_compensation.fraction * self.drive(role).stiction_torque
 
     def relaxation(self, role: int) -> RelaxationDither:
-        """The relaxation dither of role ``role`` (amplitude clamped at its torque limit).
+        """Return the relaxation dither of role ``role`` (amplitude clamped at its torque limit).
 
         Each role dithers at its own frequency, ``frequency * (1 + (role - 1) / 4)``: in the
         closed chain, dithers in step push the links as one and no joint slides (measured on
