@@ -75,7 +75,7 @@ def figure6():
     assert ka > 0.0
     return {k: analysis.figure6_experiment(
         lambda: make_plant(other_attached=False, other_height=height), SETTINGS, k)
-        for k in sorted({0.0, 0.25, ka, 1.0})}
+        for k in sorted({0.0, 0.25, ka, 0.5})}
 
 
 def test_figure6_joint_1_reaches_its_target_with_and_without_ka(figure6):
@@ -84,36 +84,31 @@ def test_figure6_joint_1_reaches_its_target_with_and_without_ka(figure6):
         assert abs(run.joint1[-1] - target) < SETTINGS.control.in_position_tolerance[0]
 
 
-def test_figure6_the_residual_vibration_is_the_held_arm_mode_with_joint_1_stuck(figure6):
-    """What rings near the target is the structure, not the loop.
+def test_figure6_with_ka_joint_1_stops_and_what_rings_is_the_held_arm_mode(figure6):
+    """With the file's Ka, what is left near the target is the structure, not the loop.
 
-    After arrival joint 1 stops in its stiction and does not move again; the tip rings at the
-    lowest out-of-plane mode of the held arm (18 rad/s), decaying at the structure's own
-    damping. A joint-space controller whose command is filtered below 8 rad/s, acting on a
-    joint that does not move, has no hold on it.
+    Joint 1 arrives and stops in its stiction; the tip rings at the lowest out-of-plane mode
+    of the held arm (18 rad/s), decaying at the structure's own damping.
     """
-    for ka in (0.0, SETTINGS.control.coarse.acceleration_feedback[0]):
-        run = figure6[ka]
-        assert run.joint1_motion < 1e-6
-        assert run.residual_frequency == pytest.approx(TUNING.predicted['a_yaw_joint'],
-                                                       rel=0.10)
+    run = figure6[SETTINGS.control.coarse.acceleration_feedback[0]]
+    assert run.joint1_motion < 1e-6
+    assert run.residual_frequency == pytest.approx(TUNING.predicted['a_yaw_joint'], rel=0.10)
 
 
-def test_figure6_ka_does_not_eliminate_the_residual_vibration_on_the_plant(figure6):
-    """The paper's claim ("effectively eliminated") does not hold on this plant.
+def test_figure6_ka_settles_joint_1_with_less_residual_tip_vibration(figure6):
+    """The paper's claim (section 4, Figure 6), measured on the plant.
 
-    Ka damps the loop's own filter-lag resonance (eq (14), Figure 5), but at the file's gains
-    the loop without Ka already arrives without oscillating and the residual is the held-arm
-    mode above, left by how the link was bent at the moment joint 1 stuck. With the file's Ka
-    the residual is still most of what it is without; over Ka = 0.25 ... 1 it does not fall
-    with Ka, and some values leave more than none (measured: 0.87 mm without, 2.2, 0.68 and
-    1.0 mm with Ka = 0.25, 0.5, 1). See the README.
+    Without Ka, joint 1 sticks short of the target at the end of the move (26.6 mrad measured)
+    and arrives a second later, so the tip is still swinging in the window; with the file's
+    Ka the joint arrives with the move and the residual is the small held-arm ring (measured:
+    16.9 mm without, 0.80 and 0.93 mm with Ka = 0.25 and 0.5). See the README.
     """
     without = figure6[0.0]
-    with_file_ka = figure6[SETTINGS.control.coarse.acceleration_feedback[0]]
-    assert with_file_ka.residual_amplitude > 0.5 * without.residual_amplitude
-    with_ka = [run.residual_amplitude for ka, run in figure6.items() if ka > 0.0]
-    assert max(with_ka) > without.residual_amplitude
+    assert without.joint1_motion > 1e-3  # still moving after the move: it stuck short
+    for ka, run in figure6.items():
+        if ka > 0.0:
+            assert run.joint1_motion < 1e-6
+            assert run.residual_amplitude < 0.2 * without.residual_amplitude
 
 
 def test_the_figure6_command_runs_on_the_pybullet_plant_with_the_tip_free():

@@ -60,7 +60,7 @@ def test_loop_design_per_role_and_mode():
 
 def test_a_violation_of_eq15_is_refused_naming_role_mode_and_value():
     with pytest.raises(UnstableControllerError,
-                       match=r'role J1, mode fine.*eq \(15\).*0\.5 .*0\.625.*control\.fine'):
+                       match=r'role J1, mode fine.*eq \(15\).*0\.5 .*wc / wf = 1 .*control\.fine'):
         with_overrides(control__fine__bandwidth=[5.0, 5.0, 5.0, 8.0, 8.0])
 
 

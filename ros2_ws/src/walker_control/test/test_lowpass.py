@@ -53,14 +53,16 @@ def _settling_after(lowpass: LowPassFilter, tolerance: float) -> float:
     return t[outside[-1]] - 1.8
 
 
-def test_a_bessel_filter_settles_sooner_than_the_critical_one_for_the_same_attenuation():
-    """What the Bessel family offers joint 1: the attenuation, about half the settling.
+def test_the_files_joint_1_filter_settles_sooner_for_the_same_attenuation_of_its_mode():
+    """Why joint 1 uses a Bessel filter: the attenuation, about half the settling.
 
-    At 4th order and 5 rad/s, as much attenuation at the held arm's 18 rad/s mode as the
-    critically damped filter at 8 rad/s of eq (14), and about half its settling after a sweep.
+    As much attenuation at the held arm's 18 rad/s mode as the critically damped 4th-order
+    filter at 8 rad/s of eq (14), and about half its settling after a sweep.
     """
-    bessel = LowPassFilter(4, 5.0, T, 'bessel')
+    settings = load_controller_settings().control.filter
+    bessel = LowPassFilter(settings.order[0], settings.corner[0], T, settings.kind)
     critical = LowPassFilter(4, 8.0, T, 'critical')
+    assert settings.kind == 'bessel'
     gains = [20 * math.log10(abs(f.frequency_response(np.array([18.0]))[0]))
              for f in (bessel, critical)]
     assert gains[0] <= gains[1] + 0.5

@@ -7,22 +7,21 @@ The paper filters the command of joints 1-3 against the vibration of the flexibl
 Three designs are offered, all discretised at the control rate with the bilinear transform,
 pre-warped so that the digital filter has its analog counterpart's gain at the corner:
 
-``'bessel'``
+``'bessel'`` (the parameter file's)
     Maximally flat group delay: the pass band is delayed almost uniformly, so a filtered
     motion keeps its shape and arrives with little overshoot and a short tail. Gain -3 dB at
     the corner (``norm='mag'``). At 5 rad/s and 4th order it attenuates joint 1's 18 rad/s
     mode as much as the critically damped filter at 8 rad/s (-31 dB), and a filtered 90 deg
-    sweep comes within 1 mm of its end in half the time (0.6 s against 1.2 s). Not the
-    parameter file's: see the README (walks were faster, a soak's tip error drifted).
+    sweep comes within 1 mm of its end in half the time (0.6 s against 1.2 s).
 ``'butterworth'``
     Maximally flat pass band and the steepest roll-off an all-pole filter of the given order
     has: for the same attenuation of the structural mode it allows the highest corner, hence
     the least phase lag in the control band, but its step response overshoots. Gain -3 dB at
     the corner.
-``'critical'`` (the parameter file's)
+``'critical'``
     ``n`` real poles at the corner, ``F(s) = (wf / (s + wf))^n``: the filter of the paper's
     eq (14) (n = 2). No overshoot of its step response, but it droops early (-6 dB at the
-    corner for n = 2) and lags more for the same attenuation.
+    corner for n = 2) and lags more for the same attenuation. Used to reproduce eq (14).
 
 Order 0 is a pass-through (joints 4-5). The filter runs second-order sections in transposed
 direct form II (as :func:`scipy.signal.sosfilt`), one sample (or several of a held input) per
