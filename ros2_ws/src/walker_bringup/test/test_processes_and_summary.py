@@ -83,7 +83,11 @@ def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
                 'signal.signal(signal.SIGTERM, signal.SIG_IGN)\n'
                 'print("ready", flush=True)\n'
                 'time.sleep(60)\n')
-    polite = ('import time\ntry:\n    print("ready", flush=True)\n    time.sleep(60)\n'
+    # The polite child installs Python's SIGINT handler itself: a shell that runs the suite in
+    # the background (`cmd &`) starts it with SIGINT ignored, which Python would inherit.
+    polite = ('import signal, time\n'
+              'signal.signal(signal.SIGINT, signal.default_int_handler)\n'
+              'try:\n    print("ready", flush=True)\n    time.sleep(60)\n'
               'except KeyboardInterrupt:\n    pass\n')
     group = ProcessGroup(tmp_path, ENV)
     a = group.start(NodeSpec('p', 'e', 'stubborn', '/w', 'f'), python_child(stubborn))
