@@ -704,3 +704,36 @@ def test_without_a_relaxation_wait_the_step_ends_at_the_screw_in():
     assert outcome.success, outcome.message
     assert not [t for t, stage in world.stages if stage == 'relaxing']
     assert world.log[-1] == SetControlMode('hold', 'b')
+
+
+def test_a_resume_that_changes_the_base_waits_for_the_relaxation_before_a_next_step():
+    """Held during the relaxation after a screw-in: the resume swaps the base, and relaxes."""
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    world.targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                      TRUSS.position(step.to_node), world.theta, 0.03)
+    world.execute(world.sequencer.start(step, world.targets, world.now, dict(world.grippers)))
+    while world.sequencer.stage != 'relaxing':
+        world.advance()
+    assert world.sequencer.relaxed_at > world.now  # the step itself waits for it
+    for _ in range(10):
+        world.advance()
+    world.execute(world.sequencer.hold('a fault', world.now))
+    assert world.sequencer.base_gripper == step.base_gripper
+    for _ in range(30):  # held beyond the relaxation the step had started
+        world.advance()
+    assert world.sequencer.relaxed_at < world.now
+    commands = world.sequencer.resume(world.now, world.theta, dict(world.grippers),
+                                      {step.base_gripper: step.base_node,
+                                       step.moving_gripper: step.to_node})
+    assert commands == [SetControlMode('hold', step.moving_gripper)]
+    assert world.sequencer.relaxed_at == pytest.approx(world.now + SUPERVISOR.relaxation_wait)
+
+
+def test_a_resume_that_keeps_the_base_does_not_wait():
+    world = World()
+    _hold_during(world, Phase.COARSE)
+    before = world.sequencer.relaxed_at
+    world.sequencer.resume(world.now, world.theta, {'a': 'attached', 'b': 'attached'},
+                           {'a': 'n1_1', 'b': 'n2_1'})
+    assert world.sequencer.relaxed_at == before < world.now

@@ -580,6 +580,8 @@ class SupervisorNode(TeleopServer, Node):
             if not self._goal_done.done():
                 self._goal_done.set_result(True)
             return
+        if now < self.sequencer.relaxed_at:  # the joints would misplace the base frame yet
+            return
         step = walk.next_step()
         try:
             frame = BaseFrame.from_stance(self.kinematics, self._theta_roles(),

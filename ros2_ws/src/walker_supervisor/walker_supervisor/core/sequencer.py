@@ -186,7 +186,7 @@ class StepOutcome:
     phase_durations : dict of str to float
         Time spent in each phase [s].
     duration : float
-        Step time [s] from start to the end of the screw-in.
+        Step time [s] from start to the end of the relaxation after the screw-in.
     insertion_error : float
         Tip distance [m] from the hole's axis when the screw-in was requested, at the mouth
         (forward kinematics of the measured joints: what the walker knows); before that, from
@@ -237,6 +237,7 @@ class StepSequencer:
         self._phase_started = 0.0
         self._step_started = 0.0
         self._deadline = math.inf
+        self._relaxed_at = -math.inf  # [s] when the last relaxation under a new base is over
         self._settled_since: float | None = None
         self._attempts = 0
         self._durations: dict[str, float] = {}
@@ -531,8 +532,11 @@ class StepSequencer:
                                  f'resume once it has finished')
         if all(grippers.get(g) == 'attached' for g in ('a', 'b')):
             step = self._step
-            if step is not None and nodes.get(step.moving_gripper) == step.to_node:
+            if step is not None and nodes.get(step.moving_gripper) == step.to_node \
+                    and self.base_gripper != step.moving_gripper:
                 self.base_gripper = step.moving_gripper  # the step got as far as screwing in
+                # the HOLD under the new base relaxes the chain: no stance before it is over
+                self._relaxed_at = now + self.parameters.relaxation_wait
             self.phase, self.stage, self.reason = Phase.IDLE, '', ''
             return [SetControlMode('hold', self.base_gripper)]
         if grippers.get(self.base_gripper) != 'attached':
@@ -715,6 +719,11 @@ class StepSequencer:
         if self._settled_since is None:
             self._settled_since = now
         return now - self._settled_since >= self.parameters.settle_time
+
+    @property
+    def relaxed_at(self) -> float:
+        """[s] When the last relaxation under a new base is over (a next step waits for it)."""
+        return self._relaxed_at
 
     def _relax(self, now: float) -> list:
         """Screwed in: HOLD under the new base, whose controllers relax the chain, then end.
