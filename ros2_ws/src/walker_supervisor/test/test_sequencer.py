@@ -6,15 +6,17 @@ import math
 import numpy as np
 import pytest
 
-from walker_core.kinematics import WalkerKinematics
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import load_walker_parameters
 from walker_core.truss import Truss
 from walker_supervisor.core.route import PlannedStep, Stance, plan_route, possible_steps
 from walker_supervisor.core.sequencer import (
-    MAX_FINE_LINES, CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode,
-    StepSequencer, SupervisorParameters, TrajectoryRequest)
-from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
+    MAX_FINE_LINES, STANCE_MARGIN, CancelTrajectory, GripperRequest, Notice, Phase,
+    PrepareTrajectory, SequencerError, SetControlMode, StepSequencer, SupervisorParameters,
+    TrajectoryRequest)
+from walker_supervisor.core.step_geometry import (
+    BaseFrame, measure_step_targets, plan_step_targets)
 
 PARAMS = load_walker_parameters()
 KIN = WalkerKinematics.from_parameters(PARAMS)
@@ -210,7 +212,9 @@ def test_controller_modes_follow_the_phases():
     world = World()
     world.run_step(possible_steps(TRUSS, world.stance)[0])
     modes = [c.mode for c in world.log if isinstance(c, SetControlMode)]
-    assert modes[0] == 'fine' and 'coarse' in modes
+    # the controllers hold while the gripper unscrews (a relaxation under way runs on); each
+    # motion then commands its own mode just before it streams (TrajectoryRequest.mode)
+    assert modes[0] == 'hold' and 'coarse' in modes
     assert modes.index('coarse') < len(modes) - 1 - modes[::-1].index('fine')
     purposes = [c.purpose for c in world.log if isinstance(c, TrajectoryRequest)]
     # tracking is ideal here: the coarse motion ends on the point above the hole, no fine line
@@ -434,7 +438,7 @@ def test_a_gripper_answer_after_a_hold_is_ignored(accepted):
     targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
                                 TRUSS.position(step.to_node), world.theta, 0.03)
     start = world.sequencer.start(step, targets, world.now, dict(world.grippers))
-    assert isinstance(start[-1], GripperRequest) and start[-1].action == 'unscrew'
+    assert GripperRequest(step.moving_gripper, 'unscrew') in start
     world.execute(world.sequencer.hold('hold requested by an operator', world.now))
     # the plant's answer to the unscrew sent before the hold comes in now
     assert world.sequencer.gripper_done(accepted, '', world.now) == []
@@ -680,54 +684,168 @@ def test_a_way_back_the_planner_refuses_is_taken_again_in_joint_space_once():
     assert 'refused again' in world.sequencer.reason
 
 
-def test_the_step_ends_after_the_relaxation_under_the_new_base():
-    """Screwed in: HOLD under the new base at once (the controllers relax), IDLE after the wait."""
+def test_the_step_ends_at_the_screw_in_holding_under_the_new_base():
+    """Screwed in: the step ends, HOLD under the new base (the controllers relax after it)."""
     world = World()
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
     assert outcome.success, outcome.message
     holds = [i for i, c in enumerate(world.log) if c == SetControlMode('hold', 'b')]
-    assert len(holds) == 1, 'the new base is commanded once: a second HOLD is not needed'
     screw_in = max(i for i, c in enumerate(world.log)
                    if isinstance(c, GripperRequest) and c.action == 'screw_in')
-    assert holds[0] > screw_in
-    relaxing = [t for t, stage in world.stages if stage == 'relaxing']
-    assert relaxing, 'the step never waited for the relaxation'
-    assert relaxing[-1] - relaxing[0] == pytest.approx(SUPERVISOR.relaxation_wait - DT, abs=DT)
+    assert holds == [len(world.log) - 1] and holds[0] > screw_in
+    attached = next(t for t, stage in reversed(world.stages) if stage == 'screwing')
+    assert world.now == pytest.approx(attached)  # no wait: the relaxation overlaps what follows
+    assert world.sequencer.relaxed_at == pytest.approx(world.now + SUPERVISOR.relaxation_wait)
     assert world.sequencer.phase == Phase.IDLE
 
 
-def test_without_a_relaxation_wait_the_step_ends_at_the_screw_in():
+def _next_step(world):
+    stance = Stance(world.sequencer.base_gripper, world.sequencer.step.to_node,
+                    world.sequencer.step.base_node)
+    return next(s for s in possible_steps(TRUSS, stance)
+                if s.to_node != world.sequencer.step.from_node)
+
+
+def _remeasuring(world, step, calls, fail=False):
+    """Return a ``remeasure`` like the node's (the stance against the nodes), noting calls."""
+    def remeasure(theta):
+        calls.append((world.now, world.grippers[step.moving_gripper], theta.copy()))
+        if fail:
+            raise KinematicsError('joint 3 beyond its limit')
+        return measure_step_targets(KIN, step, TRUSS.position(step.base_node),
+                                    TRUSS.position(step.from_node),
+                                    TRUSS.position(step.to_node), theta, 0.03)
+    return remeasure
+
+
+def _start_next_step(world, step, remeasure):
+    frame = BaseFrame.from_stance(KIN, world.theta, TRUSS.position(step.base_node),
+                                  TRUSS.position(step.from_node))
+    world.frame = frame
+    world.targets = plan_step_targets(KIN, frame, step, TRUSS.position(step.from_node),
+                                      TRUSS.position(step.to_node), world.theta, 0.03)
+    assert world.sequencer.can_start(world.now)
+    commands = world.sequencer.start(step, world.targets, world.now, dict(world.grippers),
+                                     remeasure)
+    world.execute(commands)
+    return commands
+
+
+def test_the_next_step_measures_its_stance_after_the_relaxation_while_still_attached():
+    """A step started during the relaxation takes its targets from the relaxed joints."""
+    world = World(gripper_delay=0.5)  # the plant's screw_time
+    assert world.run_step(possible_steps(TRUSS, world.stance)[0]).success
+    relaxed_at = world.sequencer.relaxed_at
+    step, calls = _next_step(world), []
+    first = len(world.log)
+    commands = _start_next_step(world, step, _remeasuring(world, step, calls))
+    assert commands[0] == SetControlMode('hold', step.base_gripper)  # the relaxation runs on
+    assert not any(isinstance(c, PrepareTrajectory) for c in commands)  # targets not final
+    relaxed = world.theta.copy()
+    relaxed[1] += 1e-3  # the dither lets the joints slide out of the bend
+    while world.now < relaxed_at - DT / 2:
+        world.advance()
+    world.theta = relaxed
+    while world.sequencer.phase == Phase.EXTRACTION and world.sequencer.stage == 'unscrewing':
+        world.advance()
+    assert len(calls) == 1
+    when, state, theta = calls[0]
+    assert when >= relaxed_at - 1e-9 and state == 'unscrewing'
+    np.testing.assert_array_equal(theta, relaxed)
+    np.testing.assert_array_equal(world.sequencer.targets.start, relaxed)
+    prepared = [c.request for c in world.log[first:] if isinstance(c, PrepareTrajectory)]
+    assert [r.purpose for r in prepared] == ['extraction', 'coarse']
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success, world.sequencer.outcome.message
+    requested = [c for c in world.log[first:] if isinstance(c, TrajectoryRequest)]
+    extraction, coarse = (next(r for r in reversed(requested) if r.purpose == purpose)
+                          for purpose in ('extraction', 'coarse'))
+    assert extraction.same_motion(prepared[0]) and coarse.same_motion(prepared[1])
+    np.testing.assert_array_equal(extraction.start, relaxed)
+
+
+def test_a_step_started_after_the_relaxation_prepares_its_motions_at_once():
+    world = World(gripper_delay=0.5)
+    step, calls = possible_steps(TRUSS, world.stance)[0], []
+    commands = _start_next_step(world, step, _remeasuring(world, step, calls))
+    prepared = [c.request for c in commands if isinstance(c, PrepareTrajectory)]
+    assert [r.purpose for r in prepared] == ['extraction', 'coarse']
+    while world.sequencer.busy:
+        world.advance()
+    assert calls == []  # nothing to wait for: the stance at the start is relaxed
+    requested = [c for c in world.log if isinstance(c, TrajectoryRequest)]
+    assert requested[0].same_motion(prepared[0]) and requested[1].same_motion(prepared[1])
+    assert not requested[2].same_motion(prepared[1])  # the insertion is planned when due
+
+
+def test_a_stance_that_gives_no_targets_after_the_relaxation_keeps_the_first_ones():
+    world = World(gripper_delay=0.5)
+    assert world.run_step(possible_steps(TRUSS, world.stance)[0]).success
+    step, calls = _next_step(world), []
+    _start_next_step(world, step, _remeasuring(world, step, calls, fail=True))
+    first = world.sequencer.targets
+    while world.sequencer.stage == 'unscrewing':
+        world.advance()
+    assert len(calls) == 1 and world.sequencer.targets is first
+    notices = [c.message for c in world.log if isinstance(c, Notice)]
+    assert len(notices) == 1 and 'joint 3 beyond its limit' in notices[0]
+    assert [c.request.purpose for c in world.log if isinstance(c, PrepareTrajectory)][-2:] \
+        == ['extraction', 'coarse']
+    while world.sequencer.busy:
+        world.advance()
+    assert world.sequencer.outcome.success
+
+
+def test_a_step_may_start_only_when_its_unscrewing_outlasts_the_relaxation():
+    slow = dataclasses.replace(SUPERVISOR, relaxation_wait=1.0)
     world = World()
+    world.sequencer = StepSequencer(slow, KIN, world.stance.base_gripper, screw_time=0.5)
+    assert world.run_step(possible_steps(TRUSS, world.stance)[0]).success
+    relaxed_at = world.sequencer.relaxed_at
+    earliest = relaxed_at - (0.5 - STANCE_MARGIN)
+    assert not world.sequencer.can_start(earliest - 1e-6)
+    assert world.sequencer.can_start(earliest)
+
+
+def test_without_a_relaxation_wait_a_next_step_starts_at_once_and_measures_nothing_again():
+    world = World(gripper_delay=0.5)
     world.sequencer = StepSequencer(dataclasses.replace(SUPERVISOR, relaxation_wait=0.0), KIN,
                                     world.stance.base_gripper)
-    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
-    assert outcome.success, outcome.message
-    assert not [t for t, stage in world.stages if stage == 'relaxing']
-    assert world.log[-1] == SetControlMode('hold', 'b')
+    assert world.run_step(possible_steps(TRUSS, world.stance)[0]).success
+    assert world.sequencer.can_start(world.now)
+    step, calls = _next_step(world), []
+    commands = _start_next_step(world, step, _remeasuring(world, step, calls))
+    assert any(isinstance(c, PrepareTrajectory) for c in commands)
+    while world.sequencer.busy:
+        world.advance()
+    assert calls == [] and world.sequencer.outcome.success
 
 
-def test_a_resume_that_changes_the_base_waits_for_the_relaxation_before_a_next_step():
-    """Held during the relaxation after a screw-in: the resume swaps the base, and relaxes."""
-    world = World()
+def test_a_resume_that_changes_the_base_lets_the_next_step_measure_after_the_relaxation():
+    """Held while screwing in: the resume swaps the base, which starts the relaxation."""
+    world = World(gripper_delay=0.5)
     step = possible_steps(TRUSS, world.stance)[0]
     world.targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
                                       TRUSS.position(step.to_node), world.theta, 0.03)
     world.execute(world.sequencer.start(step, world.targets, world.now, dict(world.grippers)))
-    while world.sequencer.stage != 'relaxing':
-        world.advance()
-    assert world.sequencer.relaxed_at > world.now  # the step itself waits for it
-    for _ in range(10):
+    while world.sequencer.stage != 'screwing':
         world.advance()
     world.execute(world.sequencer.hold('a fault', world.now))
     assert world.sequencer.base_gripper == step.base_gripper
-    for _ in range(30):  # held beyond the relaxation the step had started
+    for _ in range(60):  # the screw-in completes during the hold
         world.advance()
-    assert world.sequencer.relaxed_at < world.now
+    assert world.grippers[step.moving_gripper] == 'attached'
     commands = world.sequencer.resume(world.now, world.theta, dict(world.grippers),
                                       {step.base_gripper: step.base_node,
                                        step.moving_gripper: step.to_node})
     assert commands == [SetControlMode('hold', step.moving_gripper)]
     assert world.sequencer.relaxed_at == pytest.approx(world.now + SUPERVISOR.relaxation_wait)
+    next_step, calls = _next_step(world), []
+    _start_next_step(world, next_step, _remeasuring(world, next_step, calls))
+    while world.sequencer.stage == 'unscrewing':
+        world.advance()
+    assert len(calls) == 1 and calls[0][0] >= world.sequencer.relaxed_at - 1e-9
 
 
 def test_a_resume_that_keeps_the_base_does_not_wait():

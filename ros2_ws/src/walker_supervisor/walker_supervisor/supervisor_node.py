@@ -51,10 +51,10 @@ from walker_supervisor.core.health import (
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
-    CancelTrajectory, GripperRequest, Phase, SequencerError, SetControlMode, StepOutcome,
-    StepSequencer, SupervisorParameters, TrajectoryRequest)
+    CancelTrajectory, GripperRequest, Notice, Phase, PrepareTrajectory, SequencerError,
+    SetControlMode, StepOutcome, StepSequencer, SupervisorParameters, TrajectoryRequest)
 from walker_supervisor.core.step_geometry import (
-    BaseFrame, plan_step_targets, recovery_targets)
+    BaseFrame, StepTargets, measure_step_targets, recovery_targets)
 from walker_supervisor.core.walk import VibrationMeter, Walk
 from walker_supervisor.step_state import (
     clear_step_state, read_step_state, step_state_path, write_step_state)
@@ -167,6 +167,8 @@ class SupervisorNode(TeleopServer, Node):
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
         # the planner request waiting for its answer: (deadline, service, future, send again)
         self._awaited: tuple[float, str, object, object] | None = None
+        # motions planned ahead (PrepareTrajectory), each with its plan_trajectory answer
+        self._prepared: list[tuple[TrajectoryRequest, object]] = []
         self.stop_client = self.create_client(Trigger, 'stop_trajectory')
         self.step_server = ActionServer(
             self, Step, 'step', execute_callback=self._execute_step,
@@ -577,27 +579,25 @@ class SupervisorNode(TeleopServer, Node):
             walk.outcomes.append(StepOutcome(False, self.sequencer.reason, {}, 0.0,
                                              math.nan, 0))
         if walk.finished:
-            if not self._goal_done.done():
+            # a walk ends relaxed: a stance measured after it is not bent by its last seat
+            if now >= self.sequencer.relaxed_at and not self._goal_done.done():
                 self._goal_done.set_result(True)
             return
-        if now < self.sequencer.relaxed_at:  # the joints would misplace the base frame yet
+        if not self.sequencer.can_start(now):  # it would measure its stance bent
             return
         step = walk.next_step()
+        self._prepared.clear()
         try:
-            frame = BaseFrame.from_stance(self.kinematics, self._theta_roles(),
-                                          self.truss.position(step.base_node),
-                                          self.truss.position(step.from_node))
-            targets = plan_step_targets(self.kinematics, frame, step,
-                                        self.truss.position(step.from_node),
-                                        self.truss.position(step.to_node), self._theta_roles(),
-                                        self.params.gripper.approach_height)
-            commands = self.sequencer.start(step, targets, now, dict(self._grippers))
+            targets = self._measure_targets(step, self._theta_roles())
+            commands = self.sequencer.start(step, targets, now, dict(self._grippers),
+                                            lambda theta: self._measure_again(step, theta,
+                                                                              targets))
         except (KinematicsError, SequencerError) as error:
             walk.outcomes.append(StepOutcome(False, f'step to {step.to_node} refused: {error}',
                                              {}, 0.0, math.nan, 0))
             self.get_logger().error(walk.outcomes[-1].message)
             return
-        write_step_state(self._state_file, step, frame.heading)
+        write_step_state(self._state_file, step, targets.frame.heading)
         self._step_bound = 2.0 * self.params.gripper.screw_time
         self._bounded: set[str] = set()
         self._true_insertion_error = math.nan
@@ -605,6 +605,23 @@ class SupervisorNode(TeleopServer, Node):
                                f'{step.moving_gripper} {step.from_node} -> {step.to_node} '
                                f'({math.degrees(targets.sweep):+.0f} deg about {step.base_node})')
         self._execute(commands)
+
+    def _measure_targets(self, step: PlannedStep, theta_roles: np.ndarray) -> StepTargets:
+        """Return the step's targets from the stance ``theta_roles`` [rad] (role order)."""
+        return measure_step_targets(self.kinematics, step, self.truss.position(step.base_node),
+                                    self.truss.position(step.from_node),
+                                    self.truss.position(step.to_node), theta_roles,
+                                    self.params.gripper.approach_height)
+
+    def _measure_again(self, step: PlannedStep, theta_roles: np.ndarray,
+                       first: StepTargets) -> StepTargets:
+        """Measure the targets from the relaxed stance (the sequencer's remeasure); file them."""
+        targets = self._measure_targets(step, theta_roles)
+        write_step_state(self._state_file, step, targets.frame.heading)
+        change = math.remainder(targets.frame.heading - first.frame.heading, 2 * math.pi)
+        self.get_logger().info(f'stance measured again after the relaxation: the base heading '
+                               f'moved by {change * 1e3:+.3f} mrad')
+        return targets
 
     def _end_step_outside_walk(self) -> None:
         """Log a step resumed after its walk ended, once it has ended; forget its file.
@@ -667,8 +684,12 @@ class SupervisorNode(TeleopServer, Node):
                 self._request_gripper(command)
             elif isinstance(command, TrajectoryRequest):
                 self._request_trajectory(command)
+            elif isinstance(command, PrepareTrajectory):
+                self._prepare_trajectory(command.request)
             elif isinstance(command, CancelTrajectory):
                 self._cancel_trajectory()
+            elif isinstance(command, Notice):
+                self.get_logger().warning(command.message)
 
     def _publish_mode(self, mode: str, base: str) -> None:
         self._commanded_mode, self._commanded_base = mode, base
@@ -742,7 +763,8 @@ class SupervisorNode(TeleopServer, Node):
         def send() -> None:
             if generation != self._trajectory_generation:
                 return  # cancelled while waiting
-            future = self.plan_client.call_async(plan_request(request, self.kinematics))
+            future = self._take_prepared(request) \
+                or self.plan_client.call_async(plan_request(request, self.kinematics))
             self._await_answer('plan_trajectory', future, send)
             future.add_done_callback(lambda f: self._on_planned(f, request, generation))
 
@@ -752,6 +774,26 @@ class SupervisorNode(TeleopServer, Node):
                     False, 'the planner is not available', self._now()))
 
         self._when_ready(ready, send, unavailable)
+
+    def _prepare_trajectory(self, request: TrajectoryRequest) -> None:
+        """Ask the planner now for a motion the sequencer will request later (if it is up)."""
+        if self.plan_client.service_is_ready():
+            self._prepared.append(
+                (request, self.plan_client.call_async(plan_request(request, self.kinematics))))
+
+    def _take_prepared(self, request: TrajectoryRequest):
+        """Return the planner's answer (future) to the same motion asked ahead, once; else None.
+
+        An answer that came back unsuccessful is not taken: the motion is planned afresh.
+        """
+        for entry in self._prepared:
+            prepared, future = entry
+            if prepared.same_motion(request):
+                self._prepared.remove(entry)
+                failed = future.done() and (future.result() is None
+                                            or not future.result().success)
+                return None if failed else future
+        return None
 
     def _when_ready(self, ready, send, unavailable) -> None:
         """Send a request now, or once its server is discovered (within _SERVER_WAIT s)."""
@@ -872,6 +914,7 @@ class SupervisorNode(TeleopServer, Node):
     def _cancel_trajectory(self) -> None:
         self._trajectory_generation += 1
         self._awaited = None
+        self._prepared.clear()
         if self._follow_handle is not None:
             self._follow_handle.cancel_goal_async()
             self._follow_handle = None

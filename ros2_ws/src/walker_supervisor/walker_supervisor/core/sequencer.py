@@ -10,6 +10,11 @@ Rules it enforces:
 
 * a step starts only with both grippers attached, and the moving gripper is unscrewed only while
   the base gripper is verified attached;
+* the step's targets rest on the base frame measured from the stance; a screw-in bends the closed
+  chain, which the controllers' relaxation dither frees after it (``relaxation_wait``), so the
+  frame is measured again once the relaxation is over, while the gripper is still unscrewing
+  and the chain still closed; the extraction and coarse motions are then planned at once
+  (:class:`PrepareTrajectory`), so that they stream the moment they are due;
 * coarse motion (controllers in COARSE mode: low gains, acceleration feedback) ends when the tip
   error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``:
   the controllers then switch to FINE mode (higher gains, integral action) while the coarse
@@ -25,7 +30,8 @@ Rules it enforces:
   takes it there (up to ``MAX_FINE_LINES`` times), and only then is the gripper screwed in; a
   jammed screw-in is retried up to
   ``max_insertion_attempts`` times (each lift goes straight up from where the gripper jammed),
-  then the step is aborted to SAFE_HOLD;
+  then the step is aborted to SAFE_HOLD; a step ends when the gripper reports attached, with
+  the controllers commanded to HOLD under the new base (which starts their relaxation);
 * any failure, a phase that overruns its planned time by ``phase_timeout``, or a trajectory that
   has not started ``phase_timeout`` after its request (the planner gone) ends in SAFE_HOLD:
   trajectories cancelled, controllers holding, grippers untouched (the base stays attached);
@@ -43,6 +49,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -54,7 +61,8 @@ from walker_supervisor.core.way_back import ik_branch, line_is_followable, lowes
 
 __all__ = [
     'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',
-    'CancelTrajectory', 'StepOutcome', 'StepSequencer', 'SequencerError',
+    'PrepareTrajectory', 'CancelTrajectory', 'Notice', 'StepOutcome', 'StepSequencer',
+    'SequencerError', 'STANCE_MARGIN',
 ]
 
 
@@ -71,6 +79,9 @@ class Phase(enum.IntEnum):
 
 #: Fine correction lines tried before insertion is attempted anyway.
 MAX_FINE_LINES = 3
+#: [s] A step starts no earlier than this before the unscrewing would end with the relaxation
+#: still running, so that the stance is measured after the relaxation, with the chain closed.
+STANCE_MARGIN = 0.1
 
 
 class SequencerError(ValueError):
@@ -109,10 +120,11 @@ class SupervisorParameters:
         'planner.stream.start_tolerance, which refuses a stream that starts farther)', 'rad',
         1e-4, 0.5, read_only=False)
     relaxation_wait: float = parameter(
-        'after the screw-in, the step waits this long under the new base before it ends: the '
-        "controllers' relaxation dither (control.relaxation.duration) frees the joints from "
-        'the bend the seat locked in, so that the next step measures its stance unbent (0: '
-        'no wait)', 's', 0.0, 5.0, read_only=False)
+        "time after a screw-in that the controllers' relaxation dither "
+        '(control.relaxation.duration) needs to free the joints from the bend the seat locked '
+        'in: the next step measures its stance only after it (during its unscrewing, with the '
+        'chain still closed), and a walk ends only after it (0: no wait)', 's', 0.0, 5.0,
+        read_only=False)
 
     def __post_init__(self) -> None:
         if self.insertion_alignment >= self.coarse_to_fine_region:
@@ -168,10 +180,35 @@ class TrajectoryRequest:
     base_gripper: str
     mode: str = 'fine'
 
+    def same_motion(self, other: 'TrajectoryRequest') -> bool:
+        """Return True if ``other`` asks for exactly this motion (a plan of one serves both)."""
+        return (self.purpose == other.purpose and self.base_gripper == other.base_gripper
+                and self.mode == other.mode and self.sweep == other.sweep
+                and all(np.array_equal(getattr(self, name), getattr(other, name))
+                        for name in ('start', 'goal', 'start_point', 'goal_point')))
+
+
+@dataclasses.dataclass(frozen=True)
+class PrepareTrajectory:
+    """Plan a trajectory that will be requested later, unchanged, so it can stream at once.
+
+    Nothing streams: a later :class:`TrajectoryRequest` equal to ``request``
+    (:meth:`TrajectoryRequest.same_motion`) may use the plan; any other plans afresh.
+    """
+
+    request: TrajectoryRequest
+
 
 @dataclasses.dataclass(frozen=True)
 class CancelTrajectory:
     """Stop any trajectory being streamed (the controllers hold the last setpoint)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Notice:
+    """Something the operator should know that changes nothing (a warning to log)."""
+
+    message: str
 
 
 @dataclasses.dataclass
@@ -186,7 +223,7 @@ class StepOutcome:
     phase_durations : dict of str to float
         Time spent in each phase [s].
     duration : float
-        Step time [s] from start to the end of the relaxation after the screw-in.
+        Step time [s] from start to the screw-in (the gripper reported attached).
     insertion_error : float
         Tip distance [m] from the hole's axis when the screw-in was requested, at the mouth
         (forward kinematics of the measured joints: what the walker knows); before that, from
@@ -238,6 +275,10 @@ class StepSequencer:
         self._step_started = 0.0
         self._deadline = math.inf
         self._relaxed_at = -math.inf  # [s] when the last relaxation under a new base is over
+        # measures the step's targets again from joint angles (role order), once the stance is
+        # relaxed (None: the targets the step started with are final)
+        self._remeasure: Callable[[np.ndarray], StepTargets] | None = None
+        self._screw_time = screw_time
         self._settled_since: float | None = None
         self._attempts = 0
         self._durations: dict[str, float] = {}
@@ -303,9 +344,35 @@ class StepSequencer:
         return float(np.linalg.norm(self.kinematics.forward(self._theta)[:3] - target))
 
     # ------------------------------------------------------------------ events
+    def can_start(self, now: float) -> bool:
+        """Return True if a step started now measures its stance after the last relaxation.
+
+        The stance is measured again at the end of the relaxation, during the unscrewing
+        (``screw_time``), so a step may start up to that long (less :data:`STANCE_MARGIN`)
+        before the relaxation is over.
+        """
+        return now >= self._relaxed_at - max(0.0, self._screw_time - STANCE_MARGIN)
+
     def start(self, step: PlannedStep, targets: StepTargets, now: float,
-              grippers: dict[str, str]) -> list:
+              grippers: dict[str, str],
+              remeasure: Callable[[np.ndarray], StepTargets] | None = None) -> list:
         """Begin a step: both grippers must be attached, and no step under way.
+
+        The controllers hold while the moving gripper unscrews (a relaxation under way runs
+        on). The extraction and coarse motions are planned ahead (:class:`PrepareTrajectory`)
+        as soon as the targets are final: at once, or, while a relaxation is under way, when it
+        is over.
+
+        Parameters
+        ----------
+        targets : StepTargets
+            The targets from the stance now.
+        remeasure : callable, optional
+            ``remeasure(theta_roles) -> StepTargets``: the targets measured again from joint
+            angles [rad] (role order), both grippers attached. Called once, at the first tick
+            after the relaxation while the gripper is still unscrewing; a
+            :class:`~walker_core.kinematics.KinematicsError` keeps ``targets`` (with a
+            :class:`Notice`). Without it, or with no relaxation under way, ``targets`` stand.
 
         Raises
         ------
@@ -332,12 +399,14 @@ class StepSequencer:
         self._insertion_error = math.nan
         self.outcome = None
         self.reason = ''
+        self._remeasure = remeasure if now < self._relaxed_at else None
         self._enter(Phase.EXTRACTION, now, 'unscrewing')
         self._deadline = math.inf
         self._gripper_deadline = now + self._screw_allowance
         self._gripper_answers_due += 1
-        return [SetControlMode('fine', step.base_gripper),
-                GripperRequest(step.moving_gripper, 'unscrew')]
+        commands = [SetControlMode('hold', step.base_gripper),
+                    GripperRequest(step.moving_gripper, 'unscrew')]
+        return commands + ([] if self._remeasure is not None else self._prepare())
 
     def gripper_done(self, success: bool, message: str, now: float) -> list:
         """Take the answer to a gripper command.
@@ -371,8 +440,36 @@ class StepSequencer:
 
     def _unscrewed(self, now: float) -> list:
         self.stage = 'lifting'
-        return [self._trajectory('extraction', self._targets.start, self._targets.above_from,
-                                 self._start_point(), self._targets.point_above_from)]
+        self._remeasure = None  # too late: the chain is open
+        return [self._issue(self._extraction_request())]
+
+    def _extraction_request(self) -> TrajectoryRequest:
+        t = self._targets
+        return self._request('extraction', t.start, t.above_from, self._start_point(),
+                             t.point_above_from)
+
+    def _coarse_request(self) -> TrajectoryRequest:
+        t = self._targets
+        return self._request('coarse', t.above_from, t.above_to, t.point_above_from,
+                             t.point_above_to, t.sweep)
+
+    def _prepare(self) -> list:
+        """Plan the extraction and the coarse motion ahead: the targets are final."""
+        return [PrepareTrajectory(self._extraction_request()),
+                PrepareTrajectory(self._coarse_request())]
+
+    def _measure_stance_again(self, state: str, now: float) -> list:
+        """Once relaxed, with the chain still closed: the targets from the joints now."""
+        if self._remeasure is None or state == 'free' or now < self._relaxed_at:
+            return []
+        remeasure, self._remeasure = self._remeasure, None
+        try:
+            self._targets = remeasure(self._theta.copy())
+        except KinematicsError as error:
+            return [Notice(f'the stance measured after the relaxation gives no targets '
+                           f'({error}); the step goes on with those from its start')
+                    ] + self._prepare()
+        return self._prepare()
 
     def _jammed(self, message: str, now: float) -> list:
         self._attempts += 1
@@ -452,9 +549,10 @@ class StepSequencer:
                 return self._abort(f'the {self._requested} trajectory did not start within '
                                    f'{self.parameters.phase_timeout:g} s of its request (no '
                                    f'answer from the planner)', now)
-        if self.stage == 'relaxing':
-            return self._finish(now, mode_told=True) if now >= self._relaxed_at else []
-        if self.stage in ('unscrewing', 'screwing'):
+        if self.stage == 'unscrewing':
+            state = grippers.get(self._step.moving_gripper, '')
+            return self._measure_stance_again(state, now) + self._follow_gripper(now, state)
+        if self.stage == 'screwing':
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.stage == 'lifted':
             return self._start_coarse_when_there(now)
@@ -492,7 +590,7 @@ class StepSequencer:
         if self.stage == 'screwing' and state != self._state_before_screwing:
             self._state_before_screwing = None  # the gripper has reported on this attempt
         if self.stage == 'screwing' and state == 'attached':
-            return self._relax(now)
+            return self._finish(now)
         if self.stage == 'screwing' and state == 'jammed' and self._state_before_screwing is None:
             return self._jammed('the screw-in jammed', now)
         if now > self._gripper_deadline:
@@ -585,17 +683,25 @@ class StepSequencer:
     def _start_point(self) -> np.ndarray:
         return self.kinematics.forward(self._targets.start)[:3]
 
-    def _trajectory(self, purpose: str, start: np.ndarray, goal: np.ndarray,
-                    start_point: np.ndarray, goal_point: np.ndarray, sweep: float = 0.0
-                    ) -> TrajectoryRequest:
-        self._deadline = math.inf  # set by trajectory_started
-        self._requested, self._requested_at = purpose, None
-        self._last_purpose = purpose
+    def _request(self, purpose: str, start: np.ndarray, goal: np.ndarray,
+                 start_point: np.ndarray, goal_point: np.ndarray, sweep: float = 0.0
+                 ) -> TrajectoryRequest:
         return TrajectoryRequest(purpose, np.array(start, dtype=float),
                                  np.array(goal, dtype=float), np.array(start_point, dtype=float),
-                                 np.array(goal_point, dtype=float), sweep,
+                                 np.array(goal_point, dtype=float), float(sweep),
                                  self._step.base_gripper,
                                  'coarse' if purpose == 'coarse' else 'fine')
+
+    def _trajectory(self, purpose: str, start: np.ndarray, goal: np.ndarray,
+                    start_point: np.ndarray, goal_point: np.ndarray) -> TrajectoryRequest:
+        return self._issue(self._request(purpose, start, goal, start_point, goal_point))
+
+    def _issue(self, request: TrajectoryRequest) -> TrajectoryRequest:
+        """Request a motion now: it must start within ``phase_timeout``."""
+        self._deadline = math.inf  # set by trajectory_started
+        self._requested, self._requested_at = request.purpose, None
+        self._last_purpose = request.purpose
+        return request
 
     def _enter(self, phase: Phase, now: float, stage: str) -> None:
         if self.phase not in (Phase.IDLE, Phase.SAFE_HOLD):
@@ -617,10 +723,8 @@ class StepSequencer:
 
     def _enter_coarse(self, now: float) -> list:
         self._enter(Phase.COARSE, now, 'moving')
-        t = self._targets
         return [SetControlMode('coarse', self._step.base_gripper),
-                self._trajectory('coarse', t.above_from, t.above_to, t.point_above_from,
-                                 t.point_above_to, t.sweep)]
+                self._issue(self._coarse_request())]
 
     def _enter_fine(self, now: float, correction: bool) -> list:
         """Switch the controllers to FINE; with ``correction``, also run a fine line.
@@ -725,31 +829,26 @@ class StepSequencer:
         """[s] When the last relaxation under a new base is over (a next step waits for it)."""
         return self._relaxed_at
 
-    def _relax(self, now: float) -> list:
-        """Screwed in: HOLD under the new base, whose controllers relax the chain, then end.
+    def _finish(self, now: float) -> list:
+        """Screwed in: the step ends, HOLD under the new base, whose controllers relax the chain.
 
         The hole drew the gripper onto its axis while the joints stayed in their friction: the
         links are bent, and the joint angles would misplace the base frame of the next step by
         the bend (about a millimetre at the tip). The controllers' relaxation dither, started
-        by this base change, lets the joints slide out of it; the step ends when it is over.
+        by this base change, lets the joints slide out of it by :attr:`relaxed_at`; the next
+        step measures its stance again after that (:meth:`start`).
         """
-        if self.parameters.relaxation_wait <= 0.0:
-            return self._finish(now)
-        self.stage = 'relaxing'
         self._relaxed_at = now + self.parameters.relaxation_wait
-        self._deadline = self._relaxed_at + self.parameters.phase_timeout
-        return [SetControlMode('hold', self._step.moving_gripper)]
-
-    def _finish(self, now: float, mode_told: bool = False) -> list:
         self._enter(Phase.IDLE, now, '')
         self._grippers[self._step.moving_gripper] = 'attached'
         self.base_gripper = self._step.moving_gripper
         self.outcome = StepOutcome(True, '', dict(self._durations), now - self._step_started,
                                    self._insertion_error, self._attempts + 1)
         self._outcome_taken = False
-        return [] if mode_told else [SetControlMode('hold', self._step.moving_gripper)]
+        return [SetControlMode('hold', self._step.moving_gripper)]
 
     def _abort(self, reason: str, now: float) -> list:
+        self._remeasure = None
         if self.busy:
             self._enter(Phase.SAFE_HOLD, now, '')
             self.outcome = StepOutcome(False, reason, dict(self._durations),

@@ -16,7 +16,8 @@ import numpy as np
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
-__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'recovery_targets']
+__all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'measure_step_targets',
+           'recovery_targets']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,6 +135,25 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     at_to = kinematics.inverse([*point_to, 0.0, reference[4]], reference=above_to)
     return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
                        point_from + lift, point_to + lift, point_to)
+
+
+def measure_step_targets(kinematics: WalkerKinematics, step: PlannedStep,
+                         base_position: np.ndarray, from_position: np.ndarray,
+                         to_position: np.ndarray, theta_roles: np.ndarray,
+                         approach_height: float) -> StepTargets:
+    """Measure the base frame from the stance and compute the step's targets from it.
+
+    :meth:`BaseFrame.from_stance` (both grippers attached, at ``base_position`` and
+    ``from_position``), then :func:`plan_step_targets`, from the same joint angles.
+
+    Raises
+    ------
+    KinematicsError
+        When the heading is undefined or a target is out of reach.
+    """
+    frame = BaseFrame.from_stance(kinematics, theta_roles, base_position, from_position)
+    return plan_step_targets(kinematics, frame, step, from_position, to_position, theta_roles,
+                             approach_height)
 
 
 def recovery_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: PlannedStep,
