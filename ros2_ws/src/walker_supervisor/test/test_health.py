@@ -3,7 +3,8 @@
 import pytest
 
 from walker_supervisor.core.health import (
-    HealthMonitor, Level, ModeRepetition, SourceStatus, reason_naming_silent_sources)
+    MODE_COMMAND_LATENCY, HealthMonitor, Level, ModeRepetition, SourceStatus,
+    reason_naming_silent_sources, tracking_expected)
 
 
 def test_silence_after_the_timeout_is_a_fault_and_trouble_a_warning():
@@ -95,3 +96,16 @@ def test_the_mode_publisher_is_renewed_after_repetitions_in_vain_and_not_before(
 def test_a_mode_repetition_count_below_one_is_refused():
     with pytest.raises(ValueError, match='at least 1'):
         ModeRepetition(renew_after=0)
+
+
+@pytest.mark.parametrize('busy, mode, after, expected', [
+    (True, 'fine', 1.5 * MODE_COMMAND_LATENCY, True),  # long enough after FINE: must track
+    (True, 'coarse', 1.0, True),
+    (True, 'fine', 0.5 * MODE_COMMAND_LATENCY, False),  # may predate the command's arrival
+    (True, 'fine', -0.3, False),  # made before the command (a HOLD while unscrewing)
+    (True, 'hold', 1.0, False),  # commanded to hold
+    (False, 'fine', 1.0, False),  # between steps
+])
+def test_a_report_shows_a_fall_back_only_once_the_mode_command_has_had_time_to_arrive(
+        busy, mode, after, expected):
+    assert tracking_expected(busy, mode, 100.0 + after, 100.0) == expected

@@ -47,7 +47,7 @@ from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler, spin_nodes
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
-    tell_mode_again)
+    tell_mode_again, tracking_expected)
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -183,6 +183,7 @@ class SupervisorNode(TeleopServer, Node):
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
         self._commanded_mode = self._commanded_base = ''  # the last mode command sent
+        self._mode_commanded_at = -math.inf  # [s] ROS clock, when it was sent
         self._mode_told_again = -math.inf  # [s] steady clock
         self._mode_repetition = ModeRepetition()
         self._controller_states = {
@@ -463,7 +464,10 @@ class SupervisorNode(TeleopServer, Node):
         for joint, subscription in self._controller_states.items():
             reports = self._sampler.take(subscription)
             if reports:
-                tracking = self.sequencer.busy and self._commanded_mode in ('coarse', 'fine')
+                stamp = reports[-1].header.stamp
+                tracking = tracking_expected(self.sequencer.busy, self._commanded_mode,
+                                             stamp.sec + 1e-9 * stamp.nanosec,
+                                             self._mode_commanded_at)
                 stale, holding = reports[-1].stale, reports[-1].mode == ControllerState.HOLD
                 self.health.seen(f'controller {joint}', now,
                                  controller_trouble(stale, holding, tracking))
@@ -694,7 +698,9 @@ class SupervisorNode(TeleopServer, Node):
     def _publish_mode(self, mode: str, base: str) -> None:
         self._commanded_mode, self._commanded_base = mode, base
         msg = ControlMode(mode=_MODES[mode], base_gripper=base)
-        msg.header.stamp = self.get_clock().now().to_msg()
+        stamp = self.get_clock().now()
+        self._mode_commanded_at = stamp.nanoseconds * 1e-9
+        msg.header.stamp = stamp.to_msg()
         self.mode_pub.publish(msg)
 
     def _request_gripper(self, request: GripperRequest) -> None:

@@ -125,6 +125,30 @@ def reason_naming_silent_sources(reason: str, statuses: list[SourceStatus]) -> s
     return f'{reason}; then {"; ".join(new)}' if reason else '; '.join(new)
 
 
+#: [s] A controller report stamped less than this after a mode command may have been made
+#: before the command reached the controller (DDS latency, a starved process).
+MODE_COMMAND_LATENCY = 0.1
+
+
+def tracking_expected(step_busy: bool, commanded_mode: str, report_stamp: float,
+                      commanded_at: float) -> bool:
+    """Return True if a controller's report should show it tracking the step's motion.
+
+    Parameters
+    ----------
+    step_busy : bool
+        A step is under way.
+    commanded_mode : str
+        The supervisor's last mode command ('hold', 'coarse', 'fine', ...).
+    report_stamp, commanded_at : float
+        Stamp of the report and time of the mode command [s], on the same (ROS) clock. A report
+        stamped within :data:`MODE_COMMAND_LATENCY` of the command may still show the mode
+        before it (a HOLD while the gripper unscrewed, say): it says nothing about a fall-back.
+    """
+    return (step_busy and commanded_mode in ('coarse', 'fine')
+            and report_stamp - commanded_at >= MODE_COMMAND_LATENCY)
+
+
 def controller_trouble(stale: bool, holding: bool, tracking_commanded: bool) -> str:
     """Return what is wrong with a joint controller by its own report ('' when nothing).
 
