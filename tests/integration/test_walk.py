@@ -36,6 +36,7 @@ class Graph:
         from walker_core.robot_parameters import default_parameter_file
 
         env = ros_environment(domain)
+        self.domain = domain
         self.nodes = walker_graph(default_parameter_file(), sim_time=True)
         self.group = ProcessGroup(tmp / 'logs', env)
         for spec in self.nodes:
@@ -141,6 +142,20 @@ def test_a_cancelled_walk_finishes_its_step_and_ends_attached(graph):
     client.spin_for(1.0)
     assert set(graph.attached_nodes()) == {'a', 'b'}
     assert client.phase.phase == StepPhase.IDLE
+
+
+def test_run_all_refuses_a_namespace_a_live_graph_already_uses(graph, tmp_path):
+    """Two graphs in one namespace would answer each other's goals: nothing is started."""
+    args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
+            '--no-walk', '--no-record', '--out', str(tmp_path / 'run')]
+    run = subprocess.run(args, env=ros_environment(graph.domain), capture_output=True,
+                         text=True, cwd=REPO_ROOT, timeout=180)
+    text = run.stdout + run.stderr
+    assert run.returncode == 2, text
+    assert f'already running in /walker on ROS domain {graph.domain}' in text
+    assert 'supervisor' in text and '--namespace' in text
+    assert 'starting' not in text, 'nothing may be started'
+    assert graph.group.poll_deaths() == []
 
 
 @pytest.mark.parametrize('interrupt', [False, True])

@@ -147,6 +147,29 @@ class GraphClient:
             (ready if up else missing).append(name)
         return Readiness(ready, missing)
 
+    def live_nodes(self, wait: float = 1.5) -> list[str]:
+        """Names of the nodes of a live graph already in this namespace (empty: none).
+
+        Nodes are discovered within a fraction of a second; a graph counts as live only when
+        one of them speaks (joint states, or the latched phase or gripper states), since DDS
+        remembers the nodes of a process killed by force until their lease runs out (up to
+        20 s). Spins up to ``wait`` seconds (wall time), less when nothing is there.
+        """
+        own = {self.node.get_name(), f'{self.node.get_name()}_sampler'}
+        deadline = time.monotonic() + wait
+        first_look = time.monotonic() + min(0.5, wait)
+        while True:
+            self.spin_for(_POLL)
+            names = sorted(name for name, ns in self.node.get_node_names_and_namespaces()
+                           if ns.rstrip('/') == self.namespace.rstrip('/') and name not in own)
+            live = self.phase is not None or self.grippers is not None \
+                or bool(self._sampler.take(self._joint_states))
+            if names and live:
+                return names
+            now = time.monotonic()
+            if now > deadline or (not names and now > first_look):
+                return []
+
     def wait_until_ready(self, node_names: list[str], timeout: float,
                          progress: Callable[[Readiness], None] | None = None,
                          should_stop: Callable[[], bool] | None = None) -> Readiness:

@@ -238,6 +238,12 @@ def main(argv: list[str] | None = None) -> int:
         progress.error(f'[walker] error: {", ".join(map(str, taken))} already exists and a '
                        'recording never overwrites a bag: choose another --out, or --no-record')
         return 2
+    context = init_context()
+    busy = _namespaces_in_use(walkers, context)
+    if busy:
+        context.try_shutdown()
+        progress.error(f'[walker] error: {busy}')
+        return 2
     count = sum(len(w.nodes) for w in walkers)
     progress.say(f'[walker] output in {out}')
     progress.say(
@@ -254,7 +260,6 @@ def main(argv: list[str] | None = None) -> int:
         interrupted['signal'] = signum
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    context = None
     deaths: list = []
     lock = threading.Lock()
 
@@ -268,7 +273,6 @@ def main(argv: list[str] | None = None) -> int:
     try:
         for walker in walkers:
             _launch(walker, args, params_file)
-        context = init_context()
         started = time.monotonic()
         for walker in walkers:
             walker.client = GraphClient(walker.namespace, context)
@@ -301,8 +305,7 @@ def main(argv: list[str] | None = None) -> int:
         for walker in walkers:
             if walker.client is not None:
                 walker.client.close()
-        if context is not None:
-            context.try_shutdown()
+        context.try_shutdown()
         progress.say('[walker] shutting the graph down')
         codes: dict[str, int | None] = {}
         left = []
@@ -323,6 +326,27 @@ def main(argv: list[str] | None = None) -> int:
         if not write_report(out / 'bag', out / 'report', params_file, args.quiet):
             code = code or 6
     return code
+
+
+def _namespaces_in_use(walkers: list[_Walker], context) -> str:
+    """Why the walkers' namespaces are taken by a live graph on this domain ('' when free).
+
+    Two graphs in one namespace would answer each other's goals and services: a walk would
+    run on the other robot.
+    """
+    for walker in walkers:
+        client = GraphClient(walker.namespace, context)
+        try:
+            names = client.live_nodes()
+        finally:
+            client.close()
+        if names:
+            domain = os.environ.get('ROS_DOMAIN_ID', '0')
+            shown = ', '.join(names[:5]) + (', ...' if len(names) > 5 else '')
+            return (f'a walker graph is already running in {walker.namespace} on ROS domain '
+                    f'{domain} (nodes {shown}): stop it, or give this one another '
+                    f'--namespace or ROS_DOMAIN_ID')
+    return ''
 
 
 def _serve(client: GraphClient, args, should_stop, deaths: list) -> int:
