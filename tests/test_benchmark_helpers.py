@@ -215,3 +215,18 @@ def test_parts_not_run_now_come_from_the_last_run_of_the_same_kind(tmp_path):
     assert result == {'x': 1}
     assert status['ok'] and status['earlier_run'] == machine['date']
     assert status['load_average_after'] == [3.0, 2, 2]
+
+
+def _files(*counts):
+    return [{'open_files': {'/walker/recorder': n, '/walker/plant': 18}} for n in counts]
+
+
+@pytest.mark.parametrize('counts, change', [
+    ((19, 19, 19, 19, 19, 19, 19, 20), 0),  # open for a moment at the last sample: no leak
+    ((19, 20, 19, 19, 19, 19, 19, 19), 0),  # ... or after the first leg
+    ((19, 19, 19, 19, 20, 20, 21, 20), 1),  # one more file held for good: a leak
+    ((19, 19, 19, 19, 19, 18, 18, 18), -1),
+])
+def test_the_soak_counts_only_open_files_held_for_good(counts, change):
+    changes = run_benchmarks.lasting_open_files_change(_files(*counts))
+    assert changes == {'/walker/recorder': change, '/walker/plant': 0}
