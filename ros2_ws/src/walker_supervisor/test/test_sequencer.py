@@ -179,6 +179,52 @@ def test_a_step_runs_the_four_phases_in_order_and_swaps_the_base(to_node):
     np.testing.assert_allclose(world.frame.to_truss(tip), TRUSS.position(to_node), atol=1e-9)
 
 
+def _stage_times(world, stage):
+    return [t for t, s in world.stages if s == stage]
+
+
+def test_a_tip_over_the_hole_and_slow_descends_without_waiting_to_settle():
+    """The descent starts at the first tick the tip is aligned and the joints slow.
+
+    The insertion settles at the mouth before the screw-in, so the fine phase need not wait
+    ``settle_time`` too: here (ideal tracking) the coarse motion ends on the point above the
+    hole, and the descent is requested at once; the mouth still settles for ``settle_time``.
+    """
+    parameters = dataclasses.replace(SUPERVISOR, settle_time=0.5)
+    world = World()
+    world.sequencer = StepSequencer(parameters, KIN, 'a')
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    arriving = _stage_times(world, 'arriving')  # FINE while the coarse motion runs on
+    descent = _stage_times(world, 'descending')
+    mouth = _stage_times(world, 'settling')
+    screw = _stage_times(world, 'screwing')
+    assert arriving and descent and mouth and screw
+    # the motion ends, its last step still moving; the next ticks are still: down at once
+    assert descent[0] - arriving[-1] <= 3 * DT + 1e-9 < 0.1 * parameters.settle_time
+    assert screw[0] - mouth[0] >= parameters.settle_time - 1e-9  # the mouth waits
+
+
+def test_an_aligned_tip_still_moving_is_not_lowered():
+    """Over the hole but a joint faster than ``settle_velocity``: no descent until it slows."""
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    world.run_step(step, max_time=0.0)  # unscrewing
+    while world.sequencer.phase != Phase.FINE:
+        world.advance()
+    while world.motion is not None:  # the coarse motion runs on to its end
+        world.advance()
+    assert world.sequencer.stage == 'settling'
+    sequencer = world.sequencer
+    theta = world.targets.above_to
+    fast = np.array([0.0, 1.5 * SUPERVISOR.settle_velocity, 0.0, 0.0, 0.0])
+    for k in range(20):
+        assert sequencer.tick(world.now + k * DT, theta, fast, dict(world.grippers)) == []
+    commands = sequencer.tick(world.now + 20 * DT, theta, np.zeros(5), dict(world.grippers))
+    assert [c.purpose for c in commands if isinstance(c, TrajectoryRequest)] == ['insertion']
+    assert sequencer.phase == Phase.INSERTION
+
+
 def test_a_tip_that_settles_off_the_hole_axis_after_the_descent_is_aligned_at_the_mouth():
     world = World(descent_miss=0.0015)  # 1.35 mm off the axis at 0.9 m
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])

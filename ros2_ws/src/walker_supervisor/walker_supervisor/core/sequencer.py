@@ -19,11 +19,13 @@ Rules it enforces:
   error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``:
   the controllers then switch to FINE mode (higher gains, integral action) while the coarse
   trajectory runs on to its end, the point above the hole;
-* fine motion ends when the joints have settled (``settle_time``, long enough for the links'
-  ringing to decay, which the joints do not show) with the tip within ``insertion_alignment``
-  of the point above the hole; if it is not, a constant-velocity fine line (paper section 5)
-  takes it there from where it settled, up to ``MAX_FINE_LINES`` times before insertion is
-  tried anyway (the screw-in itself is the final check);
+* fine motion ends, once the trajectory has ended, as soon as the tip is within
+  ``insertion_alignment`` of the point above the hole with every joint slower than
+  ``settle_velocity``: the descent need not wait for the links' ringing to decay, since the
+  insertion settles at the mouth and checks the tip again before anything screws in. A tip
+  that settles (``settle_time``) anywhere else gets a constant-velocity fine line (paper
+  section 5) from where it settled, up to ``MAX_FINE_LINES`` times before insertion is tried
+  anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis to its mouth; the descent moves the joints, which
   stop in their friction again, so once they have settled the tip is checked again, now
   across the hole's axis: more than ``insertion_alignment`` off it, a fine line at the mouth
@@ -100,7 +102,8 @@ class SupervisorParameters:
         "and from the hole's axis at its mouth at which the screw-in may start",
         'm', 1e-5, 0.05, read_only=False)
     settle_velocity: float = parameter(
-        'every joint speed must stay below this for settle_time before insertion and screw-in',
+        'joints slower than this count as still: the descent starts with every joint below '
+        'it, the screw-in after settle_time below it',
         'rad/s', 1e-4, 1.0, read_only=False)
     settle_time: float = parameter('time the joints must stay settled', 's', 0.0, 10.0,
                                    read_only=False)
@@ -563,6 +566,12 @@ class StepSequencer:
             # the coarse motion ended and the arm came to rest outside the region (friction,
             # overshoot): fine motion, with its higher gains and a fine line, takes it there
             return self._enter_fine(now, correction=True)
+        if self.phase == Phase.FINE and self.stage == 'settling' \
+                and self.tip_error() <= self.parameters.insertion_alignment \
+                and bool(np.all(np.abs(velocities) < self.parameters.settle_velocity)):
+            # over the hole and slow: the descent need not wait for the links to stop ringing,
+            # the insertion settles at the mouth and checks the tip again before it screws in
+            return self._enter_insertion(now)
         if self.stage == 'settling' and self._settled(now, velocities):
             if self.phase == Phase.FINE:
                 if self.tip_error() <= self.parameters.insertion_alignment \
