@@ -16,7 +16,8 @@ from walker_planner.core.trajectory import CARTESIAN
 
 H = 0.03  # approach height [m]
 ABOVE = (0.0, 0.9, H)
-STEPS_AT_THE_ENDS = {'cartesian_line', 'insertion_line', 'extraction_line'}
+STEPS_AT_THE_ENDS = {'cartesian_line'}  # the paper's constant-velocity fine motion
+VERTICAL_LINES = {'insertion_line', 'extraction_line'}
 
 
 @pytest.fixture(scope='module')
@@ -111,7 +112,8 @@ def test_joint_limits_are_respected(planned, context):
 
 def test_cartesian_lines_are_straight(planned, context, stance):
     name, result = planned
-    if name not in STEPS_AT_THE_ENDS | {'cartesian_parabolic_time', 'cartesian_parabolic_accel'}:
+    if name not in STEPS_AT_THE_ENDS | VERTICAL_LINES | {'cartesian_parabolic_time',
+                                                         'cartesian_parabolic_accel'}:
         return
     asked = requests(stance)[name]
     start, goal = np.array(asked['start']), np.array(asked['goal'])
@@ -121,6 +123,33 @@ def test_cartesian_lines_are_straight(planned, context, stance):
     assert np.max(np.linalg.norm(across, axis=1)) < 1e-9
     along = offsets @ direction
     assert np.all(np.diff(along) >= -1e-12)  # never backwards
+
+
+@pytest.mark.parametrize('name', sorted(VERTICAL_LINES))
+def test_vertical_lines_start_and_stop_smoothly_at_their_peak_speed(name, context, stance):
+    """The lift and the descent are minimum-jerk: no step of velocity or acceleration.
+
+    A joint held by its stiction lags a velocity step and overshoots where the line stops;
+    the quintic starts and stops at rest with zero acceleration, reaches the default speed at
+    its middle, and keeps within the Cartesian acceleration limit.
+    """
+    result = plan(PlanRequest(name, 'a', **requests(stance)[name]), context)
+    tips = tip_positions(context, result)[:, :3]
+    dt = np.diff(result.times)
+    speed = np.linalg.norm(np.diff(tips, axis=0), axis=1) / dt
+    cartesian = context.planner.cartesian
+    assert speed[0] < 0.02 * speed.max() and speed[-1] < 0.02 * speed.max()
+    np.testing.assert_allclose(result.samples.acceleration[[0, -1]], 0.0, atol=1e-9)
+    acceleration = np.abs(np.diff(speed)) / dt[1:]
+    assert acceleration.max() <= cartesian.acceleration_limit * 1.01
+    assert speed.max() <= cartesian.insertion_speed * 1.001
+    length = np.linalg.norm(np.subtract(requests(stance)[name]['goal'],
+                                        requests(stance)[name]['start']))
+    fastest = max(1.875 * length / cartesian.insertion_speed,
+                  math.sqrt(10.0 / math.sqrt(3.0) * length / cartesian.acceleration_limit))
+    assert result.duration == pytest.approx(fastest)
+    slower = plan(PlanRequest(name, 'a', **requests(stance)[name], max_velocity=0.05), context)
+    assert slower.duration == pytest.approx(1.875 * length / 0.05)
 
 
 def test_the_time_optimal_bound_is_reported_for_sweeps_and_lines(planned, context, stance):

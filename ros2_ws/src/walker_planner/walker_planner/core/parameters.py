@@ -59,7 +59,8 @@ class CartesianPlanning:
         'speed of the constant-velocity line of fine motion (when a request gives 0)', 'm/s',
         0.0001, 1.0)
     insertion_speed: float = _writable(
-        'speed of the insertion and extraction lines (when a request gives 0)', 'm/s',
+        'peak speed of the minimum-jerk insertion and extraction lines (when a request gives '
+        '0)', 'm/s',
         0.0001, 1.0)
 
     def __post_init__(self) -> None:
