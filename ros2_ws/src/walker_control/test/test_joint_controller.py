@@ -24,12 +24,12 @@ from walker_control.core.modes import Mode
 SETTINGS = replace_in_section(load_controller_settings(),
                               {'control.filter.reference': False,
                                'control.friction_compensation.feedforward_speed': 0.0})
-#: With reference shaping and friction feed-forward on, J1's compensator deadband and ramp
+#: With reference shaping and friction feed-forward on, J1-J3's compensator deadband and ramp
 #: 0.2 and 0.3 mrad, J4's 0.5 and 1 mrad: the controller as shipped.
 SHAPED = replace_in_section(SETTINGS, {
     'control.filter.reference': True, 'control.friction_compensation.feedforward_speed': 0.02,
-    'control.friction_compensation.deadband': [0.0002, 0.0005, 0.0005, 0.0005, 0.005],
-    'control.friction_compensation.ramp': [0.0003, 0.0005, 0.0005, 0.001, 0.005]})
+    'control.friction_compensation.deadband': [0.0002, 0.0002, 0.0002, 0.0005, 0.005],
+    'control.friction_compensation.ramp': [0.0003, 0.0003, 0.0003, 0.001, 0.005]})
 T = SETTINGS.sample_time
 STANCE = np.array([0.0, 0.85, 1.45, 0.85, 0.0])  # physical joint angles [rad]
 
