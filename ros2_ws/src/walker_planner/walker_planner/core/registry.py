@@ -180,7 +180,7 @@ def _cartesian_line(request, context):
 
 
 def _vertical_line(name: str, downwards: bool, request: ValidRequest, context) -> Built:
-    """A straight line along the hole axis, rest to rest with minimum jerk.
+    """Build a straight line along the hole axis, rest to rest with minimum jerk.
 
     The shortest quintic whose peak tip speed is the request's ``max_velocity`` (0: the
     ``insertion_speed``) and whose peak acceleration is within the Cartesian
