@@ -440,11 +440,14 @@ def test_resume_with_both_grippers_attached_returns_to_idle():
     world = World()
     world.sequencer.hold('operator', 0.0)
     assert world.sequencer.phase == Phase.SAFE_HOLD
+    world.sequencer.require_safe_hold()  # a hold: resumable
     commands = world.sequencer.resume(0.1, world.theta, dict(world.grippers),
                                       {'a': 'n1_1', 'b': 'n2_1'})
     assert world.sequencer.phase == Phase.IDLE and commands == [SetControlMode('hold', 'a')]
     with pytest.raises(SequencerError, match='not in SAFE_HOLD'):
         world.sequencer.resume(0.2, world.theta, dict(world.grippers), {})
+    with pytest.raises(SequencerError, match=r'not in SAFE_HOLD \(phase IDLE\)'):
+        world.sequencer.require_safe_hold()  # what the node answers first, whatever the health
 
 
 def _hold_during(world, phase, step=None, ticks=20, reason='a fault'):

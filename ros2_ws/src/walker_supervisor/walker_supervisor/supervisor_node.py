@@ -935,7 +935,16 @@ class SupervisorNode(TeleopServer, Node):
         return response
 
     def _on_resume(self, request: Trigger.Request, response: Trigger.Response):
-        """Leave safe hold: the request and a healthy graph, two independent conditions."""
+        """Leave safe hold: the request and a healthy graph, two independent conditions.
+
+        Outside SAFE_HOLD there is nothing to resume, and that is the answer whatever the
+        graph's health (a controller not heard from yet at start-up, say).
+        """
+        try:
+            self.sequencer.require_safe_hold()
+        except SequencerError as error:
+            response.success, response.message = False, str(error)
+            return response
         self._sample_measurements()
         faults = self.health.faults(self._steady_now(), include_trouble=False)
         if faults:

@@ -612,6 +612,11 @@ class StepSequencer:
         """Abort to SAFE_HOLD at once (an operator's hold, or a fault reported elsewhere)."""
         return self._abort(reason, now)
 
+    def require_safe_hold(self) -> None:
+        """Raise :class:`SequencerError` unless in SAFE_HOLD: only a hold can be resumed."""
+        if self.phase != Phase.SAFE_HOLD:
+            raise SequencerError(f'not in SAFE_HOLD (phase {self.phase.name})')
+
     def resume(self, now: float, theta_roles: np.ndarray, grippers: dict[str, str],
                nodes: dict[str, str]) -> list:
         """Leave SAFE_HOLD: back to IDLE, or on with the interrupted step.
@@ -629,8 +634,7 @@ class StepSequencer:
             Not in SAFE_HOLD; the base gripper is not attached; a gripper is still screwing or
             unscrewing; or the moving gripper is free with no step to complete.
         """
-        if self.phase != Phase.SAFE_HOLD:
-            raise SequencerError(f'not in SAFE_HOLD (phase {self.phase.name})')
+        self.require_safe_hold()
         self._theta = np.asarray(theta_roles, dtype=float)
         self._grippers = dict(grippers)
         busy = sorted(g for g, s in grippers.items() if s in ('screwing', 'unscrewing'))
