@@ -153,11 +153,12 @@ class GraphClient:
         Nodes are discovered within a fraction of a second; a graph counts as live only when
         one of them speaks (joint states, or the latched phase or gripper states), since DDS
         remembers the nodes of a process killed by force until their lease runs out (up to
-        20 s). Spins up to ``wait`` seconds (wall time), less when nothing is there.
+        20 s). Spins up to ``wait`` seconds (wall time), less when a live graph is found: on a
+        loaded machine discovery took longer than the 0.5 s first looked for, and a live graph
+        went unseen.
         """
         own = {self.node.get_name(), f'{self.node.get_name()}_sampler'}
         deadline = time.monotonic() + wait
-        first_look = time.monotonic() + min(0.5, wait)
         while True:
             self.spin_for(_POLL)
             names = sorted(name for name, ns in self.node.get_node_names_and_namespaces()
@@ -167,7 +168,7 @@ class GraphClient:
             if names and live:
                 return names
             now = time.monotonic()
-            if now > deadline or (not names and now > first_look):
+            if now > deadline:
                 return []
 
     def wait_until_ready(self, node_names: list[str], timeout: float,
