@@ -22,7 +22,7 @@ from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
-from walker_core.spinning import TopicSampler
+from walker_core.spinning import TopicSampler, destroy_actions
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
            'init_context']
@@ -109,6 +109,7 @@ class GraphClient:
     def close(self) -> None:
         """Destroy the client node."""
         self.executor.remove_node(self.node)
+        destroy_actions(self.node)
         self.node.destroy_node()
         self._sampler.destroy()
 

@@ -47,3 +47,23 @@ def test_an_executor_error_during_shutdown_ends_spinning_quietly_and_any_other_i
                 spinning.spin_nodes(node, context=context)
     finally:
         node.destroy_node()
+
+
+def test_destroy_actions_lets_the_node_go_with_its_action_servers_and_clients(
+        rclpy_context, capfd):
+    from rclpy.action import ActionClient, ActionServer
+    from walker_msgs.action import Step
+
+    def make_node():
+        node = Node('action_probe', context=rclpy_context, start_parameter_services=False)
+        ActionServer(node, Step, 'step', lambda goal: Step.Result())
+        ActionClient(node, Step, 'step')
+        return node
+
+    node = make_node()
+    spinning.destroy_actions(node)
+    assert not [w for w in node.waitables if isinstance(w, (ActionServer, ActionClient))]
+    node.destroy_node()
+    # the node is gone, log publisher and all: another of its name registers its own quietly
+    make_node().destroy_node()
+    assert 'already registered' not in capfd.readouterr().err

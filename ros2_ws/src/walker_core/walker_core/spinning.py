@@ -22,10 +22,11 @@ import time
 from collections.abc import Callable, Iterable
 
 import rclpy
+from rclpy.action import ActionClient, ActionServer
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
-__all__ = ['make_executor', 'spin_nodes', 'TopicSampler', 'EXECUTOR_VARIABLE']
+__all__ = ['make_executor', 'spin_nodes', 'destroy_actions', 'TopicSampler', 'EXECUTOR_VARIABLE']
 
 #: Environment variable choosing the executor: ``events`` (default) or ``single``.
 EXECUTOR_VARIABLE = 'WALKER_EXECUTOR'
@@ -43,6 +44,20 @@ def make_executor(context=None) -> Executor:
     from rclpy.experimental import EventsExecutor
 
     return EventsExecutor(context=context)
+
+
+def destroy_actions(node: Node) -> None:
+    """Destroy the node's action servers and clients; call it before ``node.destroy_node()``.
+
+    ``Node.destroy_node`` destroys publishers, subscriptions, services, clients, timers and
+    guard conditions, not action servers and clients: each keeps the node's handle alive until
+    the garbage collector gets to it, at interpreter exit after the context has shut down (a
+    native crash at exit is the risk), and a node of the same name created meanwhile in the
+    process finds its log publisher still registered.
+    """
+    for waitable in list(node.waitables):
+        if isinstance(waitable, (ActionServer, ActionClient)):
+            waitable.destroy()
 
 
 def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = None,

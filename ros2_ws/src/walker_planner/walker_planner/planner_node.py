@@ -41,7 +41,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.spinning import spin_nodes
+from walker_core.spinning import destroy_actions, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
@@ -152,6 +152,7 @@ class PlannerNode(Node):
             rclpy.try_shutdown(context=self.context)
             self._stream_thread.join(timeout=5.0)
         self._stream_node.destroy_node()
+        destroy_actions(self)
         super().destroy_node()
 
     def _relay(self) -> None:

@@ -44,7 +44,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
-from walker_core.spinning import TopicSampler, spin_nodes
+from walker_core.spinning import TopicSampler, destroy_actions, spin_nodes
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
     tell_mode_again, tracking_expected)
@@ -542,8 +542,9 @@ class SupervisorNode(TeleopServer, Node):
         self._diagnostics.publish(message)
 
     def destroy_node(self) -> None:
-        """Destroy the node and its sampler."""
+        """Destroy the node with its action servers and clients, and its sampler."""
         self._sampler.destroy()
+        destroy_actions(self)
         super().destroy_node()
 
     def _tick(self) -> None:

@@ -29,6 +29,7 @@ from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
+from walker_core.spinning import destroy_actions
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
 
@@ -80,6 +81,7 @@ class TeleopClient:
     def close(self) -> None:
         """Destroy the node."""
         self.executor.remove_node(self.node)
+        destroy_actions(self.node)
         self.node.destroy_node()
 
     def where(self) -> str:
