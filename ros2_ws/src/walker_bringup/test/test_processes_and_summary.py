@@ -3,6 +3,7 @@
 import json
 import math
 import os
+import signal
 import sys
 import time
 from types import SimpleNamespace
@@ -100,7 +101,9 @@ def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
     codes = group.stop_all(timeout=5.0)
     assert not a.alive and not b.alive
     assert codes['polite'] == 0
-    assert codes['stubborn'] == -9
+    # a node hung past SIGTERM is aborted: its fault handler writes where it was stuck
+    assert codes['stubborn'] == -signal.SIGABRT
+    assert 'most recent call first' in a.log_path.read_text()
     for process in (a, b):
         with pytest.raises(ProcessLookupError):
             os.kill(process.popen.pid, 0)

@@ -2,9 +2,11 @@
 
 Each node runs in a process group of its own with its output in a log file. A child that dies
 is reported at the next :meth:`ProcessGroup.poll_deaths`. Stopping sends SIGINT (the clean
-shutdown every node handles), then SIGTERM, then SIGKILL to whatever is left, and removes the
-Fast DDS shared-memory files that killed children leave in ``/dev/shm`` (only files created
-during the run and mapped by no live process).
+shutdown every node handles), then SIGTERM, SIGABRT and SIGKILL to whatever is left, and
+removes the Fast DDS shared-memory files that killed children leave in ``/dev/shm`` (only files
+created during the run and mapped by no live process). Children run with Python's fault
+handler on, so a native crash, or a hang ended by SIGABRT, leaves each thread's stack in the
+node's log.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ _SHM = Path('/dev/shm')
 #: [s] wall-clock time a node is given to stop cleanly after each signal. A graph of eight
 #: Python nodes shutting down together on a loaded 2-core machine was seen to take 4.7 s.
 STOP_TIMEOUT = 10.0
+#: [s] a hung node is given to write its threads' stacks after SIGABRT, before SIGKILL.
+_ABORT_WAIT = 5.0
 
 
 @dataclasses.dataclass
@@ -110,7 +114,9 @@ class ProcessGroup:
                              'ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST')
         self.log_dir = Path(log_dir)
         self.log_dir.mkdir(parents=True, exist_ok=True)
-        self.env = dict(env)
+        # A native crash (a segfault in the ROS layers) writes every thread's Python stack to
+        # the node's log, so the log says where it happened.
+        self.env = {**env, 'PYTHONFAULTHANDLER': '1'}
         self.processes: list[ManagedProcess] = []
         self._shm_before = _fastdds_files()
 
@@ -150,15 +156,17 @@ class ProcessGroup:
 
     def stop(self, process: ManagedProcess, timeout: float = STOP_TIMEOUT,
              interrupted: bool = False) -> int | None:
-        """Stop one process: SIGINT, then SIGTERM, then SIGKILL; return its exit code.
+        """Stop one process: SIGINT, then SIGTERM, SIGABRT and SIGKILL; return its exit code.
 
         ``interrupted``: SIGINT was sent already (it is not sent twice: a second interrupt
         would break the clean shutdown the first one started). Each escalation is noted at the
         end of the process's log, so that a node that does not stop on SIGINT in ``timeout``
-        seconds is seen as such.
+        seconds is seen as such. SIGABRT makes a hung Python node's fault handler write where
+        each of its threads is stuck into the log before it ends (``_ABORT_WAIT``).
         """
-        signals = (signal.SIGTERM, signal.SIGKILL) if interrupted else (
-            signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
+        signals = (signal.SIGTERM, signal.SIGABRT, signal.SIGKILL) if interrupted else (
+            signal.SIGINT, signal.SIGTERM, signal.SIGABRT, signal.SIGKILL)
+        waits = {signal.SIGABRT: _ABORT_WAIT, signal.SIGKILL: 10.0}
         for sig in signals:
             if not process.alive:
                 break
@@ -168,7 +176,7 @@ class ProcessGroup:
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(process.popen.pid, sig)
             try:
-                process.popen.wait(timeout=timeout if sig != signal.SIGKILL else 10.0)
+                process.popen.wait(timeout=waits.get(sig, timeout))
             except subprocess.TimeoutExpired:
                 continue
         return process.popen.returncode
