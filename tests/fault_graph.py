@@ -257,8 +257,14 @@ class FaultGraph:
                 self.complete_step(step, since)
                 return attempt
             self.client.spin_for(2.0)  # an operator's pause before trying again
+        tails = self.log_tails('supervisor', 'planner')
         raise AssertionError(f'the step did not complete after {attempts} resumes: '
-                             f'{self.last_phase.reason}')
+                             f'{self.last_phase.reason}\n{tails}')
+
+    def log_tails(self, *names: str, lines: int = 40) -> str:
+        """Return the end of the named nodes' logs, for a failure message (CI keeps no files)."""
+        return '\n'.join(f'--- end of the log of {name} ---\n'
+                         f'{self.processes[name].log_tail(lines)}' for name in names)
 
     def wait_phase_in(self, phases, timeout: float, since: float) -> float:
         """Wait for a phase message in ``phases`` received after ``since``; return its time."""

@@ -294,5 +294,5 @@ def _unclean_exits(group, unclean: dict) -> str:
     lines = [f'nodes that did not stop cleanly (exit codes): {unclean}']
     newest = {process.spec.name: process for process in group.processes}
     for name in unclean:
-        lines += [f'--- end of the log of {name} ---', newest[name].log_tail(25)]
+        lines += [f'--- end of the log of {name} ---', newest[name].log_tail(60)]
     return '\n'.join(lines)
