@@ -65,6 +65,7 @@ class FaultGraph:
                         ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
         self.group = ProcessGroup(tmp / 'logs', env)
         self.processes = {}
+        self.killed: set[str] = set()  # nodes killed by the test and not restarted since
         self.context = None
         self.guard = SharedMemoryGuard(lambda: [os.getpid()] + [
             p.popen.pid for p in self.processes.values() if p.alive], period=0.05).__enter__()
@@ -126,9 +127,13 @@ class FaultGraph:
             self.context.try_shutdown()
             self.context = None
         try:
-            return self.group.stop_all()
+            codes = self.group.stop_all()
         finally:
             self.guard.__exit__(None, None, None)
+        # a node the test killed and a failure kept it from restarting is no unclean exit:
+        # the failure is reported as itself, not again at teardown
+        return {name: code for name, code in codes.items()
+                if not (name in self.killed and code == -signal.SIGKILL)}
 
     # ------------------------------------------------------------------ waiting
     def wait_until(self, condition, timeout: float, what: str) -> None:
@@ -207,10 +212,12 @@ class FaultGraph:
         process = self.processes[name]
         os.killpg(process.popen.pid, signal.SIGKILL)
         process.popen.wait(timeout=30)
+        self.killed.add(name)
 
     def restart(self, name: str, ready: str | None = None) -> None:
         """Start a killed node again and wait until its log says ``ready`` (if given)."""
         process = self.processes[name] = self.group.restart(self.processes[name])
+        self.killed.discard(name)
         if ready is None:
             return
 
