@@ -24,7 +24,6 @@ from __future__ import annotations
 import datetime
 import functools
 import importlib
-import signal
 import sys
 import time
 from pathlib import Path
@@ -37,11 +36,11 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
-from rclpy.signals import SignalHandlerOptions
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from walker_core.node_parameters import declare_section
 from walker_core.parameter_schema import ParameterError
+from walker_core.spinning import init_node_process
 
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_writer import BagWriter
@@ -206,22 +205,12 @@ class RecorderNode(Node):
             f'{len(metadata.topics_with_message_count)} topics')
 
 
-class _StopRequest:
-    """Turns SIGINT and SIGTERM into a flag the spin loop checks (no exception mid-write)."""
-
-    def __init__(self) -> None:
-        self.requested = False
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, self._handle)
-
-    def _handle(self, signum: int, frame: object) -> None:
-        self.requested = True
-
-
 def main(args: list[str] | None = None) -> int:
-    """Run the recorder until SIGINT or SIGTERM, then close the bag; return the exit code."""
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    stop = _StopRequest()
+    """Run the recorder until SIGINT or SIGTERM, then close the bag; return the exit code.
+
+    A signal sets a flag the spin loop checks (no exception in the middle of a write).
+    """
+    stop = init_node_process(args)
     node = None
     try:
         node = RecorderNode()

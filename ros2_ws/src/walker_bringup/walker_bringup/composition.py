@@ -29,7 +29,6 @@ import argparse
 import contextlib
 import dataclasses
 import importlib
-import signal
 import sys
 import threading
 from collections.abc import Callable, Sequence
@@ -278,19 +277,13 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the composed graph until SIGINT or SIGTERM; exit code 2 when a node refuses."""
     import rclpy
-    from rclpy.signals import SignalHandlerOptions
+
+    from walker_core.spinning import init_node_process
 
     args = parse_arguments(sys.argv[1:] if argv is None else argv)
     specs = graph_from_arguments(args)
-    stop = threading.Event()
-
-    def on_signal(signum, frame) -> None:
-        stop.set()
-
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, on_signal)
     context = rclpy.context.Context()
-    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+    stop = init_node_process(context=context)
     graph = None
     code = 0
     try:
@@ -301,7 +294,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         # priority, as the plant's own process does (its other nodes share the interpreter)
         with contextlib.suppress(KeyError):  # a graph without its plant asks nothing
             graph.node('plant').request_realtime_scheduling()
-        graph.spin(stop.is_set)
+        graph.spin(stop)
     except CompositionError as error:
         print(f'[composed_graph] {error}', file=sys.stderr, flush=True)
         code = 2

@@ -33,7 +33,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from walker_bringup.lossy_link import LossyLink
-from walker_core.spinning import spin_nodes
+from walker_core.spinning import init_node_process, spin_nodes
 
 __all__ = ['LossyLinkNode', 'message_type', 'main']
 
@@ -160,12 +160,12 @@ class LossyLinkNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the link until interrupted; exit code 2 when it refuses to start."""
-    rclpy.init(args=args)
+    stop = init_node_process(args)
     node = None
     code = 0
     try:
         node = LossyLinkNode()
-        spin_nodes(node)
+        spin_nodes(node, stop=stop)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ValueError, ParameterException) as error:

@@ -37,7 +37,7 @@ from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_join
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.realtime import log_realtime_request
-from walker_core.spinning import spin_nodes
+from walker_core.spinning import init_node_process, spin_nodes
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
     InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
@@ -422,13 +422,13 @@ class JointControllerNode(Node):
 def main(args: list[str] | None = None) -> int:
     """Run one joint controller until interrupted; exit code 2 when it refuses to start."""
     argv = sys.argv if args is None else args
-    rclpy.init(args=argv)
+    stop = init_node_process(argv)
     node = None
     code = 0
     try:
         node = JointControllerNode(default_node_name(argv))
         node.request_realtime_scheduling()
-        spin_nodes(node)
+        spin_nodes(node, stop=stop)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ParameterError, ValueError) as error:

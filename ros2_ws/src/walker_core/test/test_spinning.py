@@ -67,3 +67,55 @@ def test_destroy_actions_lets_the_node_go_with_its_action_servers_and_clients(
     # the node is gone, log publisher and all: another of its name registers its own quietly
     make_node().destroy_node()
     assert 'already registered' not in capfd.readouterr().err
+
+
+_BUSY_NODE = '''
+import sys, time
+import rclpy
+from rclpy.node import Node
+from std_msgs.msg import Float64
+from walker_core import spinning
+
+if sys.argv[1] == 'walker':
+    stop = spinning.init_node_process()
+else:  # rclpy's own signal handling
+    rclpy.init()
+    stop = None
+node = Node('busy')
+publisher = node.create_publisher(Float64, 'busy', 10)
+
+def busy():  # most of the time is spent inside this callback, publishing at its end
+    time.sleep(0.005)
+    publisher.publish(Float64(data=1.0))
+
+node.create_timer(0.001, busy)
+print('ready', flush=True)
+try:
+    spinning.spin_nodes(node, stop=stop)
+except KeyboardInterrupt:
+    pass
+node.destroy_node()
+rclpy.try_shutdown()
+print('stopped', flush=True)
+'''
+
+
+def test_a_node_interrupted_in_a_callback_stops_in_order_without_an_error(ros_env):
+    """SIGINT and SIGTERM end the spinning between callbacks; nothing fails on the way out."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    def interrupted(handling: str, signum: int) -> tuple[int, str]:
+        child = subprocess.Popen([sys.executable, '-c', _BUSY_NODE, handling], env=ros_env,
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        assert child.stdout.readline().strip() == 'ready'
+        time.sleep(0.5)
+        child.send_signal(signum)
+        return child.wait(timeout=20), child.stdout.read()
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        code, output = interrupted('walker', signum)
+        assert code == 0 and 'stopped' in output, output
+        assert 'Exception' not in output and 'FATAL' not in output, output

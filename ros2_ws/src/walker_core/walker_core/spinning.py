@@ -18,6 +18,8 @@ This module imports rclpy; the rest of ``walker_core`` does not.
 from __future__ import annotations
 
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterable
 
@@ -25,8 +27,10 @@ import rclpy
 from rclpy.action import ActionClient, ActionServer
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 
-__all__ = ['make_executor', 'spin_nodes', 'destroy_actions', 'TopicSampler', 'EXECUTOR_VARIABLE']
+__all__ = ['make_executor', 'spin_nodes', 'destroy_actions', 'StopSignals', 'init_node_process',
+           'TopicSampler', 'EXECUTOR_VARIABLE']
 
 #: Environment variable choosing the executor: ``events`` (default) or ``single``.
 EXECUTOR_VARIABLE = 'WALKER_EXECUTOR'
@@ -44,6 +48,52 @@ def make_executor(context=None) -> Executor:
     from rclpy.experimental import EventsExecutor
 
     return EventsExecutor(context=context)
+
+
+class StopSignals:
+    """SIGINT and SIGTERM as a request to stop, which the spin loop checks between callbacks.
+
+    rclpy's own signal handlers shut the context down from another thread at any moment: in
+    the middle of a callback, whose next publish then fails (the events executor logs that as
+    FATAL), or while the executor takes a message. Here a signal only sets a flag; the spin
+    loop ends at its next check (within a spin timeout) and the process shuts down in order on
+    its main thread: nodes first, then the context. Create it on the main thread, with rclpy's
+    handlers off (:func:`init_node_process` does both). Every signal sets the flag: a process
+    that does not stop is for SIGABRT or SIGKILL.
+
+    Calling the object tells whether a stop was asked for (``spin_nodes(..., stop=stop)``).
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self._requested = threading.Event()
+        for signum in self.SIGNALS:
+            signal.signal(signum, self._handle)
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self._requested.set()
+
+    @property
+    def requested(self) -> bool:
+        """True once SIGINT or SIGTERM has arrived."""
+        return self._requested.is_set()
+
+    def __call__(self) -> bool:
+        """Return :attr:`requested`."""
+        return self.requested
+
+
+def init_node_process(args: list[str] | None = None, context=None) -> StopSignals:
+    """Initialise rclpy in a node process that stops in order on SIGINT and SIGTERM.
+
+    The signal handlers are installed first, so a signal during start-up also stops the
+    process as soon as it spins. Returns the :class:`StopSignals` for :func:`spin_nodes`.
+    ``context``: the context to initialise (the default context when omitted).
+    """
+    stop = StopSignals()
+    rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
+    return stop
 
 
 def destroy_actions(node: Node) -> None:

@@ -41,7 +41,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.spinning import destroy_actions, spin_nodes
+from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
@@ -396,12 +396,12 @@ def _plan_request(request) -> PlanRequest:
 
 def main(args=None) -> int:
     """Run the planner node until interrupted."""
-    rclpy.init(args=args)
+    stop = init_node_process(args)
     node = None
     try:
         node = PlannerNode()
         node.start_streaming()
-        spin_nodes(node)
+        spin_nodes(node, stop=stop)
     except ParameterError as error:
         print(f'planner: invalid parameters, not starting: {error}', flush=True)
         return 1

@@ -45,7 +45,7 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf
-from walker_core.spinning import spin_nodes
+from walker_core.spinning import init_node_process, spin_nodes
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import CommandError, EffortCommands, LockStep, seconds_to_ns
@@ -331,12 +331,12 @@ class PlantNode(Node):
 
 def main(args=None) -> int:
     """Run the plant node until shut down; exit code 1 when it refuses to start."""
-    rclpy.init(args=args)
+    stop = init_node_process(args)
     node = None
     try:
         node = PlantNode()
         node.request_realtime_scheduling()
-        spin_nodes(node)
+        spin_nodes(node, stop=stop)
     except (ParameterError, ParameterException) as error:
         get_logger('plant').fatal(f'refusing to start: {error}')
         return 1

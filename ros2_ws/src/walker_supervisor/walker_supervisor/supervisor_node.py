@@ -44,7 +44,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
-from walker_core.spinning import TopicSampler, destroy_actions, spin_nodes
+from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
     tell_mode_again, tracking_expected)
@@ -1028,14 +1028,14 @@ class SupervisorNode(TeleopServer, Node):
 
 def main(args: list[str] | None = None) -> None:
     """Run the supervisor node."""
-    rclpy.init(args=args)
+    stop = init_node_process(args)
     node = None
     try:
         node = SupervisorNode()
         # The default executor: the supervisor's asynchronous service and action calls have
         # shown a failure inside the events executor, and it handles few messages (its high-rate
         # inputs are sampled).
-        spin_nodes(node, executor=SingleThreadedExecutor())
+        spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ParameterError as error:
