@@ -69,7 +69,7 @@ def test_destroy_actions_lets_the_node_go_with_its_action_servers_and_clients(
     assert 'already registered' not in capfd.readouterr().err
 
 
-_BUSY_NODE = '''
+_BUSY_NODE = """
 import sys, time
 import rclpy
 from rclpy.node import Node
@@ -97,7 +97,7 @@ except KeyboardInterrupt:
 node.destroy_node()
 rclpy.try_shutdown()
 print('stopped', flush=True)
-'''
+"""
 
 
 def test_a_node_interrupted_in_a_callback_stops_in_order_without_an_error(ros_env):
