@@ -184,3 +184,16 @@ def test_an_output_directory_holding_a_bag_is_refused_before_anything_starts(
     assert f'[walker] error: {tmp_path / taken} already exists' in printed  # said, even quiet
     assert '--no-record' in printed
     assert not list(tmp_path.rglob('*.log'))  # no node was started
+
+
+def test_walk_progress_names_the_step_under_way_and_counts_the_steps_done_between_them():
+    from walker_msgs.action import WalkTo
+
+    from walker_bringup.run import walk_feedback_text
+
+    during = WalkTo.Feedback(step_index=4, step_count=5, phase=3, from_node='n3_2',
+                             to_node='n4_3', tip_position_error=0.0059)
+    assert walk_feedback_text(during, 46.2) == \
+        'step 5/5 n3_2 -> n4_3: fine, tip error 5.9 mm (46 s)'
+    after_the_last = WalkTo.Feedback(step_index=5, step_count=5, phase=0)
+    assert walk_feedback_text(after_the_last, 50.0) == '5 of 5 steps done: idle (50 s)'
