@@ -140,7 +140,8 @@ def test_the_planner_killed_in_fine_motion_holds_then_rejoins_and_the_step_compl
     since = time.monotonic()
     graph.kill('planner')
     held = graph.wait_phase(StepPhase.SAFE_HOLD, FAULT_TIMEOUT, since)
-    assert 'stale' in held.reason or 'planner' in held.reason, held.reason
+    assert 'stale' in held.reason or 'planner' in held.reason, \
+        f'{held.reason}\n{graph.log_tails("plant", "controller_a_yaw", "supervisor")}'
     wrapped = graph.result(handle)
     assert wrapped.status == GoalStatus.STATUS_ABORTED
     assert graph.attached_nodes() == {step.base_gripper: step.base_node}
