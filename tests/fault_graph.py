@@ -14,7 +14,7 @@ import signal
 import time
 from pathlib import Path
 
-from ros_test_support import SharedMemoryGuard, ros_environment
+from ros_test_support import SharedMemoryGuard, log_tails, ros_environment
 
 __all__ = ['FaultGraph', 'assert_the_bag_holds_the_faults', 'TIMEOUT', 'FAULT_TIMEOUT',
            'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LINK_INPUT', 'LINK_OUTPUT']
@@ -268,10 +268,9 @@ class FaultGraph:
         raise AssertionError(f'the step did not complete after {attempts} resumes: '
                              f'{self.last_phase.reason}\n{tails}')
 
-    def log_tails(self, *names: str, lines: int = 40) -> str:
-        """Return the end of the named nodes' logs, for a failure message (CI keeps no files)."""
-        return '\n'.join(f'--- end of the log of {name} ---\n'
-                         f'{self.processes[name].log_tail(lines)}' for name in names)
+    def log_tails(self, *names: str) -> str:
+        """Return the end of the named nodes' logs, for a failure message."""
+        return log_tails(self.group, list(names))
 
     def wait_phase_in(self, phases, timeout: float, since: float) -> float:
         """Wait for a phase message in ``phases`` received after ``since``; return its time."""

@@ -291,8 +291,15 @@ def running_graph(make_graph, tmp: Path) -> Iterator:
 
 def _unclean_exits(group, unclean: dict) -> str:
     """Describe the nodes that did not exit with code 0, each with the end of its log."""
-    lines = [f'nodes that did not stop cleanly (exit codes): {unclean}']
+    return (f'nodes that did not stop cleanly (exit codes): {unclean}\n'
+            + log_tails(group, list(unclean), lines=60))
+
+
+def log_tails(group, names: list[str], lines: int = 40) -> str:
+    """Return the end of the logs of the named nodes of a ``ProcessGroup`` (newest process each).
+
+    For failure messages: CI keeps no files.
+    """
     newest = {process.spec.name: process for process in group.processes}
-    for name in unclean:
-        lines += [f'--- end of the log of {name} ---', newest[name].log_tail(60)]
-    return '\n'.join(lines)
+    return '\n'.join(f'--- end of the log of {name} ---\n{newest[name].log_tail(lines)}'
+                     for name in names)
