@@ -70,17 +70,13 @@ def test_destroy_actions_lets_the_node_go_with_its_action_servers_and_clients(
 
 
 _BUSY_NODE = """
-import sys, time
+import time
 import rclpy
 from rclpy.node import Node
 from std_msgs.msg import Float64
 from walker_core import spinning
 
-if sys.argv[1] == 'walker':
-    stop = spinning.init_node_process()
-else:  # rclpy's own signal handling
-    rclpy.init()
-    stop = None
+stop = spinning.init_node_process()
 node = Node('busy')
 publisher = node.create_publisher(Float64, 'busy', 10)
 
@@ -90,10 +86,7 @@ def busy():  # most of the time is spent inside this callback, publishing at its
 
 node.create_timer(0.001, busy)
 print('ready', flush=True)
-try:
-    spinning.spin_nodes(node, stop=stop)
-except KeyboardInterrupt:
-    pass
+spinning.spin_nodes(node, stop=stop)
 node.destroy_node()
 rclpy.try_shutdown()
 print('stopped', flush=True)
@@ -107,8 +100,8 @@ def test_a_node_interrupted_in_a_callback_stops_in_order_without_an_error(ros_en
     import sys
     import time
 
-    def interrupted(handling: str, signum: int) -> tuple[int, str]:
-        child = subprocess.Popen([sys.executable, '-c', _BUSY_NODE, handling], env=ros_env,
+    def interrupted(signum: int) -> tuple[int, str]:
+        child = subprocess.Popen([sys.executable, '-c', _BUSY_NODE], env=ros_env,
                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         assert child.stdout.readline().strip() == 'ready'
         time.sleep(0.5)
@@ -116,6 +109,6 @@ def test_a_node_interrupted_in_a_callback_stops_in_order_without_an_error(ros_en
         return child.wait(timeout=20), child.stdout.read()
 
     for signum in (signal.SIGINT, signal.SIGTERM):
-        code, output = interrupted('walker', signum)
+        code, output = interrupted(signum)
         assert code == 0 and 'stopped' in output, output
         assert 'Exception' not in output and 'FATAL' not in output, output

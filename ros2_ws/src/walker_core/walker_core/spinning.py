@@ -112,7 +112,10 @@ def destroy_actions(node: Node) -> None:
 
 def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = None,
                context=None, executor: Executor | None = None) -> None:
-    """Spin nodes until the context shuts down (SIGINT, SIGTERM) or ``stop()`` is true.
+    """Spin nodes until ``stop()`` is true or the context shuts down.
+
+    In a node process ``stop`` is its :class:`StopSignals` (SIGINT, SIGTERM), checked between
+    callbacks; the caller then destroys its nodes and shuts rclpy down.
 
     A shutdown while the executor waits ends the spinning as a shutdown between two waits
     does (no ``ExternalShutdownException`` escapes, e.g. from a helper thread, nor the
