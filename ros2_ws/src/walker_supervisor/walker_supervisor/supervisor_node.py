@@ -94,7 +94,10 @@ _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
                    GripperState.JAMMED: 'jammed'}
 _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMode.COARSE,
           'fine': ControlMode.FINE}
-TICK_PERIOD = 0.02  # [s] the supervisor's decision period (ROS clock)
+#: [s] the supervisor's decision period (ROS clock). It also decides at once when a gripper's
+#: state changes and when a motion ends: the step goes on without waiting up to a period
+#: (about 40 ms a step in sim time).
+TICK_PERIOD = 0.02
 _FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
 _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
 #: [s] (wall) a plan or follow request the planner has not answered this long is sent again,
@@ -234,6 +237,7 @@ class SupervisorNode(TeleopServer, Node):
     def _on_gripper_states(self, msg: GripperStates) -> None:
         self.health.seen('plant gripper states', self._steady_now())
         first = not self._grippers
+        before = dict(self._grippers)
         for state in msg.grippers:
             self._grippers[state.name] = _GRIPPER_STATES.get(state.state, 'unknown')
             self._gripper_nodes[state.name] = state.node
@@ -248,6 +252,8 @@ class SupervisorNode(TeleopServer, Node):
             # nothing moves, so stop it (the controllers hold where it stops)
             self._when_ready(self.stop_client.service_is_ready, self._stop_orphan_stream,
                              lambda: None)
+        elif not first and self._grippers != before:
+            self._tick()  # a gripper done unscrewing or screwing in: decide now, not next tick
 
     def _stop_orphan_stream(self) -> None:
         self.get_logger().warning('stopping any trajectory still streaming for an earlier '
@@ -917,6 +923,7 @@ class SupervisorNode(TeleopServer, Node):
         success = result is not None and result.success
         message = 'no result' if result is None else result.message
         self._execute(self.sequencer.trajectory_done(success, message, self._now()))
+        self._tick()  # the next motion or phase is decided now, not at the next tick
 
     def _cancel_trajectory(self) -> None:
         self._trajectory_generation += 1
