@@ -28,7 +28,7 @@ class Graph:
     def __init__(self, tmp: Path, domain: int) -> None:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
-        from walker_msgs.msg import GripperStates
+        from walker_msgs.msg import GripperStates, StepPhase
 
         from walker_bringup.graph import walker_graph
         from walker_bringup.graph_client import GraphClient, init_context
@@ -45,10 +45,12 @@ class Graph:
         self.client = GraphClient('/walker', self.context)
         self.gripper_states = []
         self.joint_states = []
+        self.phases = []
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.client.node.create_subscription(GripperStates, 'gripper_states',
                                              self.gripper_states.append, qos)
+        self.client.node.create_subscription(StepPhase, 'phase', self.phases.append, qos)
         self.client.node.create_subscription(
             JointState, 'joint_states', lambda m: self.joint_states.append(list(m.position)),
             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
@@ -105,6 +107,7 @@ def test_a_three_step_walk_with_quarter_and_half_turns_reaches_its_target(graph)
     import math
 
     reports_before = len(graph.client.reports)
+    phases_before = len(graph.phases)
     # From the start stance (gripper a in n1_1, b in n2_1, J1 at -pi/2) three steps reach
     # n3_2: two quarter turns and a half turn (other routes would wind the yaws too far).
     status, result = graph.client.walk_to('n3_2', WALK_TIMEOUT)
@@ -120,6 +123,31 @@ def test_a_three_step_walk_with_quarter_and_half_turns_reaches_its_target(graph)
     assert all(r.time_optimal_bound > 0 and r.duration > r.time_optimal_bound for r in reports)
     assert 'n3_2' in graph.attached_nodes().values()
     assert set(graph.attached_nodes()) == {'a', 'b'}
+    _assert_the_phase_progress_grows_through_each_phase(graph.phases[phases_before:], 3)
+
+
+def _assert_the_phase_progress_grows_through_each_phase(phases, steps):
+    """Every phase of every step is published with a progress that grows towards 1.
+
+    EXTRACTION, COARSE and INSERTION are timed against their plans: each is published again
+    as it advances (by quarters) and reaches at least three quarters; FINE goes by the tip error.
+    """
+    from walker_msgs.msg import StepPhase
+
+    runs = {}
+    for message in phases:
+        if message.phase in (StepPhase.IDLE, StepPhase.SAFE_HOLD):
+            assert message.phase_progress == 0.0
+            continue
+        runs.setdefault((message.step_index, message.phase), []).append(message.phase_progress)
+    timed = (StepPhase.EXTRACTION, StepPhase.COARSE, StepPhase.INSERTION)
+    assert {key for key in runs if key[1] in timed} == {
+        (index, phase) for index in range(steps) for phase in timed}
+    for (index, phase), values in runs.items():
+        assert values == sorted(values) and 0.0 <= values[0] and values[-1] <= 1.0, \
+            (index, phase, values)
+        if phase in timed:
+            assert len(values) >= 4 and values[-1] >= 0.75, (index, phase, values)
 
 
 def test_a_cancelled_walk_finishes_its_step_and_ends_attached(graph):

@@ -51,6 +51,7 @@ URDF_LIMITS = {'a_yaw_joint': 9.0, 'a_pitch_joint': 11.0, 'vertex_joint': 9.5,
 PEAK_FRACTION = 0.6  # peak commanded torque over the limit, every joint
 CLAMPED = 7  # a_pitch_joint samples flagged saturated
 APPROACH = 0.03  # [m] height of the tip above the hole before insertion
+PROGRESS_REPEAT = 0.01  # [s] after each phase entry, the phase again with more progress
 
 
 @dataclasses.dataclass(frozen=True)
@@ -238,15 +239,18 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
             messages.append((0.0, 0, lambda: w.write(
                 'robot_description', 0.0, t_['std_msgs/msg/String'](_urdf()))))
         for time_, name, index, count, source, target, reason in phase_events(steps, safe_hold):
-            def phase(time_=time_, name=name, index=index, count=count, source=source,
-                      target=target, reason=reason):
-                w.write('phase', time_, t_['walker_msgs/msg/StepPhase'](
-                    header=w.header(time_), phase=PHASE_CODES[name],
-                    base_gripper=STEPS[min(index, 1)].base, step_index=index,
-                    step_count=count, from_node=source, to_node=target, base_node='',
-                    base_heading=0.0, phase_progress=0.0,
-                    reason=reason))
-            messages.append((time_, 1, phase))
+            # each phase as the supervisor publishes it: on entry, and again as its progress
+            # grows (the same phase, step and reason: not a new entry)
+            for at, progress in ((time_, 0.0), (time_ + PROGRESS_REPEAT, 0.25)):
+                def phase(time_=at, name=name, index=index, count=count, source=source,
+                          target=target, reason=reason, progress=progress):
+                    w.write('phase', time_, t_['walker_msgs/msg/StepPhase'](
+                        header=w.header(time_), phase=PHASE_CODES[name],
+                        base_gripper=STEPS[min(index, 1)].base, step_index=index,
+                        step_count=count, from_node=source, to_node=target, base_node='',
+                        base_heading=0.0, phase_progress=progress,
+                        reason=reason))
+                messages.append((at, 1, phase))
         for time_, states, base in gripper_events(safe_hold):
             def grippers(time_=time_, states=states, base=base):
                 gripper = t_['walker_msgs/msg/GripperState']

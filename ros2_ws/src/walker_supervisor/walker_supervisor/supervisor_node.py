@@ -112,6 +112,9 @@ _CONTROLLER_STATES = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE
 #: The motions whose planner bounds make up a step's time-optimal bound.
 _BOUNDED = frozenset({'extraction', 'coarse', 'insertion'})
 FEEDBACK_PERIOD = 0.1  # [s]
+#: The phase is published again, within a phase, each time its progress has grown this much
+#: (and when it reaches 1): a few messages per phase on the latched topic.
+PROGRESS_STEP = 0.25
 
 
 class SupervisorNode(TeleopServer, Node):
@@ -145,6 +148,7 @@ class SupervisorNode(TeleopServer, Node):
         self._true_insertion_error = math.nan
         self._last_feedback = -math.inf
         self._last_phase: tuple | None = None
+        self._published_progress = 0.0
         self._residual_vibration = math.nan
         self._bounded: set[str] = set()
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
@@ -791,8 +795,14 @@ class SupervisorNode(TeleopServer, Node):
     def _prepare_trajectory(self, request: TrajectoryRequest) -> None:
         """Ask the planner now for a motion the sequencer will request later (if it is up)."""
         if self.plan_client.service_is_ready():
-            self._prepared.append(
-                (request, self.plan_client.call_async(plan_request(request, self.kinematics))))
+            future = self.plan_client.call_async(plan_request(request, self.kinematics))
+            future.add_done_callback(lambda f: self._on_prepared(f, request))
+            self._prepared.append((request, future))
+
+    def _on_prepared(self, future, request: TrajectoryRequest) -> None:
+        response = future.result()
+        if response is not None and response.success:
+            self.sequencer.motion_planned(request.purpose, response.duration)
 
     def _take_prepared(self, request: TrajectoryRequest):
         """Return the planner's answer (future) to the same motion asked ahead, once; else None.
@@ -990,7 +1000,10 @@ class SupervisorNode(TeleopServer, Node):
         step = self.sequencer.step if self.sequencer.busy else None
         key = (self.sequencer.phase, self.sequencer.reason, self.sequencer.base_gripper,
                walk.step_index if walk else 0, walk is not None, self.sequencer.step)
-        if key == self._last_phase:
+        progress = self.sequencer.phase_progress(self._now())
+        advanced = progress > self._published_progress \
+            and progress >= min(1.0, self._published_progress + PROGRESS_STEP)
+        if key == self._last_phase and not advanced:
             return
         if self._last_phase is not None and key[0] != self._last_phase[0]:
             text = (f'phase {self.sequencer.phase.name}'
@@ -999,10 +1012,10 @@ class SupervisorNode(TeleopServer, Node):
                 self.get_logger().warning(text)
             else:
                 self.get_logger().info(text)
-        self._last_phase = key
+        self._last_phase, self._published_progress = key, progress
         msg = StepPhase(phase=int(self.sequencer.phase),
                         base_gripper=self.sequencer.base_gripper,
-                        reason=self.sequencer.reason)
+                        reason=self.sequencer.reason, phase_progress=progress)
         msg.header.stamp = self.get_clock().now().to_msg()
         if walk is not None:
             msg.step_index, msg.step_count = walk.step_index, len(walk.route)

@@ -296,6 +296,9 @@ class StepSequencer:
         self._requested: str | None = None  # purpose of a trajectory requested, not started
         self._last_purpose = ''  # purpose of the last trajectory requested
         self._requested_at: float | None = None  # [s] first tick after the request
+        self._planned_motions: dict[str, float] = {}  # [s] last planned duration, by purpose
+        self._progress = 0.0  # of the phase entered at _progress_key
+        self._progress_key: tuple | None = None
 
     # ------------------------------------------------------------------ queries
     @property
@@ -345,6 +348,39 @@ class StepSequencer:
                   Phase.INSERTION: self._targets.point_to}.get(self.phase,
                                                                self._targets.point_above_to)
         return float(np.linalg.norm(self.kinematics.forward(self._theta)[:3] - target))
+
+    def phase_progress(self, now: float) -> float:
+        """Fraction of the current phase done, in [0, 1] (``StepPhase.phase_progress``).
+
+        EXTRACTION, COARSE and INSERTION go by time: the time in the phase over its planned
+        duration, the sum of its timed parts (EXTRACTION: the unscrewing, ``screw_time``, and
+        the lift; COARSE: the coarse motion; INSERTION: the descent, ``settle_time`` and the
+        screw-in), each motion as planned once it streams and, until then, as the last one of
+        its kind was (0 before the first). FINE goes by the tip error: 0 at
+        ``coarse_to_fine_region``, 1 at ``insertion_alignment``. The value never decreases
+        within a phase, and stays at 1 when a phase runs over its plan (a correction line, a
+        retried screw-in); 0 in IDLE and SAFE_HOLD.
+        """
+        if self.phase in (Phase.IDLE, Phase.SAFE_HOLD) or self._targets is None:
+            return 0.0
+        key = (self.phase, self._phase_started)
+        if key != self._progress_key:
+            self._progress_key, self._progress = key, 0.0
+        parameters = self.parameters
+        if self.phase == Phase.FINE:
+            value = (parameters.coarse_to_fine_region - self.tip_error()) \
+                / (parameters.coarse_to_fine_region - parameters.insertion_alignment)
+        else:
+            motions = self._planned_motions
+            planned = {
+                Phase.EXTRACTION: self._screw_time + motions.get('extraction', 0.0),
+                Phase.COARSE: motions.get('coarse', 0.0),
+                Phase.INSERTION: motions.get('insertion', 0.0) + parameters.settle_time
+                + self._screw_time}[self.phase]
+            value = (now - self._phase_started) / planned if planned > 0.0 else 0.0
+        if math.isfinite(value):
+            self._progress = max(self._progress, min(1.0, value))
+        return self._progress
 
     # ------------------------------------------------------------------ events
     def can_start(self, now: float) -> bool:
@@ -486,11 +522,19 @@ class StepSequencer:
         tip = self.kinematics.forward(self._theta)[:3]
         return [self._trajectory('retry_lift', self._theta, up[0], tip, up[1])]
 
+    def motion_planned(self, purpose: str, planned_duration: float) -> None:
+        """Note how long a motion asked for ahead (:class:`PrepareTrajectory`) will take [s].
+
+        Only the phase progress uses it (:meth:`phase_progress`), before the motion streams.
+        """
+        self._planned_motions[purpose] = float(planned_duration)
+
     def trajectory_started(self, planned_duration: float, now: float) -> None:
         """Note that the requested trajectory is streaming and should take this long [s]."""
         self._trajectory_running = True
         self._requested = self._requested_at = None
         self._deadline = now + planned_duration + self.parameters.phase_timeout
+        self._planned_motions[self._last_purpose] = planned_duration
 
     def trajectory_done(self, success: bool, message: str, now: float) -> list:
         """Take the end of the streamed trajectory (``success`` False: refused or aborted)."""
