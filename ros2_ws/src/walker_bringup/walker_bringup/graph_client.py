@@ -148,18 +148,20 @@ class GraphClient:
             (ready if up else missing).append(name)
         return Readiness(ready, missing)
 
-    def live_nodes(self, wait: float = 1.5) -> list[str]:
+    def live_nodes(self, wait: float = 1.5, confirm: float = 6.0) -> list[str]:
         """Names of the nodes of a live graph already in this namespace (empty: none).
 
         Nodes are discovered within a fraction of a second; a graph counts as live only when
         one of them speaks (joint states, or the latched phase or gripper states), since DDS
         remembers the nodes of a process killed by force until their lease runs out (up to
-        20 s). Spins up to ``wait`` seconds (wall time), less when a live graph is found: on a
-        loaded machine discovery took longer than the 0.5 s first looked for, and a live graph
-        went unseen.
+        20 s). Spins up to ``wait`` seconds (wall time) for nodes, less when a live graph is
+        found: on a loaded machine discovery took longer than the 0.5 s first looked for, and
+        a live graph went unseen. Once nodes are seen, it waits up to ``confirm`` seconds in
+        all for one of them to speak: a graph running flat out in sim time on a loaded
+        machine matched the probe's subscriptions later than 1.5 s, and was taken for dead.
         """
         own = {self.node.get_name(), f'{self.node.get_name()}_sampler'}
-        deadline = time.monotonic() + wait
+        start = time.monotonic()
         while True:
             self.spin_for(_POLL)
             names = sorted(name for name, ns in self.node.get_node_names_and_namespaces()
@@ -168,8 +170,7 @@ class GraphClient:
                 or bool(self._sampler.take(self._joint_states))
             if names and live:
                 return names
-            now = time.monotonic()
-            if now > deadline:
+            if time.monotonic() - start > (max(wait, confirm) if names else wait):
                 return []
 
     def wait_until_ready(self, node_names: list[str], timeout: float,
