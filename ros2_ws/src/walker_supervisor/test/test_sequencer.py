@@ -182,6 +182,20 @@ def test_a_step_runs_the_four_phases_in_order_and_swaps_the_base(to_node):
     np.testing.assert_allclose(world.frame.to_truss(tip), TRUSS.position(to_node), atol=1e-9)
 
 
+def _record_progress(world):
+    """Return the list the world's ticks append (phase, phase progress) to."""
+    seen = []
+    tick = world.sequencer.tick
+
+    def recording_tick(now, *args):
+        commands = tick(now, *args)
+        seen.append((world.sequencer.phase, world.sequencer.phase_progress(now)))
+        return commands
+
+    world.sequencer.tick = recording_tick
+    return seen
+
+
 def test_the_phase_progress_grows_from_zero_to_one_through_each_phase():
     """``StepPhase.phase_progress``: by the planned durations, and by the tip error in FINE.
 
@@ -192,15 +206,7 @@ def test_the_phase_progress_grows_from_zero_to_one_through_each_phase():
     phase.
     """
     world = World(gripper_delay=0.5)
-    seen = []
-    tick = world.sequencer.tick
-
-    def recording_tick(now, *args):
-        commands = tick(now, *args)
-        seen.append((world.sequencer.phase, world.sequencer.phase_progress(now)))
-        return commands
-
-    world.sequencer.tick = recording_tick
+    seen = _record_progress(world)
     assert world.sequencer.phase_progress(0.0) == 0.0  # IDLE
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
     assert outcome.success, outcome.message
@@ -229,15 +235,7 @@ def test_a_phase_that_runs_over_its_plan_stays_at_full_progress():
     # joint 1 stops 45 mm short, outside the coarse-to-fine region: COARSE waits for the arm
     # to settle after its planned end, then hands over to a fine line
     world = World(gripper_delay=0.5, coarse_miss=0.05)
-    seen = []
-    tick = world.sequencer.tick
-
-    def recording_tick(now, *args):
-        commands = tick(now, *args)
-        seen.append((world.sequencer.phase, world.sequencer.phase_progress(now)))
-        return commands
-
-    world.sequencer.tick = recording_tick
+    seen = _record_progress(world)
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
     assert outcome.success, outcome.message
     coarse = [v for phase, v in seen if phase == Phase.COARSE]
