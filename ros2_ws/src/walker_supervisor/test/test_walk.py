@@ -37,6 +37,16 @@ def test_a_failed_or_cancelled_walk_is_finished_but_not_reached():
     assert cancelled.finished and not cancelled.reached and cancelled.path == ['n0_1']
 
 
+def test_a_walk_under_way_is_to_be_cancelled_and_one_ending_waited_for():
+    walk = Walk('n0_2', list(ROUTE), [outcome()])
+    assert walk.refusal(step_running=False) == 'a walk to n0_2 is running: cancel it first'
+    walk.cancel_requested = True  # the step under way finishes first
+    assert 'cancel it first' in walk.refusal(step_running=True)
+    walk.outcomes.append(outcome())  # the last step screwed in, the joints still relax
+    assert walk.refusal(step_running=False).startswith('the walk to n0_2 is ending')
+    assert 'again in a moment' in walk.refusal(step_running=False)
+
+
 def test_vibration_amplitude_of_a_sine_over_the_window():
     meter = VibrationMeter(window=0.5)
     for k in range(1000):  # 2 s at 500 Hz: a 1 mm vibration about a fixed point

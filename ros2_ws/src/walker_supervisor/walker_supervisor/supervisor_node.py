@@ -420,7 +420,7 @@ class SupervisorNode(TeleopServer, Node):
 
     def _start_checks(self) -> Stance:
         if self.walk is not None:
-            raise SequencerError(f'a walk to {self.walk.target} is running: cancel it first')
+            raise SequencerError(self.walk.refusal(step_running=self.sequencer.busy))
         if self.sequencer.phase == Phase.SAFE_HOLD:
             raise SequencerError(f'the walker is in safe hold ({self.sequencer.reason}): call '
                                  f'resume first')

@@ -56,6 +56,20 @@ class Walk:
         """True when every planned step succeeded."""
         return self.step_index == len(self.route) and not self.failed
 
+    def refusal(self, step_running: bool) -> str:
+        """Why another walk or step cannot start while this walk's goal is open.
+
+        A walk that has taken its last step (``step_running`` False) ends only once the joints
+        have relaxed under the new base (``supervisor.relaxation_wait`` after the screw-in),
+        while the phase already reads IDLE: a goal sent then is told to come again, not to
+        cancel.
+        """
+        if self.finished and not step_running:
+            return (f'the walk to {self.target} is ending: the joints relax under the new base '
+                    f'after its last screw-in (supervisor.relaxation_wait); send the goal '
+                    f'again in a moment')
+        return f'a walk to {self.target} is running: cancel it first'
+
     def next_step(self) -> PlannedStep:
         """Return the step to take now; raises IndexError when the walk is finished."""
         if self.finished:
