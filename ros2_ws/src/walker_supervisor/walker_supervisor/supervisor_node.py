@@ -96,7 +96,7 @@ _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMod
           'fine': ControlMode.FINE}
 #: [s] the supervisor's decision period (ROS clock). It also decides at once when a gripper's
 #: state changes and when a motion ends: the step goes on without waiting up to a period
-#: (about 40 ms a step in sim time).
+#: (about 50 ms a step in sim time, measured from the bag of a walk).
 TICK_PERIOD = 0.02
 _FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
 _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
