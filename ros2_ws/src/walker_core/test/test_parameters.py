@@ -72,6 +72,8 @@ def test_a_missing_parameter_is_named(tmp_path, name):
     ('truss.spacing', 1.3, 'reach'),
     ('robot.flexibility.joint1_mode', 90.0, 'lower than'),
     ('robot.name', 'my walker', 'ROS name'),
+    ('timing.decision_priority', 50, 'must be below timing.realtime_priority'),
+    ('timing.decision_priority', 100, 'above the maximum'),
 ])
 def test_invalid_values_are_refused_with_the_parameter_named(tmp_path, name, value, words):
     path = write_params(tmp_path, {name: value})
@@ -120,3 +122,11 @@ def test_updates_are_validated_as_a_whole_and_change_nothing_when_refused():
 def test_round_trip_through_the_flat_form():
     params = load_walker_parameters()
     assert WalkerParameters.from_flat(section_to_flat(params)) == params
+
+
+@pytest.mark.parametrize('realtime, decision, expected', [(50, 40, 40), (50, 0, 0), (0, 40, 0)])
+def test_the_deciding_processes_never_outrank_the_loop(tmp_path, realtime, decision, expected):
+    """The supervisor and the planner ask for a priority only below the loop's, never alone."""
+    path = write_params(tmp_path, {'timing.realtime_priority': realtime,
+                                   'timing.decision_priority': decision})
+    assert load_walker_parameters(path).timing.decision_scheduling_priority == expected

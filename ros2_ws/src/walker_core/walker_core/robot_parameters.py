@@ -189,6 +189,26 @@ class TimingParameters:
         "SCHED_FIFO priority the control loop's processes (the plant and the joint "
         'controllers) ask for when they run on the wall clock (0: default scheduling; ignored '
         'in sim time, where the lock-step has no deadlines)', '', 0, 99)
+    decision_priority: int = parameter(
+        'SCHED_FIFO priority the processes that decide and plan the steps (the supervisor and '
+        'the planner, with its setpoint stream) ask for on the wall clock: below '
+        'realtime_priority, so that they never delay a control period, and above every '
+        'ordinary process (0: default scheduling; ignored in sim time)', '', 0, 99)
+
+    @property
+    def decision_scheduling_priority(self) -> int:
+        """Priority the supervisor and the planner ask for: 0 when the loop asks for none.
+
+        A loop left to the default scheduler is never outranked by the processes it serves.
+        """
+        return self.decision_priority if self.realtime_priority else 0
+
+    def __post_init__(self) -> None:
+        if self.realtime_priority and self.decision_priority >= self.realtime_priority:
+            raise ParameterError(
+                f'timing.decision_priority ({self.decision_priority}) must be below '
+                f'timing.realtime_priority ({self.realtime_priority}): a plan being computed '
+                'would otherwise delay the control loop (0 leaves the scheduling alone)')
 
 
 @dataclasses.dataclass(frozen=True)

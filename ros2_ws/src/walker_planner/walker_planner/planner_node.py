@@ -40,6 +40,7 @@ from walker_msgs.srv import PlanTrajectory
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
@@ -145,6 +146,21 @@ class PlannerNode(Node):
             target=spin_nodes, args=(self._stream_node,), kwargs={'context': self.context},
             name='setpoint-stream', daemon=True)
         self._stream_thread.start()
+
+    def request_realtime_scheduling(self) -> bool:
+        """Ask for ``SCHED_FIFO`` at ``timing.decision_priority`` on the wall clock; log it.
+
+        Called by :func:`main` once the stream thread runs (every thread of the process is
+        moved): the plans a step waits for and the setpoints the controllers expect every
+        period then come ahead of every ordinary process, below the control loop. Nothing is
+        asked in sim time, nor when the loop itself asks for nothing
+        (``timing.realtime_priority`` 0), nor for a node built inside another process.
+        """
+        if self.get_parameter('use_sim_time').value:
+            self.get_logger().info('default scheduling (sim time: no deadlines to meet)')
+            return False
+        return log_realtime_request(self.get_logger(),
+                                    self._robot.timing.decision_scheduling_priority)
 
     def destroy_node(self) -> None:
         """Stop the stream thread, then destroy both nodes."""
@@ -401,6 +417,7 @@ def main(args=None) -> int:
     try:
         node = PlannerNode()
         node.start_streaming()
+        node.request_realtime_scheduling()
         spin_nodes(node, stop=stop)
     except ParameterError as error:
         print(f'planner: invalid parameters, not starting: {error}', flush=True)

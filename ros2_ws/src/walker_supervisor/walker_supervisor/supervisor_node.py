@@ -42,6 +42,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
@@ -208,6 +209,20 @@ class SupervisorNode(TeleopServer, Node):
         self.create_timer(_DIAGNOSTICS_PERIOD, self._publish_diagnostics, clock=self._steady)
 
     # ------------------------------------------------------------------ parameters
+    def request_realtime_scheduling(self) -> bool:
+        """Ask for ``SCHED_FIFO`` at ``timing.decision_priority`` on the wall clock; log it.
+
+        Called by :func:`main`, for the process the node owns: a step's decisions then come
+        ahead of every ordinary process (the recorder, an operator's tools), below the control
+        loop. Nothing is asked in sim time, nor when the loop itself asks for nothing
+        (``timing.realtime_priority`` 0), nor for a node built inside another process.
+        """
+        if self.get_parameter('use_sim_time').value:
+            self.get_logger().info('default scheduling (sim time: no deadlines to meet)')
+            return False
+        return log_realtime_request(self.get_logger(),
+                                    self.params.timing.decision_scheduling_priority)
+
     def _check_alignment(self, settings: SupervisorParameters) -> None:
         tolerance = self.params.gripper.insertion_position_tolerance
         if settings.insertion_alignment >= tolerance:
@@ -1052,6 +1067,7 @@ def main(args: list[str] | None = None) -> None:
     node = None
     try:
         node = SupervisorNode()
+        node.request_realtime_scheduling()
         # The default executor: the supervisor's asynchronous service and action calls have
         # shown a failure inside the events executor, and it handles few messages (its high-rate
         # inputs are sampled).

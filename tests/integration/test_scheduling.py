@@ -1,0 +1,51 @@
+"""The processes that decide and plan the steps run below the loop's real-time priority.
+
+On the wall clock the supervisor and the planner ask for ``SCHED_FIFO`` at
+``timing.decision_priority`` (40 as shipped, below the loop's 50): under the default scheduler
+the loop's five controllers and plant, at 50, starved them, and a real-time walk waited up to
+seconds for its plans. In sim time, or when the loop itself asks for nothing, they leave the
+scheduling alone.
+"""
+
+import os
+
+import pytest
+
+from ros_test_support import (
+    REPO_ROOT, NodeProcess, isolated_domain, realtime_permitted, ros_environment,
+    thread_policies)
+
+pytestmark = pytest.mark.integration
+
+INSTALL = REPO_ROOT / 'ros2_ws' / 'install'
+EXECUTABLES = {
+    'planner': INSTALL / 'walker_planner' / 'lib' / 'walker_planner' / 'planner_node',
+    'supervisor': INSTALL / 'walker_supervisor' / 'lib' / 'walker_supervisor' / 'supervisor_node',
+}
+CASES = {
+    'wall clock': (),
+    'sim time': ('use_sim_time:=true',),
+    'loop without a priority': ('timing.realtime_priority:=0',),
+}
+WAIT = 30.0  # [s] for the node to start and report its scheduling
+
+
+@pytest.mark.parametrize('case', sorted(CASES))
+@pytest.mark.parametrize('name', sorted(EXECUTABLES))
+def test_the_deciding_processes_ask_for_their_priority_on_the_wall_clock_only(name, case):
+    args = [str(EXECUTABLES[name]), '--ros-args', '-r', '__ns:=/walker']
+    for parameter in CASES[case]:
+        args += ['-p', parameter]
+    asks = case == 'wall clock'
+    with isolated_domain() as domain, \
+            NodeProcess(args, ros_environment(domain), name) as node:
+        assert node.wait_for_output('SCHED_FIFO' if asks else 'default scheduling', WAIT), \
+            node.output
+        policies = thread_policies(node.process.pid)
+        if asks and realtime_permitted():
+            assert policies == {(os.SCHED_FIFO, 40)}, (policies, node.output)
+            assert 'SCHED_FIFO priority 40 on' in node.output
+        else:
+            assert policies == {(os.SCHED_OTHER, 0)}, (policies, node.output)
+            if asks:
+                assert 'SCHED_FIFO priority 40 refused' in node.output, node.output
