@@ -7,7 +7,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from walker_core.dynamics import RigidModel, diagonal_inertia, mass_matrix_numerical
+from walker_core.dynamics import (
+    RigidModel, diagonal_inertia, mass_matrix_numerical, role_inertia)
 from walker_core.robot_parameters import load_walker_parameters
 
 PARAMS = load_walker_parameters()
@@ -46,6 +47,19 @@ def test_diagonal_terms_equal_the_numerical_mass_matrix(theta):
     numeric = mass_matrix_numerical(theta, MODEL)
     np.testing.assert_allclose(diagonal_inertia(theta, MODEL), np.diag(numeric),
                                rtol=1e-6, atol=1e-8)
+
+
+@given(joint_vectors, st.sampled_from([1, 2, 3, 4, 5]))
+def test_one_role_term_equals_the_numerical_mass_matrix(theta, role):
+    numeric = mass_matrix_numerical(theta, MODEL)
+    assert role_inertia(list(theta), MODEL, role) == pytest.approx(
+        numeric[role - 1, role - 1], rel=1e-6, abs=1e-8)
+
+
+@pytest.mark.parametrize('role', [0, 6])
+def test_a_role_outside_1_to_5_is_refused(role):
+    with pytest.raises(ValueError, match='role'):
+        role_inertia([0.0] * 5, MODEL, role)
 
 
 @given(joint_vectors)

@@ -30,7 +30,8 @@ import numpy as np
 
 from walker_core.kinematics import WalkerKinematics
 
-__all__ = ['RigidModel', 'diagonal_inertia', 'mass_matrix_numerical', 'point_mass_positions']
+__all__ = ['RigidModel', 'role_inertia', 'diagonal_inertia', 'mass_matrix_numerical',
+           'point_mass_positions']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,7 +70,65 @@ class RigidModel:
     @property
     def reflected_motor_inertia(self) -> np.ndarray:
         """``n_i^2 I_m`` for roles J1..J5 [kg*m^2]."""
-        return np.square(np.asarray(self.gear_ratios)) * self.motor_inertia
+        return np.array([self.rotor_inertia(role) for role in (1, 2, 3, 4, 5)])
+
+    def rotor_inertia(self, role: int) -> float:
+        """``n_i^2 I_m`` of role ``role`` (1..5) [kg*m^2]."""
+        ratio = float(self.gear_ratios[role - 1])
+        return ratio * ratio * self.motor_inertia
+
+
+def role_inertia(theta: Sequence[float], model: RigidModel, role: int) -> float:
+    """Diagonal term ``I_ii`` of one role (eqs (9)-(13), corrected), in plain float arithmetic.
+
+    The one-joint form of :func:`diagonal_inertia`, for a controller that needs its own term
+    every control period: it computes that term alone, with no array.
+
+    Parameters
+    ----------
+    theta : sequence of 5 float
+        Joint angles J1..J5 [rad].
+    model : RigidModel
+        Lumped masses, lengths and drives.
+    role : int
+        The joint role 1..5.
+
+    Returns
+    -------
+    float
+        Inertia seen by joint ``role`` [kg*m^2], the others held still.
+
+    Raises
+    ------
+    ValueError
+        For a role outside 1..5.
+    """
+    l1, l2 = model.l1, model.l2
+    m5 = model.m5
+    if role == 1:
+        # eq (9): squared distances of the masses from the yaw axis (l3 misprint -> l2)
+        t2, t3, t4 = float(theta[1]), float(theta[2]), float(theta[3])
+        arm3 = l2 * math.sin(t2)
+        arm4 = arm3 + l2 * math.sin(t2 + t3)
+        arm5 = arm4 + l1 * math.sin(t2 + t3 + t4)
+        return (model.rotor_inertia(1) + model.m3 * arm3 ** 2 + model.m4 * arm4 ** 2
+                + m5 * arm5 ** 2)
+    if role == 2:
+        # eq (10): squared distances from the J2 axis (cross term and m3 term corrected)
+        t3, t4 = float(theta[2]), float(theta[3])
+        chord_sq = 2.0 * l2 ** 2 * (1.0 + math.cos(t3))
+        return (model.rotor_inertia(2) + model.m3 * l2 ** 2 + model.m4 * chord_sq
+                + m5 * (chord_sq + l1 ** 2 + 2.0 * l1 * l2 * (math.cos(t4) + math.cos(t3 + t4))))
+    if role == 3:
+        # eq (11): squared distances from the J3 axis (m4 term restored)
+        t4 = float(theta[3])
+        return (model.rotor_inertia(3) + model.m4 * l2 ** 2
+                + m5 * (l1 ** 2 + l2 ** 2 + 2.0 * l1 * l2 * math.cos(t4)))
+    if role == 4:  # eq (12)
+        return model.rotor_inertia(4) + m5 * l1 ** 2
+    if role == 5:  # eq (13)
+        return model.rotor_inertia(5)
+    raise ValueError(f'joint role must be 1..5, got {role!r}')
 
 
 def diagonal_inertia(theta: Sequence[float], model: RigidModel) -> np.ndarray:
@@ -87,25 +146,8 @@ def diagonal_inertia(theta: Sequence[float], model: RigidModel) -> np.ndarray:
     ndarray, shape (5,)
         Inertia seen by each joint [kg*m^2], the others held still.
     """
-    _, t2, t3, t4, _ = np.asarray(theta, dtype=float)
-    l1, l2 = model.l1, model.l2
-    m3, m4, m5 = model.m3, model.m4, model.m5
-    motor = model.reflected_motor_inertia
-    # eq (9): squared distances of the masses from the yaw axis (l3 misprint -> l2)
-    arm3 = l2 * math.sin(t2)
-    arm4 = arm3 + l2 * math.sin(t2 + t3)
-    arm5 = arm4 + l1 * math.sin(t2 + t3 + t4)
-    i11 = motor[0] + m3 * arm3 ** 2 + m4 * arm4 ** 2 + m5 * arm5 ** 2
-    # eq (10): squared distances from the J2 axis (cross term and m3 term corrected)
-    chord_sq = 2.0 * l2 ** 2 * (1.0 + math.cos(t3))
-    i22 = (motor[1] + m3 * l2 ** 2 + m4 * chord_sq
-           + m5 * (chord_sq + l1 ** 2 + 2.0 * l1 * l2 * (math.cos(t4) + math.cos(t3 + t4))))
-    # eq (11): squared distances from the J3 axis (m4 term restored)
-    i33 = motor[2] + m4 * l2 ** 2 + m5 * (l1 ** 2 + l2 ** 2 + 2.0 * l1 * l2 * math.cos(t4))
-    # eqs (12), (13)
-    i44 = motor[3] + m5 * l1 ** 2
-    i55 = motor[4]
-    return np.array([i11, i22, i33, i44, i55])
+    theta = [float(value) for value in theta]
+    return np.array([role_inertia(theta, model, role) for role in (1, 2, 3, 4, 5)])
 
 
 def point_mass_positions(theta: Sequence[float], model: RigidModel) -> np.ndarray:

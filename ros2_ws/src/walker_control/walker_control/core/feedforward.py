@@ -10,11 +10,10 @@ eq (14) at every configuration).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
-import numpy as np
-
-from walker_core.dynamics import RigidModel, diagonal_inertia
+from walker_core.dynamics import RigidModel, role_inertia
 
 __all__ = ['RigidFeedForward']
 
@@ -35,14 +34,18 @@ class RigidFeedForward:
         """``I_ii`` of role ``role`` (1..5) [kg*m^2] at ``configuration`` (roles J1..J5, rad).
 
         Implements the corrected eqs (9)-(13) through
-        :func:`walker_core.dynamics.diagonal_inertia`.
+        :func:`walker_core.dynamics.role_inertia` (plain floats: the controller calls it
+        every control period).
         """
         if role not in (1, 2, 3, 4, 5):
             raise ValueError(f'joint role must be 1..5, got {role!r}')
-        q = np.asarray(configuration, dtype=float)
-        if q.shape != (5,) or not np.all(np.isfinite(q)):
+        try:
+            valid = len(configuration) == 5 and all(math.isfinite(q) for q in configuration)
+        except TypeError:
+            valid = False
+        if not valid:
             raise ValueError(f'configuration must be 5 finite angles, got {configuration!r}')
-        return float(diagonal_inertia(q, self.model)[role - 1])
+        return role_inertia(configuration, self.model, role)
 
     @staticmethod
     def torque(inertia: float, acceleration: float, effort: float = 0.0) -> float:

@@ -46,10 +46,8 @@ import dataclasses
 import math
 from collections.abc import Sequence
 
-import numpy as np
-
 from walker_core.dynamics import RigidModel
-from walker_core.joint_roles import physical_to_roles, role_of_joint, validate_gripper
+from walker_core.joint_roles import role_of_joint, role_permutation, validate_gripper
 from walker_control.core.accel_feedback import acceleration_feedback_torque
 from walker_control.core.config import ControllerSettings
 from walker_control.core.feedforward import RigidFeedForward
@@ -59,6 +57,7 @@ from walker_control.core.lowpass import LowPassFilter
 from walker_control.core.modes import Mode
 from walker_control.core.pid import Pid, PidGains
 from walker_control.core.reference_shaping import ReferenceShaper
+from walker_control.core.stability import LoopDesign
 
 __all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
            'MissingAccelerationError', 'JointController']
@@ -133,6 +132,25 @@ class ControlOutput:
 _MAX_CATCH_UP_PERIODS = 100
 
 
+@dataclasses.dataclass(frozen=True)
+class _RoleDesign:
+    """What one role in one mode takes from the settings: derived once, used every sample.
+
+    The controller runs hundreds of times a second in a process shared with others; building
+    these from the settings on every sample cost more than the control law itself.
+    """
+
+    loop: LoopDesign
+    kp: float               # normalised gains (LoopDesign.kp, .ki, .kd)
+    ki: float
+    kd: float
+    torque_limit: float     # [N*m]
+    coulomb: float          # [N*m] drive friction, for the friction feed-forward
+    friction: tuple         # (level, deadband, ramp) of the friction compensator
+    compensator: FrictionCompensator
+    shaping: tuple | None   # the reference shaper's design, None without shaping
+
+
 def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
@@ -180,6 +198,8 @@ class JointController:
         self._saturation = 0.0
         self._last_output: ControlOutput | None = None
         self._relaxing_for: float | None = None  # [s] into the relaxation dither, if on
+        self._role_designs: dict[tuple[int, Mode], _RoleDesign] = {}
+        self._design_used: _RoleDesign | None = None
 
     # ---------------------------------------------------------------------------- properties
     @property
@@ -263,6 +283,7 @@ class JointController:
         """Use new (validated) parameters from the next sample on, with bumpless transfer."""
         self._settings = settings
         self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
+        self._role_designs = {}
 
     # ------------------------------------------------------------------------------- update
     def update(self, measurement: Measurement, setpoint: Setpoint | None,
@@ -303,16 +324,16 @@ class JointController:
                 return output
         settings = self._settings
         role = self.role
-        design = settings.loop_design(role, mode)
+        cached = self._role_design(role, mode)
+        design = cached.loop
         if design.acceleration_feedback > 0.0 and measurement.acceleration is None:
             raise MissingAccelerationError(
                 f'{self._joint_name}: acceleration feedback is on (role J{role}, mode '
                 f'{mode.key}) but no joint acceleration was measured')
         transition = (role, mode) != self._key
-        friction_design = (settings.friction_level(role),
-                           settings.control.friction_compensation.deadband[role - 1],
-                           settings.control.friction_compensation.ramp[role - 1])
-        redesign = transition or (design, friction_design) != self._design
+        friction_design = cached.friction
+        redesign = transition or (cached is not self._design_used
+                                  and (design, friction_design) != self._design)
         if transition:
             self._hold_position = measurement.position
         if setpoint is not None and mode.tracks_setpoints:
@@ -320,33 +341,33 @@ class JointController:
         else:
             commanded = Setpoint(position=self._hold_position)
         periods = self._periods(dt)
-        reference = self._shape(role, transition, measurement, commanded, periods)
+        reference = self._shape(cached.shaping, transition, measurement, commanded, periods)
 
         inertia = self._feedforward.inertia(role, configuration)
-        limit = settings.drive(role).torque_limit
-        self._pid.set_gains(PidGains(p=inertia * design.kp, i=inertia * design.ki,
-                                     d=inertia * design.kd, output_limit=limit,
+        limit = cached.torque_limit
+        self._pid.set_gains(PidGains(p=inertia * cached.kp, i=inertia * cached.ki,
+                                     d=inertia * cached.kd, output_limit=limit,
                                      integral_limit=limit))
         error = reference.position - measurement.position
         error_rate = reference.velocity - measurement.velocity
         feedforward = self._feedforward.torque(
             inertia, commanded.acceleration,
             commanded.effort + friction_feedforward(
-                settings.drive(role).friction_torque, commanded.velocity,
+                cached.coulomb, commanded.velocity,
                 settings.control.friction_compensation.feedforward_speed))
         acceleration = measurement.acceleration if measurement.acceleration is not None else 0.0
         if self._shaper is not None:  # feed back the acceleration error (reference_shaping)
             acceleration -= reference.acceleration
         accel_term = acceleration_feedback_torque(design.acceleration_feedback, inertia,
                                                   acceleration)
-        compensator = FrictionCompensator(*friction_design)
-        friction = compensator.torque(error)
+        friction = cached.compensator.torque(error)
 
         if redesign:
-            self._bumpless_transfer(role, transition, design.ki > 0.0,
+            self._bumpless_transfer(role, transition, cached.ki > 0.0,
                                     feedforward + accel_term + self._pid.gains.p * error
                                     + self._pid.gains.d * error_rate, friction)
             self._key, self._design = (role, mode), (design, friction_design)
+        self._design_used = cached
 
         hold_integral = self._saturation != 0.0 and (error > 0.0) == (self._saturation > 0.0)
         terms = self._pid.compute_command(error, error_rate, dt, hold_integral=hold_integral)
@@ -383,16 +404,23 @@ class JointController:
         return output
 
     # ------------------------------------------------------------------------------ helpers
-    def _check_measurement(self, measurement: Measurement) -> np.ndarray:
-        values = (measurement.position, measurement.velocity)
-        if measurement.acceleration is not None:
-            values += (measurement.acceleration,)
-        positions = np.asarray(measurement.joint_positions, dtype=float)
-        if not all(math.isfinite(v) for v in values) or positions.shape != (5,) \
-                or not np.all(np.isfinite(positions)):
+    def _check_measurement(self, measurement: Measurement) -> tuple[float, ...]:
+        """Return the configuration in role order; raise :class:`MeasurementError` if unusable.
+
+        Plain floats, no arrays: this runs every control period.
+        """
+        positions = measurement.joint_positions
+        acceleration = measurement.acceleration
+        try:
+            valid = (math.isfinite(measurement.position) and math.isfinite(measurement.velocity)
+                     and (acceleration is None or math.isfinite(acceleration))
+                     and len(positions) == 5 and all(math.isfinite(q) for q in positions))
+        except TypeError:
+            valid = False
+        if not valid:
             raise MeasurementError(f'{self._joint_name}: measurement refused, not finite or not '
                                    f'5 joint positions: {measurement!r}')
-        return physical_to_roles(positions, self._base)
+        return tuple(float(positions[i]) for i in role_permutation(self._base))
 
     def _periods(self, dt: float) -> int:
         """Control periods a sample of ``dt`` seconds spans (1 to ``_MAX_CATCH_UP_PERIODS``).
@@ -405,32 +433,51 @@ class JointController:
         """
         return min(_MAX_CATCH_UP_PERIODS, max(1, round(dt / self._settings.sample_time)))
 
-    def _shape(self, role: int, transition: bool, measurement: Measurement,
+    def _shape(self, design: tuple | None, transition: bool, measurement: Measurement,
                commanded: Setpoint, periods: int) -> Setpoint:
         """Return the setpoint the feedback compares with: shaped by the role's filter, if on.
 
-        The shaper keeps running through a change between tracking modes of the same role (a
-        moving setpoint goes on moving); it restarts at the joint's measured state on the way
-        into or out of HOLD, on a role change and when the filter's design changes. It advances
-        by ``periods`` control periods (:meth:`_periods`), holding the setpoint over them, as
-        the command filter does.
+        ``design`` is the shaper's ``(order, corner, sample_time, kind)``, None when
+        ``control.filter.reference`` is off. The shaper keeps running through a change between
+        tracking modes of the same role (a moving setpoint goes on moving); it restarts at the
+        joint's measured state on the way into or out of HOLD, on a role change and when the
+        filter's design changes. It advances by ``periods`` control periods (:meth:`_periods`),
+        holding the setpoint over them, as the command filter does.
         """
-        control = self._settings.control
-        if not control.filter.reference:
+        if design is None:
             self._shaper = None
             return commanded
-        # the design is compared, not rebuilt, every sample: designing the filter with scipy
-        # costs about 0.25 ms, ten times the rest of the update
-        design = (control.filter.order[role - 1], control.filter.corner[role - 1],
-                  self._settings.sample_time, control.filter.kind)
         keeps_tracking = not transition or (
-            self._key is not None and self._key[0] == role and self._key[1].tracks_setpoints
-            and self.mode.tracks_setpoints)
+            self._key is not None and self._key[0] == self.role
+            and self._key[1].tracks_setpoints and self.mode.tracks_setpoints)
         if self._shaper is None or design != self._shaper_design or not keeps_tracking:
             self._shaper = ReferenceShaper(*design)
             self._shaper.reset_to(measurement.position, measurement.velocity)
             self._shaper_design = design
         return self._shaper.update(commanded, periods)
+
+    def _role_design(self, role: int, mode: Mode) -> _RoleDesign:
+        """Return the settings of ``role`` in ``mode``, derived once per settings (_RoleDesign)."""
+        cached = self._role_designs.get((role, mode))
+        if cached is None:
+            settings = self._settings
+            control = settings.control
+            loop = settings.loop_design(role, mode)
+            friction = (settings.friction_level(role),
+                        control.friction_compensation.deadband[role - 1],
+                        control.friction_compensation.ramp[role - 1])
+            drive = settings.drive(role)
+            # designing the shaper's filter with scipy costs far more than a sample: the design
+            # is compared, and the filter built only when it changes
+            shaping = ((control.filter.order[role - 1], control.filter.corner[role - 1],
+                        settings.sample_time, control.filter.kind)
+                       if control.filter.reference else None)
+            cached = _RoleDesign(loop=loop, kp=loop.kp, ki=loop.ki, kd=loop.kd,
+                                 torque_limit=drive.torque_limit, coulomb=drive.friction_torque,
+                                 friction=friction, compensator=FrictionCompensator(*friction),
+                                 shaping=shaping)
+            self._role_designs[(role, mode)] = cached
+        return cached
 
     def _new_filter(self, role: int) -> LowPassFilter:
         settings = self._settings
@@ -484,6 +531,7 @@ class JointController:
         self._last_input = self._last_friction = 0.0
         self._saturation = 0.0
         self._key, self._design = (self.role, Mode.OFF), None
+        self._design_used = None
         output = ControlOutput(
             effort=0.0, mode=Mode.OFF, role=self.role,
             reference=Setpoint(position=measurement.position), position_error=0.0, inertia=0.0,

@@ -55,6 +55,10 @@ class PidGains:
     integral_limit: float
 
     def __post_init__(self) -> None:
+        # the common case first, cheaply: the controllers build gains every control period
+        if all(type(value) is float and 0.0 <= value < math.inf for value in (
+                self.p, self.i, self.d, self.output_limit, self.integral_limit)):
+            return
         for name in ('p', 'i', 'd', 'output_limit', 'integral_limit'):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0):
