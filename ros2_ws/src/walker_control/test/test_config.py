@@ -98,6 +98,9 @@ def test_a_filter_corner_above_nyquist_is_refused():
     ('control.filter.kind', 'chebyshev', 'must be one of'),
     ('control.coarse.acceleration_feedback', [0.5, -1.0, 0.0, 0.0, 0.0], 'below the minimum'),
     ('control.setpoint_timeout', float('nan'), 'finite'),
+    ('control.setpoint_extrapolation', -0.01, 'below the minimum'),
+    ('control.setpoint_extrapolation', 0.6, r'setpoint_extrapolation \(0.6 s\) must not exceed '
+                                            r'control\.setpoint_timeout'),
 ])
 def test_malformed_values_are_refused_by_name(name, value, words):
     with pytest.raises(ParameterError, match=words):

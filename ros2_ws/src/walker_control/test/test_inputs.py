@@ -6,7 +6,8 @@ import pytest
 
 from walker_control.core.config import load_controller_settings
 from walker_control.core.inputs import (
-    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, validate_setpoint)
+    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, carry_forward,
+    validate_setpoint)
 
 DRIVE = load_controller_settings().drive(1)
 
@@ -122,3 +123,42 @@ def test_the_watchdog_reports_when_each_stream_was_last_heard():
     watchdog.expect_setpoints(True)
     watchdog.setpoint_received(1.2)
     assert watchdog.last_setpoint == 1.2
+
+
+@pytest.mark.parametrize('elapsed', [0.002, 0.01, 0.05])
+def test_a_late_setpoint_is_carried_along_its_constant_acceleration_exactly(elapsed):
+    """Within a segment of constant acceleration the carried setpoint is the trajectory's."""
+    def sample(t):
+        return Setpoint(position=0.1 + 0.8 * t + 0.5 * 2.0 * t * t, velocity=0.8 + 2.0 * t,
+                        acceleration=2.0, effort=0.3)
+
+    carried = carry_forward(sample(0.0), elapsed, 0.05, DRIVE)
+    expected = sample(elapsed)
+    assert carried.position == pytest.approx(expected.position, abs=1e-12)
+    assert carried.velocity == pytest.approx(expected.velocity, abs=1e-12)
+    assert (carried.acceleration, carried.effort) == (2.0, 0.3)
+
+
+def test_a_setpoint_is_carried_no_longer_than_the_horizon():
+    setpoint = Setpoint(position=0.0, velocity=1.0)
+    assert carry_forward(setpoint, 0.2, 0.05, DRIVE) == carry_forward(setpoint, 0.05, 0.05, DRIVE)
+    assert carry_forward(setpoint, 0.2, 0.05, DRIVE).position == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize('setpoint, elapsed, horizon', [
+    (Setpoint(position=0.4), 0.03, 0.05),                 # at rest: an operator's setpoint
+    (Setpoint(position=0.4, velocity=1.0), 0.0, 0.05),    # not late
+    (Setpoint(position=0.4, velocity=1.0), -0.002, 0.05),  # applies later (never selected)
+    (Setpoint(position=0.4, velocity=1.0), 0.03, 0.0),    # carrying turned off
+])
+def test_a_setpoint_at_rest_on_time_or_with_carrying_off_is_unchanged(setpoint, elapsed,
+                                                                       horizon):
+    assert carry_forward(setpoint, elapsed, horizon, DRIVE) is setpoint
+
+
+def test_a_carried_setpoint_stays_within_the_joint_limits():
+    near_end = Setpoint(position=DRIVE.position_max - 0.001, velocity=DRIVE.velocity_limit,
+                        acceleration=20.0)
+    carried = carry_forward(near_end, 0.05, 0.05, DRIVE)
+    assert carried.position == DRIVE.position_max
+    assert carried.velocity == DRIVE.velocity_limit

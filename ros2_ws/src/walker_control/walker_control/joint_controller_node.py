@@ -41,7 +41,7 @@ from walker_core.spinning import init_node_process, spin_nodes
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
     InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
-    validate_setpoint)
+    carry_forward, validate_setpoint)
 from walker_control.core.joint_controller import (
     ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,
     RoleChangeError)
@@ -364,7 +364,9 @@ class JointControllerNode(Node):
             self._controller.hold(f'setpoint stream stale: {lag}')
             self.get_logger().warning(f'setpoint stream stale: {lag}; holding')
             return None
-        return selected[1]
+        return carry_forward(selected[1], stamp - selected[0],
+                             self._settings.control.setpoint_extrapolation,
+                             self._settings.drive(self._controller.role))
 
     def _publish(self, msg: JointState, measurement: Measurement, out: ControlOutput) -> None:
         # One message object of each kind is reused: constructing them costs more than the

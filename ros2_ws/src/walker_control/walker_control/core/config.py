@@ -195,12 +195,21 @@ class ControlParameters:
     state_timeout: float = parameter(
         'a controller holds when no joint state arrived for this long', 's', 0.005, 60.0,
         read_only=False)
+    setpoint_extrapolation: float = parameter(
+        'longest time a streamed setpoint is carried forward along its velocity and '
+        'acceleration while the next one is late (0: held as it is)', 's', 0.0, 1.0,
+        read_only=False)
     state_rate: float = parameter(
         'rate of the controller state messages (plots and bags; every period at or above the '
         'control rate)', 'Hz', 1.0, 5000.0, read_only=False)
 
     def __post_init__(self) -> None:
         _require_five(self, 'in_position_tolerance')
+        if self.setpoint_extrapolation > self.setpoint_timeout:
+            raise ParameterError(
+                f'control.setpoint_extrapolation ({self.setpoint_extrapolation:g} s) must not '
+                f'exceed control.setpoint_timeout ({self.setpoint_timeout:g} s): a stream that '
+                f'stopped is held, then refused as stale, never carried on')
 
     def gains(self, mode: Mode) -> ModeGains:
         """Return the gain section of ``mode`` (HOLD, COARSE or FINE)."""

@@ -5,6 +5,8 @@
 * :class:`SetpointBuffer`: setpoints arrive ahead of the state they apply to (the planner streams
   one period ahead); for a state stamped ``t`` the controller uses the newest setpoint whose
   stamp is not later than ``t``.
+* :func:`carry_forward`: when that setpoint is older than the state (the next one is late), it
+  is carried forward along its own velocity and acceleration, for a bounded time.
 * :class:`InputWatchdog`: decides, on a steady clock, whether the state or setpoint stream has
   stopped for longer than its timeout.
 * :class:`Resubscription`: decides when a stream silent for long has its subscription made
@@ -22,8 +24,8 @@ import math
 
 from walker_core.robot_parameters import Drive
 
-__all__ = ['Setpoint', 'SetpointError', 'validate_setpoint', 'SetpointBuffer', 'InputWatchdog',
-           'StaleInputs', 'Resubscription']
+__all__ = ['Setpoint', 'SetpointError', 'validate_setpoint', 'carry_forward', 'SetpointBuffer',
+           'InputWatchdog', 'StaleInputs', 'Resubscription']
 
 
 class SetpointError(ValueError):
@@ -76,6 +78,46 @@ def validate_setpoint(setpoint: Setpoint, drive: Drive, joint_name: str = 'joint
             f'{joint_name} setpoint effort {setpoint.effort:.6g} N*m refused: above the torque '
             f'limit {drive.torque_limit:g} N*m')
     return setpoint
+
+
+def carry_forward(setpoint: Setpoint, elapsed: float, horizon: float, drive: Drive) -> Setpoint:
+    """Return the setpoint ``elapsed`` seconds after its stamp, carried along its own motion.
+
+    A streamed setpoint is a sample of a trajectory at its stamp. When the next sample is late
+    (a starved planner, a message lost), the state the controller answers is newer than the
+    sample, and holding the sample would stop the reference's position while its velocity and
+    acceleration (the feed-forward) go on: the joint would run ahead of its reference, and
+    jump back when the stream resumes. The sample is instead carried forward as the trajectory
+    it describes, ``p + v t + a t^2 / 2`` and ``v + a t``, exact within a segment of constant
+    acceleration; at most for ``horizon`` seconds (a stopped stream then holds what it
+    reached, until its timeout), and within the joint's position and velocity limits. A
+    setpoint at rest (``v = a = 0``, an operator's) is unchanged.
+
+    Parameters
+    ----------
+    setpoint : Setpoint
+        The newest setpoint whose stamp is not later than the state's (validated).
+    elapsed : float
+        State stamp minus setpoint stamp [s].
+    horizon : float
+        Longest time [s] a setpoint is carried forward (``control.setpoint_extrapolation``);
+        0 holds it as it is.
+    drive : Drive
+        The joint's limits.
+
+    Returns
+    -------
+    Setpoint
+    """
+    t = min(elapsed, horizon)
+    if not t > 0.0 or (setpoint.velocity == 0.0 and setpoint.acceleration == 0.0):
+        return setpoint
+    a = setpoint.acceleration
+    position = setpoint.position + (setpoint.velocity + 0.5 * a * t) * t
+    velocity = setpoint.velocity + a * t
+    return Setpoint(position=min(max(position, drive.position_min), drive.position_max),
+                    velocity=min(max(velocity, -drive.velocity_limit), drive.velocity_limit),
+                    acceleration=a, effort=setpoint.effort)
 
 
 class SetpointBuffer:
