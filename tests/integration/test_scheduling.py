@@ -3,8 +3,9 @@
 On the wall clock the supervisor and the planner ask for ``SCHED_FIFO`` at
 ``timing.decision_priority`` (40 as shipped, below the loop's 50): under the default scheduler
 the loop's five controllers and plant, at 50, starved them, and a real-time walk waited up to
-seconds for its plans. In sim time, or when the loop itself asks for nothing, they leave the
-scheduling alone.
+seconds for its plans. The planner's setpoint stream, which the controllers expect every
+period, is part of the loop and runs at the loop's priority. In sim time, or when the loop
+itself asks for nothing, they leave the scheduling alone.
 """
 
 import os
@@ -41,10 +42,18 @@ def test_the_deciding_processes_ask_for_their_priority_on_the_wall_clock_only(na
             NodeProcess(args, ros_environment(domain), name) as node:
         assert node.wait_for_output('SCHED_FIFO' if asks else 'default scheduling', WAIT), \
             node.output
+        permitted = realtime_permitted()
+        if name == 'planner' and asks and permitted:  # the stream thread is moved up last
+            assert node.wait_for_output('setpoint stream:', WAIT), node.output
         policies = thread_policies(node.process.pid)
-        if asks and realtime_permitted():
-            assert policies == {(os.SCHED_FIFO, 40)}, (policies, node.output)
+        if asks and permitted:
+            # the planner's setpoint stream is part of the control loop: at the loop's 50
+            expected = {(os.SCHED_FIFO, 40), (os.SCHED_FIFO, 50)} if name == 'planner' \
+                else {(os.SCHED_FIFO, 40)}
+            assert policies == expected, (policies, node.output)
             assert 'SCHED_FIFO priority 40 on' in node.output
+            if name == 'planner':
+                assert 'setpoint stream: SCHED_FIFO priority 50 on thread' in node.output
         else:
             assert policies == {(os.SCHED_OTHER, 0)}, (policies, node.output)
             if asks:

@@ -6,10 +6,12 @@ The requests run in child processes, so the test process keeps its own schedulin
 import os
 import subprocess
 import sys
+import threading
 
 import pytest
 
-from walker_core.realtime import log_realtime_request, request_realtime_priority
+from walker_core.realtime import (
+    log_realtime_request, request_realtime_priority, request_thread_priority)
 
 
 @pytest.mark.parametrize('priority', [-1, 100, 1.5, True, '50', None])
@@ -18,6 +20,49 @@ def test_a_priority_outside_0_to_99_is_refused_and_nothing_changes(priority):
     with pytest.raises(ValueError, match='0..99'):
         request_realtime_priority(priority)
     assert os.sched_getscheduler(0) == before
+
+
+@pytest.mark.parametrize('priority', [-1, 100, 1.5, True, '50', None])
+def test_a_thread_priority_outside_0_to_99_is_refused_and_nothing_changes(priority):
+    before = os.sched_getscheduler(0)
+    with pytest.raises(ValueError, match='0..99'):
+        request_thread_priority(threading.get_native_id(), priority)
+    assert os.sched_getscheduler(0) == before
+
+
+_THREAD_CHILD = """
+import os, threading
+from walker_core.realtime import request_realtime_priority, request_thread_priority
+started, done = threading.Event(), threading.Event()
+def work():
+    started.set(); done.wait(10.0)
+worker = threading.Thread(target=work); worker.start(); started.wait()
+print(*request_realtime_priority(5))
+granted, report = request_thread_priority(worker.native_id, 9)
+tasks = [int(task) for task in os.listdir(f'/proc/{os.getpid()}/task')]
+policies = {t: (os.sched_getscheduler(t), os.sched_getparam(t).sched_priority) for t in tasks}
+done.set(); worker.join()
+others = {value for task, value in policies.items() if task != worker.native_id}
+print(granted, policies[worker.native_id] == (os.SCHED_FIFO, 9), others == {(os.SCHED_FIFO, 5)})
+print(report)
+"""
+
+
+def test_one_thread_is_moved_above_the_rest_of_its_process():
+    """The process at 5, then one of its threads at 9: that thread alone, the others stay.
+
+    Refused (no privilege): the report says why.
+    """
+    child = subprocess.run([sys.executable, '-c', _THREAD_CHILD], capture_output=True,
+                           text=True, env=os.environ, timeout=60)
+    assert child.returncode == 0, child.stderr
+    process, first, report = child.stdout.splitlines()[:3]
+    granted, moved, others_stay = first.split()
+    if process.startswith('True'):
+        assert (granted, moved, others_stay) == ('True', 'True', 'True'), child.stdout
+        assert report.startswith('SCHED_FIFO priority 9 on thread ')
+    else:
+        assert granted == 'False' and 'refused' in report, child.stdout
 
 
 def test_priority_0_leaves_the_scheduling_alone():

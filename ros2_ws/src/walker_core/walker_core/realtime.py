@@ -26,7 +26,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ['MAX_PRIORITY', 'request_realtime_priority', 'log_realtime_request']
+__all__ = ['MAX_PRIORITY', 'request_realtime_priority', 'request_thread_priority',
+           'log_realtime_request']
 
 #: Highest ``SCHED_FIFO`` priority Linux accepts.
 MAX_PRIORITY = 99
@@ -58,14 +59,9 @@ def request_realtime_priority(priority: int) -> tuple[bool, str]:
     ValueError
         For a priority outside 0..99; nothing changes.
     """
-    if isinstance(priority, bool) or not isinstance(priority, int) \
-            or not 0 <= priority <= MAX_PRIORITY:
-        raise ValueError(f'real-time priority must be an integer 0..{MAX_PRIORITY} '
-                         f'(0: the default scheduler), got {priority!r}')
-    if priority == 0:
-        return False, 'default scheduling (real-time priority 0)'
-    if not hasattr(os, 'sched_setscheduler'):
-        return False, 'real-time priority not available on this platform; default scheduling'
+    refused = _unavailable(priority)
+    if refused:
+        return False, refused
     param = os.sched_param(priority)
     moved: list[tuple[int, int, int]] = []  # (thread, policy, priority) before the change
     for thread in _threads(os.getpid()):
@@ -82,6 +78,54 @@ def request_realtime_priority(priority: int) -> tuple[bool, str]:
                       if isinstance(error, PermissionError) else str(error))
             return False, f'SCHED_FIFO priority {priority} refused ({reason}); default scheduling'
     return True, f'SCHED_FIFO priority {priority} on {len(moved)} threads'
+
+
+def request_thread_priority(thread: int, priority: int) -> tuple[bool, str]:
+    """Run one thread of this process under ``SCHED_FIFO`` at ``priority``, if permitted.
+
+    For a thread whose work has deadlines the rest of its process does not have (the planner's
+    setpoint stream, which the controllers wait for every control period).
+
+    Parameters
+    ----------
+    thread : int
+        The thread's native id (``threading.Thread.native_id``).
+    priority : int
+        As :func:`request_realtime_priority`.
+
+    Returns
+    -------
+    tuple of (bool, str)
+        Whether the thread now runs under ``SCHED_FIFO`` at ``priority``, and a report.
+
+    Raises
+    ------
+    ValueError
+        For a priority outside 0..99; nothing changes.
+    """
+    refused = _unavailable(priority)
+    if refused:
+        return False, refused
+    try:
+        os.sched_setscheduler(thread, os.SCHED_FIFO, os.sched_param(priority))
+    except OSError as error:
+        reason = ('no permission: needs root, CAP_SYS_NICE or an rtprio limit'
+                  if isinstance(error, PermissionError) else str(error))
+        return False, f'SCHED_FIFO priority {priority} for thread {thread} refused ({reason})'
+    return True, f'SCHED_FIFO priority {priority} on thread {thread}'
+
+
+def _unavailable(priority: int) -> str:
+    """Why ``priority`` is not to be asked for ('' when it is); ValueError when invalid."""
+    if isinstance(priority, bool) or not isinstance(priority, int) \
+            or not 0 <= priority <= MAX_PRIORITY:
+        raise ValueError(f'real-time priority must be an integer 0..{MAX_PRIORITY} '
+                         f'(0: the default scheduler), got {priority!r}')
+    if priority == 0:
+        return 'default scheduling (real-time priority 0)'
+    if not hasattr(os, 'sched_setscheduler'):
+        return 'real-time priority not available on this platform; default scheduling'
+    return ''
 
 
 def _restore(moved: list[tuple[int, int, int]]) -> None:
