@@ -43,6 +43,27 @@ def test_quintic_hermite_interpolation_is_exact_for_quintics(values, gaps):
     np.testing.assert_allclose(sampled.acceleration, exact[:, 2], atol=1e-6)
 
 
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-0.3, 0.3), min_size=30, max_size=30),
+       st.lists(st.floats(0.05, 0.5), min_size=2, max_size=6),
+       st.sampled_from(['quintic', 'cubic', 'linear']),
+       st.lists(st.floats(-0.2, 2.0), min_size=1, max_size=12))
+def test_one_sample_time_gives_what_an_array_of_times_gives(values, gaps, kind, where):
+    """The stream's scalar path and the array path agree, inside, at and beyond the points."""
+    coefficients = np.array(values).reshape(5, 6)
+    times = np.concatenate([[0.0], np.cumsum(gaps)])
+    knots = np.array([quintic(t, coefficients) for t in times])
+    derivatives = {'quintic': (knots[:, 1], knots[:, 2]), 'cubic': (knots[:, 1],),
+                   'linear': ()}[kind]
+    trajectory = SampledTrajectory.from_points(NAMES, times, knots[:, 0], *derivatives)
+    at = np.concatenate([np.array(where) * times[-1], times])
+    together = trajectory.sample(at)
+    for k, t in enumerate(at):
+        alone = trajectory.sample(float(t))
+        for one, many in zip(alone, together, strict=True):
+            np.testing.assert_allclose(one, many[k], rtol=1e-9, atol=1e-9)
+
+
 def test_cubic_and_linear_interpolation_when_the_points_carry_less():
     times = [0.0, 1.0, 2.0]
     positions = [[0.0] * 5, [1.0] * 5, [0.0] * 5]

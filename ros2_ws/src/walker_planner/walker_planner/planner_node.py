@@ -115,6 +115,9 @@ class PlannerNode(Node):
                                  context=self.context, use_global_arguments=False,
                                  start_parameter_services=False)
         self._stream_thread: threading.Thread | None = None
+        self._setpoint_messages = [JointCommand(joint_name=name) for name in PHYSICAL_JOINT_NAMES]
+        self._state_names: tuple[str, ...] = ()
+        self._state_index: list[int] = []
         self._setpoint_publishers = {
             name: self._stream_node.create_publisher(
                 JointCommand, f'controllers/{name}/setpoint', SETPOINT_QOS)
@@ -204,10 +207,16 @@ class PlannerNode(Node):
 
     # ------------------------------------------------------------------ subscriptions
     def _on_joint_state(self, message: JointState) -> None:
+        names = tuple(message.name)
+        if names != self._state_names:  # the plant's order, looked up once
+            try:
+                self._state_index = [names.index(name) for name in PHYSICAL_JOINT_NAMES]
+            except ValueError:
+                return
+            self._state_names = names
         try:
-            index = [list(message.name).index(name) for name in PHYSICAL_JOINT_NAMES]
-            positions = np.asarray(message.position, dtype=float)[index]
-        except (ValueError, IndexError):
+            positions = np.asarray(message.position, dtype=float)[self._state_index]
+        except IndexError:
             return
         if np.all(np.isfinite(positions)):
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
@@ -364,15 +373,25 @@ class PlannerNode(Node):
             self._finish(active, None)
 
     def _publish(self, active: _ActiveStream, setpoint) -> None:
-        stamp = to_time(setpoint.stamp)
-        for j, name in enumerate(PHYSICAL_JOINT_NAMES):
-            command = JointCommand(joint_name=name, position=float(setpoint.position[j]),
-                                   velocity=float(setpoint.velocity[j]),
-                                   acceleration=float(setpoint.acceleration[j]))
-            command.header.stamp = stamp
-            self._setpoint_publishers[name].publish(command)
+        self._send(setpoint.stamp, setpoint.position.tolist(), setpoint.velocity.tolist(),
+                   setpoint.acceleration.tolist())
         active.last = setpoint
         active.ticks += 1
+
+    def _send(self, stamp: int, positions, velocities, accelerations) -> None:
+        """Publish one setpoint per joint (physical order), stamped ``stamp`` [ns].
+
+        The five messages are reused (every caller holds the lock): building them every period
+        cost more than computing the setpoints.
+        """
+        stamp = to_time(stamp)
+        for j, name in enumerate(PHYSICAL_JOINT_NAMES):
+            command = self._setpoint_messages[j]
+            command.header.stamp = stamp
+            command.position = positions[j]
+            command.velocity = velocities[j]
+            command.acceleration = accelerations[j]
+            self._setpoint_publishers[name].publish(command)
 
     def _feedback(self, active: _ActiveStream, setpoint) -> FollowTrajectory.Feedback:
         duration = active.stream.trajectory.duration
@@ -396,11 +415,8 @@ class PlannerNode(Node):
         self._ended.append(active)
 
     def _publish_hold(self, position: np.ndarray, now: int) -> None:
-        stamp = to_time(now + self._period_ns)
-        for j, name in enumerate(PHYSICAL_JOINT_NAMES):
-            command = JointCommand(joint_name=name, position=float(position[j]))
-            command.header.stamp = stamp
-            self._setpoint_publishers[name].publish(command)
+        zeros = [0.0] * len(PHYSICAL_JOINT_NAMES)
+        self._send(now + self._period_ns, position.tolist(), zeros, zeros)
 
     def _tracking_error(self, stream: SetpointStream) -> float:
         """Largest joint error [rad] of the newest state against the stream; -1 without one."""

@@ -14,7 +14,10 @@ clock times are integer nanoseconds, as on the wire, so nothing drifts.
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
+import functools
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -132,8 +135,11 @@ class SampledTrajectory:
         """Interpolated positions, velocities, accelerations at ``t`` [s], physical order.
 
         Before the first point the trajectory holds the first point's position, after the last
-        the last's, at rest.
+        the last's, at rest. A scalar ``t`` (the stream's one sample per control period) takes
+        a path without array bookkeeping; both evaluate the same segment polynomials.
         """
+        if isinstance(t, (int, float)) and math.isfinite(t):
+            return self._sample_one(float(t))
         times, scalar = as_times(t)
         knots = self.times
         clipped = np.clip(times, knots[0], knots[-1])
@@ -155,26 +161,57 @@ class SampledTrajectory:
             return Samples(*(array[0] for array in result))
         return result
 
+    def _sample_one(self, t: float) -> Samples:
+        knots = self._knots
+        if t <= knots[0] or t >= knots[-1] or len(knots) == 1:
+            zeros = np.zeros(self.positions.shape[1])
+            held = self.positions[0] if t <= knots[0] else self.positions[-1]
+            return Samples(held.copy(), zeros, zeros.copy())
+        i = bisect.bisect_right(knots, t) - 1
+        h = knots[i + 1] - knots[i]
+        x = (t - knots[i]) / h
+        x2 = x * x
+        coefficients = self._segments[i]
+        return Samples(np.array([1.0, x, x2, x2 * x, x2 * x2, x2 * x2 * x]) @ coefficients,
+                       np.array([0.0, 1.0, 2.0 * x, 3.0 * x2, 4.0 * x2 * x, 5.0 * x2 * x2])
+                       @ coefficients / h,
+                       np.array([0.0, 0.0, 2.0, 6.0 * x, 12.0 * x2, 20.0 * x2 * x])
+                       @ coefficients / (h * h))
+
+    @functools.cached_property
+    def _knots(self) -> list[float]:
+        return [float(t) for t in self.times]
+
+    @functools.cached_property
+    def _segments(self) -> np.ndarray:
+        """Coefficients ``c0..c5`` of each segment's polynomial in ``x`` in [0, 1], (N-1, 6, 5).
+
+        Quintic Hermite with positions, velocities and accelerations; cubic with positions and
+        velocities; linear with positions only (ros2_control's joint_trajectory_controller).
+        """
+        h = np.diff(self.times)[:, None]
+        p0, p1 = self.positions[:-1], self.positions[1:]
+        d = p1 - p0
+        zero = np.zeros_like(p0)
+        if self.velocities is None:
+            c = [p0, d, zero, zero, zero, zero]
+        else:
+            v0, v1 = self.velocities[:-1] * h, self.velocities[1:] * h
+            if self.accelerations is None:
+                c = [p0, v0, 3.0 * d - 2.0 * v0 - v1, -2.0 * d + v0 + v1, zero, zero]
+            else:
+                a0 = self.accelerations[:-1] * h * h
+                a1 = self.accelerations[1:] * h * h
+                c = [p0, v0, 0.5 * a0,
+                     10.0 * d - 6.0 * v0 - 4.0 * v1 - 1.5 * a0 + 0.5 * a1,
+                     -15.0 * d + 8.0 * v0 + 7.0 * v1 + 1.5 * a0 - a1,
+                     6.0 * d - 3.0 * (v0 + v1) - 0.5 * (a0 - a1)]
+        return np.stack(c, axis=1)
+
     def _hermite(self, index: np.ndarray, t: np.ndarray) -> Samples:
         h = (self.times[index + 1] - self.times[index])[:, None]
         x = ((t - self.times[index]) / h[:, 0])[:, None]
-        p0, p1 = self.positions[index], self.positions[index + 1]
-        zero = np.zeros_like(p0)
-        v0, v1 = ((zero, zero) if self.velocities is None
-                  else (self.velocities[index] * h, self.velocities[index + 1] * h))
-        if self.velocities is None:
-            c = [p0, p1 - p0, zero, zero, zero, zero]
-        elif self.accelerations is None:
-            d = p1 - p0
-            c = [p0, v0, 3.0 * d - 2.0 * v0 - v1, -2.0 * d + v0 + v1, zero, zero]
-        else:
-            a0 = self.accelerations[index] * h * h
-            a1 = self.accelerations[index + 1] * h * h
-            d = p1 - p0
-            c = [p0, v0, 0.5 * a0,
-                 10.0 * d - 6.0 * v0 - 4.0 * v1 - 1.5 * a0 + 0.5 * a1,
-                 -15.0 * d + 8.0 * v0 + 7.0 * v1 + 1.5 * a0 - a1,
-                 6.0 * d - 3.0 * (v0 + v1) - 0.5 * (a0 - a1)]
+        c = [self._segments[index, k] for k in range(6)]
         position = c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * (c[4] + x * c[5]))))
         rate = c[1] + x * (2.0 * c[2] + x * (3.0 * c[3] + x * (4.0 * c[4] + x * 5.0 * c[5])))
         curvature = 2.0 * c[2] + x * (6.0 * c[3] + x * (12.0 * c[4] + x * 20.0 * c[5]))
