@@ -74,9 +74,8 @@ def request_realtime_priority(priority: int) -> tuple[bool, str]:
             continue
         except OSError as error:
             _restore(moved)  # refused part-way: every thread back as it was
-            reason = ('no permission: needs root, CAP_SYS_NICE or an rtprio limit'
-                      if isinstance(error, PermissionError) else str(error))
-            return False, f'SCHED_FIFO priority {priority} refused ({reason}); default scheduling'
+            return False, (f'SCHED_FIFO priority {priority} refused ({_why_refused(error)}); '
+                           f'default scheduling')
     return True, f'SCHED_FIFO priority {priority} on {len(moved)} threads'
 
 
@@ -109,10 +108,14 @@ def request_thread_priority(thread: int, priority: int) -> tuple[bool, str]:
     try:
         os.sched_setscheduler(thread, os.SCHED_FIFO, os.sched_param(priority))
     except OSError as error:
-        reason = ('no permission: needs root, CAP_SYS_NICE or an rtprio limit'
-                  if isinstance(error, PermissionError) else str(error))
-        return False, f'SCHED_FIFO priority {priority} for thread {thread} refused ({reason})'
+        return False, (f'SCHED_FIFO priority {priority} for thread {thread} refused '
+                       f'({_why_refused(error)})')
     return True, f'SCHED_FIFO priority {priority} on thread {thread}'
+
+
+def _why_refused(error: OSError) -> str:
+    return ('no permission: needs root, CAP_SYS_NICE or an rtprio limit'
+            if isinstance(error, PermissionError) else str(error))
 
 
 def _unavailable(priority: int) -> str:
