@@ -124,6 +124,13 @@ def test_a_three_step_walk_with_quarter_and_half_turns_reaches_its_target(graph)
     assert 'n3_2' in graph.attached_nodes().values()
     assert set(graph.attached_nodes()) == {'a', 'b'}
     _assert_the_phase_progress_grows_through_each_phase(graph.phases[phases_before:], 3)
+    # the plant's record of the loop reaches the client (run_all.py prints it): lock-stepped
+    loop = graph.client.loop
+    assert loop is not None and loop.clock_mode == 'sim_time', loop
+    assert loop.plant_time > sum(r.duration for r in reports) and loop.lockstep_timeouts == 0
+    assert set(loop.late_efforts) == {'a_yaw_joint', 'a_pitch_joint', 'vertex_joint',
+                                      'b_pitch_joint', 'b_yaw_joint'}
+    assert loop.summary(500.0).startswith('loop: lock-stepped in sim time')
 
 
 def _assert_the_phase_progress_grows_through_each_phase(phases, steps):

@@ -19,9 +19,11 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
+from diagnostic_msgs.msg import DiagnosticArray
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
+from walker_bringup.loop_health import PLANT_STATUS_SUFFIX, LoopHealth, loop_health
 from walker_core.spinning import TopicSampler, destroy_actions
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
@@ -32,6 +34,8 @@ _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+_DIAGNOSTICS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
 
 
 class GraphNotReadyError(RuntimeError):
@@ -90,12 +94,23 @@ class GraphClient:
         self.node.create_subscription(StepPhase, 'phase', self._on_phase, _LATCHED)
         self.node.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
                                       _LATCHED)
+        # the plant's record of the loop's timing, at 1 Hz (see loop_health)
+        self.loop: LoopHealth | None = None
+        self._plant_status = f'{namespace.rstrip("/")}/plant{PLANT_STATUS_SUFFIX}'
+        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
+                                      _DIAGNOSTICS)
 
     def _on_phase(self, msg: StepPhase) -> None:
         self.phase = msg
 
     def _on_grippers(self, msg: GripperStates) -> None:
         self.grippers = msg
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.name == self._plant_status:
+                health = loop_health(status.message, {v.key: v.value for v in status.values})
+                self.loop = health or self.loop
 
     @property
     def plant_stepping(self) -> bool:

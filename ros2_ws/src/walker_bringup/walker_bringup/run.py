@@ -211,7 +211,7 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the main job; return the exit code (0 when every walk reached its target)."""
     args = parse_arguments(argv)
-    from walker_core.robot_parameters import default_parameter_file
+    from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 
     params_file = Path(args.params_file or default_parameter_file()).resolve()
     stamp = datetime.datetime.now().strftime('%Y%m%d-%H%M%S')
@@ -230,6 +230,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         walkers = _describe_walkers(args, params_file, out, env)
+        args.control_rate = load_walker_parameters(params_file).timing.control_rate
     except ValueError as error:
         progress.error(f'[walker] error: {error}')
         return 2
@@ -422,10 +423,13 @@ def _walk(client: GraphClient, target: str, args, progress: _Progress, should_st
         if label:
             print(f'[walker] {label}:')
         print(format_table(rows) if rows else '[walker] no step was taken')
+        if client.loop is not None:
+            print(f'[walker] {prefix}{client.loop.summary(args.control_rate)}')
         write_json(rows, out / summary_name,
                    {'target': target, 'reached': bool(result.success),
                     'message': result.message, 'path': list(result.path),
                     'wall_time': time.monotonic() - started,
+                    'loop': None if client.loop is None else client.loop.as_dict(),
                     **({'namespace': client.namespace} if label else {})})
         if result.success:
             print(f'[walker] {prefix}reached {target} in {result.steps_taken} steps, '

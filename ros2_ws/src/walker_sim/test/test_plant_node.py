@@ -93,12 +93,15 @@ def test_real_time_mode_publishes_the_five_joints_at_the_control_rate(ros_env, p
     from walker_msgs.msg import GripperStates, JointAccelerations
     from walker_sim.messages import LATCHED_QOS, SENSOR_QOS
 
-    states, accelerations, descriptions, grippers = [], [], [], []
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    states, accelerations, descriptions, grippers, diagnostics = [], [], [], [], []
     node = probe.node
     node.create_subscription(JointState, f'{NAMESPACE}/joint_states', states.append,
                              SENSOR_QOS)
     node.create_subscription(JointAccelerations, f'{NAMESPACE}/joint_accelerations',
                              accelerations.append, SENSOR_QOS)
+    node.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
     with start_plant(ros_env, 'sim.clock_mode:=real_time') as plant:
         assert probe.spin_until(lambda: len(states) > 0, START_TIMEOUT), plant.output
         states.clear()
@@ -125,6 +128,12 @@ def test_real_time_mode_publishes_the_five_joints_at_the_control_rate(ros_env, p
         assert qos_of(wait_for_endpoints(probe, topic('effort_commands'), False)) == [
             (reliable, volatile)]
         assert node.get_publishers_info_by_topic('/clock') == []
+        assert probe.spin_until(lambda: diagnostics, 15.0), plant.output
+    # the loop's record (walker_bringup.loop_health): no controller answered, so the loop
+    # never closed and its longest standstill is still none
+    report = diagnostics[-1].status[0]
+    assert report.message.startswith('real_time, t=')
+    assert {v.key: v.value for v in report.values}['longest tick interval [ms]'] == '0.0'
     assert len(states) >= 100, 'too few joint states to judge the rate'
     for message in states:
         assert list(message.name) == JOINTS

@@ -109,6 +109,9 @@ class PlantNode(Node):
         self._counts = {'refused': 0, 'saturated': 0, 'expired': 0, 'overruns': 0}
         self._gripper_key: tuple | None = None
         self._last_tick = math.nan
+        self._last_tick_wall = math.nan  # [s] steady time the last real-time tick ran
+        self._longest_tick_interval = 0.0  # [s] the longest wall time between two ticks
+        self._loop_closed = False  # every controller has answered (real time)
         self._started = not self.sim_time
         self._last_sent = self._steady_now()
         self._last_warning = -math.inf
@@ -186,6 +189,13 @@ class PlantNode(Node):
         published, and they are counted as overruns.
         """
         now = self._steady_now()
+        if not self._loop_closed:  # start-up (discovery, first publications) is not the loop
+            self._loop_closed = all(self.commands.stamp_of(joint) is not None
+                                    for joint in self.lockstep.joints)
+        elif math.isfinite(self._last_tick_wall):
+            self._longest_tick_interval = max(self._longest_tick_interval,
+                                              now - self._last_tick_wall)
+        self._last_tick_wall = now
         periods = 1
         if math.isfinite(self._last_tick):
             periods = min(max(1, round((now - self._last_tick) / self.period)), _MAX_CATCH_UP)
@@ -262,7 +272,7 @@ class PlantNode(Node):
         self._publish_grippers(self.plant.state(), force=True)
 
     def _report(self) -> None:
-        """Publish /diagnostics: missed, expired, refused and clamped commands."""
+        """Publish /diagnostics: missed, expired, refused and clamped commands, late ticks."""
         status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: plant',
                                   hardware_id='walker_sim')
         missed = sum(self.lockstep.missed.values())
@@ -273,6 +283,8 @@ class PlantNode(Node):
         values.update({f'{name} commands': count for name, count in self._counts.items()})
         values['lock-step timeouts'] = self.lockstep.timeouts
         values['not waited for'] = ', '.join(sorted(self.lockstep.lost))
+        if not self.sim_time:  # how long the loop stood still at worst, since it closed
+            values['longest tick interval [ms]'] = f'{self._longest_tick_interval * 1e3:.1f}'
         status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
         message = DiagnosticArray(status=[status])
         message.header.stamp = time_msg(self._stamp)

@@ -1,0 +1,111 @@
+"""How well the control loop kept its period during a walk, from the plant's own diagnostics.
+
+The plant publishes on ``/diagnostics`` (1 Hz, steady clock) a status named
+``<plant node>: plant`` whose message reads ``<clock mode>, t=<plant time> s, ...`` and whose
+values count, since it started, the periods each joint's effort came late (``missed
+<joint>``), the control periods it stepped late to catch up with the wall clock (``overruns
+commands``), the lock-step timeouts (sim time) and, on the wall clock, the longest interval
+between two of its ticks. :func:`loop_health` reads that status and :meth:`LoopHealth.summary`
+says in one line what a user of ``run_all.py`` needs to know: whether the loop kept real time.
+
+Plain Python: the graph client hands over the status's message and values as strings.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Mapping
+
+__all__ = ['LoopHealth', 'loop_health', 'PLANT_STATUS_SUFFIX']
+
+#: The plant's status is named after its node: ``/walker/plant: plant``.
+PLANT_STATUS_SUFFIX = ': plant'
+
+_MESSAGE = re.compile(r'^(?P<mode>\w+), t=(?P<time>[-+0-9.eE]+) s')
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopHealth:
+    """The control loop's record in one walk (counts since the plant started).
+
+    Attributes
+    ----------
+    clock_mode : str
+        ``'real_time'`` or ``'sim_time'``.
+    plant_time : float
+        The plant's time [s] when the status was published.
+    late_periods : int
+        Control periods the plant stepped late, catching up with the wall clock (real time).
+    late_efforts : dict of str to int
+        Per joint, the periods its controller's effort came after the plant's next tick.
+    lockstep_timeouts : int
+        Times the plant stopped waiting for efforts (sim time).
+    longest_tick_interval : float or None
+        Longest wall time [s] between two of the plant's ticks (real time; None in sim time).
+    """
+
+    clock_mode: str
+    plant_time: float
+    late_periods: int
+    late_efforts: dict[str, int]
+    lockstep_timeouts: int
+    longest_tick_interval: float | None
+
+    def summary(self, control_rate: float) -> str:
+        """Say in one line, for the end of a walk, whether the loop kept its period.
+
+        Parameters
+        ----------
+        control_rate : float
+            ``timing.control_rate`` [Hz].
+        """
+        periods = max(1, round(self.plant_time * control_rate))
+        joint, late = max(self.late_efforts.items(), key=lambda item: item[1],
+                          default=('', 0))
+        if self.clock_mode == 'sim_time':
+            if not self.lockstep_timeouts:
+                return f'loop: lock-stepped in sim time, {periods} periods, no timeout'
+            return (f'loop: lock-stepped in sim time, {periods} periods; the plant stopped '
+                    f'waiting for late efforts {self.lockstep_timeouts} times')
+        text = (f'loop: {periods} periods of {1e3 / control_rate:g} ms in real time; the plant '
+                f'stepped {self.late_periods} late ({100.0 * self.late_periods / periods:.1f} %)')
+        if self.longest_tick_interval is not None:
+            text += f', standing still {self.longest_tick_interval * 1e3:.0f} ms at worst'
+        if late:
+            text += (f'; efforts came late in {late} periods ({100.0 * late / periods:.1f} %, '
+                     f'{joint})')
+        if self.late_periods or late:
+            text += ('. A loop that cannot keep its period tracks worse than in sim time '
+                     '(README, Known limits)')
+        return text
+
+    def as_dict(self) -> dict:
+        """Return the record as JSON-ready values (for the walk's summary file)."""
+        return dataclasses.asdict(self)
+
+
+def loop_health(message: str, values: Mapping[str, str]) -> LoopHealth | None:
+    """Read the plant's diagnostic status; None when it is not one (or not readable).
+
+    Parameters
+    ----------
+    message : str
+        The status's message, ``<clock mode>, t=<seconds> s, ...``.
+    values : mapping of str to str
+        The status's key-value pairs.
+    """
+    match = _MESSAGE.match(message)
+    if match is None:
+        return None
+    try:
+        late_efforts = {key[len('missed '):]: int(value) for key, value in values.items()
+                        if key.startswith('missed ')}
+        longest = values.get('longest tick interval [ms]')
+        return LoopHealth(
+            clock_mode=match['mode'], plant_time=float(match['time']),
+            late_periods=int(values.get('overruns commands', 0)), late_efforts=late_efforts,
+            lockstep_timeouts=int(values.get('lock-step timeouts', 0)),
+            longest_tick_interval=None if longest is None else float(longest) * 1e-3)
+    except ValueError:
+        return None
