@@ -104,3 +104,21 @@ def test_design_command_refuses_an_unstable_file(tmp_path, capsys):
         'bandwidth: [5.0, 5.0, 5.0, 8.0, 8.0]  # [rad/s] chosen: the highest'))
     assert analysis.main(['design', '--params-file', str(path)]) == 2
     assert 'eq (15)' in capsys.readouterr().out
+
+
+def test_joint_1s_sweeps_are_slower_through_its_filter_and_the_half_turn_slower_still():
+    settings = load_controller_settings()
+    floors = analysis.sweep_floors(settings, 0.9, 0.0005, sample_time=0.02)
+    assert [floor.sweep for floor in floors] == [90.0, 180.0]
+    for floor in floors:
+        # the unfiltered sweep is the rate-and-torque bang-coast-bang, a little early by the
+        # band it may enter before the end
+        assert 0.0 < floor.unfiltered < floor.filtered
+    assert floors[0].filtered < floors[1].filtered
+
+
+def test_floor_command_prints_the_sweeps(capsys):
+    assert analysis.main(['floor', '--tolerance', '0.001']) == 0
+    out = capsys.readouterr().out
+    assert "Joint 1's fastest sweep with the tip at 0.9 m" in out and '1 mm' in out
+    assert [line.split('|')[0].strip() for line in out.splitlines()[2:]] == ['90', '180']

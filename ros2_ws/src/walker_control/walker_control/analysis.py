@@ -6,6 +6,7 @@ Command line (console script ``control_analysis``)::
     control_analysis bode    [--out DIR]   Figure 5 (wf/wc = 5, several Ka) with its table
     control_analysis design  [--params-file F]  the stability check of every loop in the file
     control_analysis figure6 [--out DIR] [--model two-mass]   Figure 6 (needs the plant)
+    control_analysis floor   [--radius R] [--tolerance E]   joint 1's fastest sweeps
 
 Each subcommand prints a table and writes PNG figures (matplotlib, Agg backend) into ``--out``
 (default ``runs/analysis``). The functions behind them are importable and ROS-free.
@@ -32,7 +33,7 @@ from walker_control.core.stability import (
 __all__ = [
     'RouthGridResult', 'routh_grid', 'BodeCurve', 'figure5_curves', 'achievable_ratio',
     'PlantCore', 'Figure6Run', 'figure6_experiment', 'dominant_frequency',
-    'TwoMassJoint1Model', 'main',
+    'TwoMassJoint1Model', 'SweepFloor', 'sweep_floors', 'main',
 ]
 
 DEFAULT_OUT = Path('runs') / 'analysis'
@@ -614,6 +615,80 @@ def _save(fig, path: Path) -> None:
     _pyplot().close(fig)
 
 
+# ------------------------------------------------------------------------------- floor
+#: Sweeps of a step about the base [deg]: the quarter and the half turn of the default truss.
+FLOOR_SWEEPS = (90.0, 180.0)
+FLOOR_SAMPLE_TIME = 0.01  # [s] the programme's period (2 ms and 10 ms agree within 6 ms)
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepFloor:
+    """Joint 1's fastest sweep [s], with no filter and through its command filter."""
+
+    sweep: float        # [deg]
+    unfiltered: float   # [s] until the tip is within the tolerance for good, no filter
+    filtered: float     # [s] the same, through joint 1's command filter
+
+
+def sweep_floors(settings, radius: float, tip_tolerance: float,
+                 sweeps: Sequence[float] = FLOOR_SWEEPS,
+                 sample_time: float = FLOOR_SAMPLE_TIME) -> list[SweepFloor]:
+    """Joint 1's fastest sweeps at a stance, at the drive's full limits, with and without filter.
+
+    The acceleration limit is the torque the yaw drive has left after its Coulomb friction over
+    joint 1's inertia with the tip at ``radius`` (eq (9)); the rate limit is its velocity limit;
+    the move has arrived once the shaped reference is within ``tip_tolerance / radius`` of its
+    end for good (:func:`~walker_control.core.fastest_move.fastest_move_through_filter`). No
+    plan beats it with the paper's controller structure (the whole command filtered).
+    """
+    from walker_control.core.fastest_move import fastest_move_through_filter
+    from walker_control.core.lowpass import design_lowpass_sos
+    from walker_core.dynamics import RigidModel, role_inertia
+    from walker_core.kinematics import WalkerKinematics
+
+    geometry = settings.robot.geometry
+    joints = WalkerKinematics(geometry.l1, geometry.l2).inverse([0.0, radius, 0.0, 0.0, 0.0])
+    inertia = role_inertia(joints, RigidModel.from_parameters(settings), 1)
+    drive = settings.drive(1)
+    acceleration = (drive.torque_limit - drive.friction_torque) / inertia
+    filters = settings.control.filter
+    designs = (design_lowpass_sos(0, 0.0, sample_time),
+               design_lowpass_sos(filters.order[0], filters.corner[0], sample_time,
+                                  filters.kind))
+    floors = []
+    for sweep in sweeps:
+        unfiltered, filtered = (
+            fastest_move_through_filter(math.radians(sweep), drive.velocity_limit,
+                                        acceleration, sos, sample_time,
+                                        tip_tolerance / radius).arrival
+            for sos in designs)
+        floors.append(SweepFloor(sweep, unfiltered, filtered))
+    return floors
+
+
+def _run_floor(args: argparse.Namespace) -> int:
+    from walker_core.parameter_schema import ParameterError
+    from walker_control.core.config import load_controller_settings
+
+    from walker_core.robot_parameters import load_walker_parameters
+
+    try:
+        settings = load_controller_settings(args.params_file)
+        radius = args.radius or load_walker_parameters(args.params_file).truss.spacing
+    except ParameterError as error:
+        print(f'refused: {error}')
+        return 2
+    filters = settings.control.filter
+    print(f"Joint 1's fastest sweep with the tip at {radius:g} m, until the tip is within "
+          f'{args.tolerance * 1e3:g} mm of the target for good (full torque and rate; '
+          f'{FLOOR_SAMPLE_TIME * 1e3:g} ms programme)')
+    print(f' sweep | no filter | through its filter ({filters.kind} {filters.order[0]} '
+          f'@ {filters.corner[0]:g} rad/s)')
+    for floor in sweep_floors(settings, radius, args.tolerance):
+        print(f' {floor.sweep:5.0f} | {floor.unfiltered:7.2f} s | {floor.filtered:.2f} s')
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run a subcommand; return the exit code."""
     parser = argparse.ArgumentParser(prog='control_analysis',
@@ -622,7 +697,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     for name, text in (('routh', 'eq (15) against Routh-Hurwitz and the poles'),
                        ('bode', 'Figure 5 and its bandwidth table'),
                        ('design', 'the stability check of the parameter file'),
-                       ('figure6', 'Figure 6: joint-1 motion with and without Ka')):
+                       ('figure6', 'Figure 6: joint-1 motion with and without Ka'),
+                       ('floor', "joint 1's fastest sweeps, with and without its filter")):
         command = sub.add_parser(name, help=text)
         command.add_argument('--out', type=Path, default=DEFAULT_OUT,
                              help='directory for figures (default: runs/analysis)')
@@ -631,9 +707,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         if name == 'figure6':
             command.add_argument('--model', choices=('plant', 'two-mass'), default='plant',
                                  help='plant to run on (default: the pybullet plant)')
+        if name == 'floor':
+            command.add_argument('--radius', type=float, default=None,
+                                 help='tip distance from the base yaw axis [m] (default: the '
+                                      'truss spacing)')
+            command.add_argument('--tolerance', type=float, default=0.0005,
+                                 help='arrival band at the tip [m] (default: 0.0005, the '
+                                      "supervisor's insertion_alignment)")
     args = parser.parse_args(argv)
     runner = {'routh': _run_routh, 'bode': _run_bode, 'design': _run_design,
-              'figure6': _run_figure6}[args.command]
+              'figure6': _run_figure6, 'floor': _run_floor}[args.command]
     return runner(args)
 
 
