@@ -20,6 +20,7 @@ setup(
     license='Apache-2.0',
     entry_points={'console_scripts': [
         'joint_controller_node = walker_control.joint_controller_node:main',
+        'joint_controllers_node = walker_control.joint_controllers_node:main',
         'control_analysis = walker_control.analysis:main',
     ]},
 )
