@@ -30,10 +30,14 @@ LINK_OUTPUT = 'controllers/vertex_joint/setpoint_lossy'  # what the vertex contr
 
 
 class FaultGraph:
-    """The running graph, a client, and everything seen on the topics the checks need."""
+    """The running graph, a client, and everything seen on the topics the checks need.
 
-    def __init__(self, tmp: Path, domain: int) -> None:
-        from walker_bringup.graph import NodeSpec, walker_graph
+    With ``grouped``, the five joint controllers run as one node (``controllers``, one
+    process; ``run_all.py --grouped-controllers``) and there is no lossy link.
+    """
+
+    def __init__(self, tmp: Path, domain: int, grouped: bool = False) -> None:
+        from walker_bringup.graph import walker_graph
         from walker_bringup.processes import ProcessGroup
         from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 
@@ -45,24 +49,21 @@ class FaultGraph:
         # been seen deaf to the graph (no control mode, no states) over shared memory.
         env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
         self.specs = {spec.name: spec for spec in walker_graph(
-            default_parameter_file(), sim_time=True, record=True, bag_path=self.bag)}
+            default_parameter_file(), sim_time=True, record=True, bag_path=self.bag,
+            grouped_controllers=grouped)}
         # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
         # planner's interpreter, and with it its setpoint stream, for up to a second there): a
         # healthy node is never taken for a dead one, and a dead one is still named within
         # seconds. The shipped values are shorter (README).
         for name, spec in list(self.specs.items()):
-            extra = INPUT_TIMEOUTS if name.startswith('controller_') else \
+            extra = INPUT_TIMEOUTS if name.startswith('controller') else \
                 (('supervisor.watchdog_timeout', str(WATCHDOG)),) if name == 'supervisor' else ()
             self.specs[name] = dataclasses.replace(spec, parameters=(*spec.parameters, *extra))
         # The vertex controller reads its setpoints through a lossy link, lossless until a test
         # sets it to drop, delay or cut
-        vertex = self.specs['controller_vertex']
-        self.specs['controller_vertex'] = dataclasses.replace(
-            vertex, remaps=(*vertex.remaps, (LINK_INPUT, LINK_OUTPUT)))
-        self.specs['lossy_link'] = NodeSpec(
-            'walker_bringup', 'lossy_link', 'lossy_link', vertex.namespace, vertex.params_file,
-            parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
-                        ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
+        vertex = self.specs.get('controller_vertex')
+        if vertex is not None:
+            self._add_lossy_link(vertex)
         self.group = ProcessGroup(tmp / 'logs', env)
         self.processes = {}
         self.killed: set[str] = set()  # nodes killed by the test and not restarted since
@@ -74,6 +75,16 @@ class FaultGraph:
         except BaseException:
             self.close()
             raise
+
+    def _add_lossy_link(self, vertex) -> None:
+        from walker_bringup.graph import NodeSpec
+
+        self.specs['controller_vertex'] = dataclasses.replace(
+            vertex, remaps=(*vertex.remaps, (LINK_INPUT, LINK_OUTPUT)))
+        self.specs['lossy_link'] = NodeSpec(
+            'walker_bringup', 'lossy_link', 'lossy_link', vertex.namespace, vertex.params_file,
+            parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
+                        ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
 
     def _bring_up(self, domain: int) -> None:
         from diagnostic_msgs.msg import DiagnosticArray

@@ -1,4 +1,6 @@
-"""``run_all.py --composed``: the whole graph in one process comes up, and nothing is left."""
+"""``run_all.py --composed`` and ``--grouped-controllers``: up, walking, nothing left."""
+
+import json
 
 import os
 import subprocess
@@ -24,4 +26,26 @@ def test_run_all_composed_brings_the_graph_up_in_one_process(tmp_path):
     assert 'in 1 composed process' in text
     assert 'graph ready' in text
     assert 'all processes stopped (graph: ' in text
+    assert processes_with(namespace) == [], text
+
+
+def test_run_all_walks_with_the_joint_controllers_grouped_in_one_process(tmp_path):
+    """One step with one controller process for the five joints, recorded, in sim time."""
+    namespace = f'/walker_grouped_check_{os.getpid()}'
+    out = tmp_path / 'run'
+    with isolated_domain() as domain:
+        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
+                '--grouped-controllers', '--namespace', namespace, '--out', str(out),
+                '--target', 'n1_2', '--no-report']
+        run = subprocess.run(args, env=ros_environment(domain), stdout=subprocess.PIPE,
+                             stderr=subprocess.STDOUT, text=True, cwd=REPO_ROOT, timeout=300)
+    text = run.stdout
+    assert run.returncode == 0, text
+    assert 'recorder, plant, controllers, planner, supervisor' in text
+    assert 'controller_' not in text.split('graph ready')[0]
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['reached'] and summary['path'] == ['n1_2'], summary
+    assert summary['loop']['lockstep_timeouts'] == 0, summary['loop']
+    step, = summary['steps']
+    assert step['success'] and step['insertion_error'] < 1e-3, step  # [m]
     assert processes_with(namespace) == [], text

@@ -46,6 +46,22 @@ def test_the_graph_has_every_node_with_its_arguments():
     assert controller_node_name('vertex_joint') == 'controller_vertex'
 
 
+def test_grouped_controllers_are_one_node_with_the_same_arguments():
+    separate = walker_graph('/tmp/walker.yaml', sim_time=True, record=True)
+    grouped = walker_graph('/tmp/walker.yaml', sim_time=True, record=True,
+                           grouped_controllers=True)
+    assert [n.name for n in grouped] == ['recorder', 'plant', 'controllers', 'planner',
+                                         'supervisor']
+    controllers = grouped[2]
+    assert (controllers.package, controllers.executable) == ('walker_control',
+                                                             'joint_controllers_node')
+    # every joint: the node's default joint_names; the rest as each controller's own
+    assert not any('joint_name' in arg for arg in controllers.command('/bin/true'))
+    assert controllers.parameters == separate[2].parameters[1:]
+    assert [n for n in grouped if n.name != 'controllers'] == \
+        [n for n in separate if not n.name.startswith('controller_')]
+
+
 def test_refuses_to_start_nodes_without_loopback_discovery(tmp_path):
     with pytest.raises(ValueError, match='LOCALHOST'):
         ProcessGroup(tmp_path, {k: v for k, v in ENV.items()

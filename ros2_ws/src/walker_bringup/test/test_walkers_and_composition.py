@@ -93,10 +93,12 @@ def test_run_all_refuses_a_bad_number_of_walkers(capsys):
     {'sim_time': True, 'record': True, 'bag_path': '/tmp/some/bag'},
     {'namespace': '/walker_2', 'start': StartStance('a', 'n1_2', 'n2_2'),
      'clock_topic': '/walker_2/clock', 'parameters': (('timing.control_rate', '1000.0'),)},
+    {'sim_time': True, 'grouped_controllers': True},
 ])
 def test_the_composed_command_describes_the_same_graph(options):
     keywords = {'namespace': '/walker', 'sim_time': False, 'record': False, 'bag_path': None,
-                'start': None, 'clock_topic': None, 'parameters': (), **options}
+                'start': None, 'clock_topic': None, 'parameters': (),
+                'grouped_controllers': False, **options}
     command = composed_command(PARAMS, executable='/bin/composed_graph', **keywords)
     assert command[0] == '/bin/composed_graph'
     composed = graph_from_arguments(parse_arguments(command[1:]))

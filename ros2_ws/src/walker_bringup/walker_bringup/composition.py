@@ -71,6 +71,8 @@ COMPONENTS: dict[tuple[str, str], Component] = {
     ('walker_sim', 'plant_node'): Component('walker_sim.plant_node', 'PlantNode'),
     ('walker_control', 'joint_controller_node'): Component(
         'walker_control.joint_controller_node', 'JointControllerNode'),
+    ('walker_control', 'joint_controllers_node'): Component(
+        'walker_control.joint_controllers_node', 'JointControllersNode'),
     ('walker_planner', 'planner_node'): Component(
         'walker_planner.planner_node', 'PlannerNode', start='start_streaming'),
     ('walker_supervisor', 'supervisor_node'): Component(
@@ -220,6 +222,8 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
                         help='remap /clock to this topic in every node')
     parser.add_argument('-p', '--param', action='append', default=[], metavar='NAME:=VALUE',
                         help='parameter override for every node (repeatable)')
+    parser.add_argument('--grouped-controllers', action='store_true',
+                        help='the five joint controllers as one node (joint_controllers_node)')
     args = parser.parse_args(argv)
     parameters = []
     for text in args.param:
@@ -247,7 +251,8 @@ def graph_from_arguments(args: argparse.Namespace) -> list[NodeSpec]:
     params_file = Path(args.params_file or default_parameter_file()).resolve()
     return walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                         record=args.record, bag_path=args.bag_path, start=args.start,
-                        clock_topic=args.clock_topic, parameters=args.param)
+                        clock_topic=args.clock_topic, parameters=args.param,
+                        grouped_controllers=args.grouped_controllers)
 
 
 def composed_command(params_file: str | Path, namespace: str = '/walker',
@@ -255,7 +260,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
                      bag_path: str | Path | None = None, start: StartStance | None = None,
                      clock_topic: str | None = None,
                      parameters: tuple[tuple[str, str], ...] = (),
-                     executable: str | None = None) -> list[str]:
+                     executable: str | None = None,
+                     grouped_controllers: bool = False) -> list[str]:
     """Return the command line of the composed graph with :func:`walker_graph`'s arguments."""
     command = [executable or str(executable_path('walker_bringup', 'composed_graph')),
                '--params-file', str(params_file), '--namespace', namespace]
@@ -271,6 +277,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
         command += ['--clock-topic', clock_topic]
     for name, value in parameters:
         command += ['--param', f'{name}:={value}']
+    if grouped_controllers:
+        command.append('--grouped-controllers')
     return command
 
 

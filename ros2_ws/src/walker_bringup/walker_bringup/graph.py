@@ -14,7 +14,10 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = ['NodeSpec', 'StartStance', 'walker_graph', 'walker_namespace', 'start_stances',
            'several_walkers', 'walker_targets', 'executable_path', 'controller_node_name',
-           'RECORDED_TOPICS']
+           'GROUPED_CONTROLLERS_NODE', 'RECORDED_TOPICS']
+
+#: Name of the one node of the five joint controllers in a graph with ``grouped_controllers``.
+GROUPED_CONTROLLERS_NODE = 'controllers'
 
 #: What a walk's bag holds (relative to the robot's namespace): everything the walk report
 #: uses. The high-rate inner-loop topics (effort_commands, joint_accelerations, the setpoint
@@ -126,7 +129,8 @@ def walker_namespace(index: int) -> str:
 def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: bool = False,
                  record: bool = False, bag_path: str | Path | None = None,
                  start: StartStance | None = None, clock_topic: str | None = None,
-                 parameters: tuple[tuple[str, str], ...] = ()) -> list[NodeSpec]:
+                 parameters: tuple[tuple[str, str], ...] = (),
+                 grouped_controllers: bool = False) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, five controllers, planner, supervisor.
 
     Parameters
@@ -150,6 +154,10 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     parameters : tuple of (str, str)
         Overrides given to every node, after its own (e.g. ``('timing.control_rate',
         '1000.0')``); values in ROS YAML syntax.
+    grouped_controllers : bool
+        Run the five joint controllers in one node (``joint_controllers_node``, named
+        ``controllers``: one state in, one effort message out per period) instead of one
+        ``joint_controller_node`` each.
     """
     params_file = str(params_file)
     parameters = tuple(parameters)
@@ -174,7 +182,11 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     # tell the clock mode themselves, and a sim-time graph, lock-stepped and without deadlines,
     # tells them to leave their scheduling alone (timing.realtime_priority 0).
     controller = (('timing.realtime_priority', '0'),) if sim_time else ()
-    for joint in PHYSICAL_JOINT_NAMES:
+    if grouped_controllers:
+        nodes.append(NodeSpec('walker_control', 'joint_controllers_node',
+                              GROUPED_CONTROLLERS_NODE, namespace, params_file,
+                              controller + parameters, remaps))
+    for joint in () if grouped_controllers else PHYSICAL_JOINT_NAMES:
         nodes.append(NodeSpec('walker_control', 'joint_controller_node',
                               controller_node_name(joint), namespace, params_file,
                               (('joint_name', joint),) + controller + parameters, remaps))
@@ -235,7 +247,8 @@ def start_stances(params_file: str | Path, count: int) -> list[StartStance]:
 
 def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
                     record: bool = False, bag_dir: str | Path | None = None,
-                    parameters: tuple[tuple[str, str], ...] = ()
+                    parameters: tuple[tuple[str, str], ...] = (),
+                    grouped_controllers: bool = False
                     ) -> list[tuple[str, StartStance, list[NodeSpec]]]:
     """List the graphs of ``count`` walkers on one truss: ``(namespace, start, nodes)`` each.
 
@@ -244,7 +257,8 @@ def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
     ``/clock`` is remapped into the walker's namespace (``/walker_2/clock``), except for the
     first walker, whose graph is exactly the single walker's. With ``record``, each walker's
     recorder writes ``<bag_dir>/bag`` (the first) or ``<bag_dir>/bag_walker_<i>``;
-    ``parameters`` go to every node (see :func:`walker_graph`).
+    ``parameters`` go to every node and ``grouped_controllers`` is each graph's (see
+    :func:`walker_graph`).
     """
     graphs = []
     for index, start in enumerate(start_stances(params_file, count), start=1):
@@ -255,7 +269,8 @@ def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
             bag = Path(bag_dir) / ('bag' if index == 1 else f'bag_{namespace.strip("/")}')
         graphs.append((namespace, start, walker_graph(
             params_file, namespace, sim_time, record=record, bag_path=bag,
-            start=start if index > 1 else None, clock_topic=clock, parameters=parameters)))
+            start=start if index > 1 else None, clock_topic=clock, parameters=parameters,
+            grouped_controllers=grouped_controllers)))
     return graphs
 
 

@@ -2,11 +2,12 @@
 
 Every node runs as a separate process (:mod:`walker_bringup.processes`), or, with
 ``--composed``, the whole graph runs in one process (:mod:`walker_bringup.composition`) under
-the same supervision. With ``--walkers N``, N graphs run side by side in the namespaces
-``/walker``, ``/walker_2``, ..., each from its own start on the same truss layout and each
-walking the same route moved with its start (their plants are separate physics worlds: they do
-not collide). A graph
-counts as up when every node is in the ROS graph and every server answers (not after a sleep).
+the same supervision. ``--grouped-controllers`` runs the five joint controllers as one node
+(``joint_controllers_node``) instead of five, either way. With ``--walkers N``, N graphs run
+side by side in the namespaces ``/walker``, ``/walker_2``, ..., each from its own start on the
+same truss layout and each walking the same route moved with its start (their plants are
+separate physics worlds: they do not collide). A graph counts as up when every node is in the
+ROS graph and every server answers (not after a sleep).
 A child that dies is reported at once with the end of its log, the walk is stopped safely (the
 supervisor is told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does
 the same. Nothing is left running: each child is interrupted, then terminated, then killed.
@@ -80,6 +81,10 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
                              'process per node')
+    parser.add_argument('--grouped-controllers', action='store_true',
+                        help='run the five joint controllers as one node and process '
+                             '(joint_controllers_node: one state in, one effort message out '
+                             'per period) instead of one each')
     parser.add_argument('--walkers', type=_walker_count, default=1, metavar='N',
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
                              'each from its own start, walking the same route moved with it '
@@ -168,10 +173,12 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
     """
     if args.walkers == 1:
         nodes = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
-                             record=args.record, bag_path=out / 'bag')
+                             record=args.record, bag_path=out / 'bag',
+                             grouped_controllers=args.grouped_controllers)
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
-    graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out)
+    graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out,
+                             grouped_controllers=args.grouped_controllers)
     targets = walker_targets(params_file, args.target, [start for _, start, _ in graphs])
     walkers = []
     for index, ((namespace, start, nodes), target) in enumerate(zip(graphs, targets,
@@ -203,7 +210,8 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
     bags = _bag_paths([walker])
     command = composed_command(params_file, walker.namespace, args.sim_time,
                                bool(bags), bags[0] if bags else None, walker.start,
-                               dict(plant.remaps).get('/clock'))
+                               dict(plant.remaps).get('/clock'),
+                               grouped_controllers=args.grouped_controllers)
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', walker.namespace,
                                 str(params_file)), command)
 
