@@ -51,12 +51,15 @@ class GraphRun:
     probe : bool
         Time the plant from the inside (:mod:`loop_probe`). Its records grow by about 160
         bytes a control period: a run that measures memory (the soak) goes without.
+    grouped : bool
+        The five joint controllers as one node (``run_all.py --grouped-controllers``).
     """
 
     def __init__(self, scratch: Path, walkers: int = 1, composed: bool = False,
                  sim_time: bool = True, parameters: tuple[tuple[str, str], ...] = (),
-                 record: bool = False, probe: bool = True) -> None:
+                 record: bool = False, probe: bool = True, grouped: bool = False) -> None:
         self.probe = probe
+        self.grouped = grouped
         self.scratch = Path(scratch)
         self.count = walkers
         self.composed = composed
@@ -92,7 +95,7 @@ class GraphRun:
         domain = self._stack.enter_context(isolated_domain())
         params_file = Path(default_parameter_file()).resolve()
         self.graphs = several_walkers(params_file, self.count, self.sim_time, self.record,
-                                      self.scratch, self.parameters)
+                                      self.scratch, self.parameters, self.grouped)
         for namespace, start, nodes in self.graphs:
             label = namespace.strip('/')
             env = ros_environment(domain)
@@ -113,7 +116,8 @@ class GraphRun:
                 command = composed_command(
                     params_file, namespace, self.sim_time, recorder is not None, bag,
                     start if namespace != '/walker' else None,
-                    dict(plant.remaps).get('/clock'), self.parameters)
+                    dict(plant.remaps).get('/clock'), self.parameters,
+                    grouped_controllers=self.grouped)
                 group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', namespace,
                                      str(params_file)),
                             [sys.executable, str(PROBE), 'composed', *command[1:]])

@@ -22,11 +22,14 @@ starts, in a ROS domain of its own, discovery on loopback, the plant timed from 
 * ``planner``: planning time per trajectory type, and the bang-bang solve alone.
 * ``control_loop``: all the graph's processes up in real time (controllers holding), at
   500 Hz and 1 kHz: JointState-to-effort round trip (median, p99, max), missed periods, CPU.
-* ``composition``: the same graph as one process against separate processes: the real-time
-  loop at 500 Hz, and a sim-time walking window (real-time factor, round trip); CPU and memory.
+* ``composition``: the same graph as separate processes, with the five joint controllers
+  grouped in one process (``--grouped-controllers``), and as one process: the real-time loop
+  at 500 Hz and 1 kHz, and a sim-time walking window (real-time factor, round trip); CPU and
+  memory.
 * ``walk``: a walk in sim time (the step reports: step time and its ratio to the time-optimal
   bound, tip error at insertion, residual vibration, walking speed; whole-graph CPU and peak
-  memory), and one step in real time with the loop timed during it.
+  memory), and one step in real time with the loop timed during it, as separate processes
+  and with the controllers grouped.
 * ``scaling``: 1, 2 and 4 walkers (namespaces ``/walker``, ``/walker_2``, ...), each walking
   back and forth on the same truss layout (separate physics worlds: they do not collide), in
   sim time: per-walker real-time factor, round trip and CPU; and 1 and 2 walkers in real time.
@@ -114,14 +117,14 @@ class Suite:
 
     def window(self, *, sim_time: bool, walking: bool, walkers: int = 1,
                composed: bool = False, rate: float | None = None, seconds: float,
-               warmup: float = 3.0) -> dict:
+               warmup: float = 3.0, grouped: bool = False) -> dict:
         """Bring graphs up, measure a window (walking or holding), bring them down.
 
         Returns per walker the loop figures (:func:`bench_support.loop_statistics`), its CPU
         (sum over its processes, fraction of one core), its CPU per simulated second and its
         processes' peak memory; and the whole run's CPU and the time the graphs took to come up.
         """
-        key = (sim_time, walking, walkers, composed, rate, seconds)
+        key = (sim_time, walking, walkers, composed, rate, seconds, grouped)
         if key in self._windows:
             return self._windows[key]
         from bench_support import CpuMeter, loop_statistics
@@ -130,6 +133,7 @@ class Suite:
         self._runs += 1
         what = (f'{walkers} walker{"s" if walkers > 1 else ""}, '
                 f'{"composed" if composed else "processes"}, '
+                + ('controllers grouped, ' if grouped else '') +
                 f'{"sim time" if sim_time else "real time"}'
                 + (f', {rate:g} Hz' if rate else '') + (', walking' if walking else ', holding'))
         self.say(f'{what}: bringing up, then {warmup:g} s + {seconds:g} s measured')
@@ -137,7 +141,7 @@ class Suite:
         began = time.monotonic()
         walking_context = None
         with GraphRun(self.scratch / f'run{self._runs}', walkers, composed, sim_time,
-                      parameters) as run:
+                      parameters, grouped=grouped) as run:
             startup = time.monotonic() - began
             if walking:
                 walking_context = Walking(run, [back_and_forth_targets(start)
@@ -178,7 +182,8 @@ class Suite:
                 'walks_completed': (len(walking_context.results[index])
                                     if walking_context else 0),
                 'safe_holds': walking_context.holds[index] if walking_context else []})
-        result = {'walkers': walkers, 'composed': composed, 'sim_time': sim_time,
+        result = {'walkers': walkers, 'composed': composed, 'grouped': grouped,
+                  'sim_time': sim_time,
                   'rate_hz': rate or 1e9 / period_ns, 'walking': walking,
                   'startup_s': round(startup, 2), 'window_s': seconds,
                   'load_average': [round(x, 2) for x in os.getloadavg()],
@@ -239,18 +244,25 @@ def part_control_loop(suite: Suite) -> dict:
             for rate in (500.0, 1000.0)}
 
 
+#: The graph's arrangements the composition part compares: a process per node; the five
+#: joint controllers grouped in one node and process; the whole graph in one process.
+ARRANGEMENTS = {'processes': {}, 'grouped': {'grouped': True}, 'composed': {'composed': True}}
+
+
 def part_composition(suite: Suite) -> dict:
-    """One process against separate processes: real-time loop and sim-time walking."""
+    """Arrangements of the graph (:data:`ARRANGEMENTS`): real-time loop, sim-time walking."""
     real = suite.seconds(15.0, 6.0)
     sim = suite.seconds(40.0, 15.0)
     return {
         'real_time_500hz': {kind: suite.window(sim_time=False, walking=False, rate=500.0,
-                                               composed=kind == 'composed', seconds=real)
-                            for kind in ('processes', 'composed')},
-        'sim_time_walking': {kind: suite.window(sim_time=True, walking=True,
-                                                composed=kind == 'composed', seconds=sim,
-                                                warmup=5.0)
-                             for kind in ('processes', 'composed')},
+                                               seconds=real, **options)
+                            for kind, options in ARRANGEMENTS.items()},
+        'real_time_1000hz': {kind: suite.window(sim_time=False, walking=False, rate=1000.0,
+                                                seconds=real, **options)
+                             for kind, options in ARRANGEMENTS.items()},
+        'sim_time_walking': {kind: suite.window(sim_time=True, walking=True, seconds=sim,
+                                                warmup=5.0, **options)
+                             for kind, options in ARRANGEMENTS.items()},
     }
 
 
@@ -281,15 +293,18 @@ def part_scaling(suite: Suite) -> dict:
     return result
 
 
-def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True) -> dict:
+def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True,
+               grouped: bool = False) -> dict:
     from bench_support import CpuMeter, loop_statistics
     from graph_runner import GraphRun, walk_resuming
     from walker_bringup.summary import rows_from_reports
 
     suite._runs += 1
-    suite.say(f'walk to {target} in {"sim" if sim_time else "real"} time (recorded)')
+    suite.say(f'walk to {target} in {"sim" if sim_time else "real"} time (recorded'
+              + (', controllers grouped)' if grouped else ')'))
     began = time.monotonic()
-    with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, sim_time, record=record) as run:
+    with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, sim_time, record=record,
+                  grouped=grouped) as run:
         startup = time.monotonic() - began
         client = run.clients[0]
         meter = CpuMeter(run.pids())
@@ -317,7 +332,8 @@ def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True) -
                       'residual_vibration_m': row.residual_vibration,
                       'attempts': row.attempts})
     wall = (end_ns - start_ns) / 1e9
-    return {'target': target, 'sim_time': sim_time, 'reached': bool(result.success),
+    return {'target': target, 'sim_time': sim_time, 'grouped': grouped,
+            'reached': bool(result.success),
             'message': result.message, 'safe_holds': holds, 'steps': steps,
             'startup_s': round(startup, 2),
             'walking_s': walking, 'wall_s': round(wall, 2),
@@ -333,7 +349,9 @@ def part_walk(suite: Suite) -> dict:
     _report_walk(suite, sim)
     real = _walk_once(suite, False, REAL_TIME_TARGET)
     _report_walk(suite, real)
-    return {'sim_time': sim, 'real_time': real}
+    grouped = _walk_once(suite, False, REAL_TIME_TARGET, grouped=True)
+    _report_walk(suite, grouped)
+    return {'sim_time': sim, 'real_time': real, 'real_time_grouped': grouped}
 
 
 def _report_walk(suite: Suite, walk: dict) -> None:
@@ -564,15 +582,18 @@ def figures(results: dict) -> list[dict]:
                 'none missed', w.get('missed_periods', 1) == 0)
     composition = results.get('composition')
     if composition:
-        for kind in ('processes', 'composed'):
-            window = composition['real_time_500hz'][kind]
-            w = window['per_walker'][0]
-            add(f'{kind}: real time 500 Hz round trip median / p99 / max; missed',
-                f'{_loop_cell(w["loop"])}; {100 * w["loop"].get("missed_fraction", 0):.1f} %')
-            add(f'{kind}: real time 500 Hz CPU; peak memory',
-                f'{100 * w["cpu_fraction"]:.0f} % of a core; '
-                f'{w["peak_rss_bytes"] / 2**20:.0f} MiB')
-        for kind in ('processes', 'composed'):
+        kinds = [k for k in ARRANGEMENTS if k in composition['real_time_500hz']]
+        for rate in ('500', '1000'):
+            for kind in kinds if f'real_time_{rate}hz' in composition else ():
+                window = composition[f'real_time_{rate}hz'][kind]
+                w = window['per_walker'][0]
+                add(f'{kind}: real time {rate} Hz round trip median / p99 / max; missed',
+                    f'{_loop_cell(w["loop"])}; '
+                    f'{100 * w["loop"].get("missed_fraction", 0):.1f} %')
+                add(f'{kind}: real time {rate} Hz CPU; peak memory',
+                    f'{100 * w["cpu_fraction"]:.0f} % of a core; '
+                    f'{w["peak_rss_bytes"] / 2**20:.0f} MiB')
+        for kind in kinds:
             window = composition['sim_time_walking'][kind]
             w = window['per_walker'][0]
             rtf = w['loop'].get('real_time_factor')
@@ -587,10 +608,12 @@ def figures(results: dict) -> list[dict]:
                 f'{w["peak_rss_bytes"] / 2**20:.0f} MiB')
     walk = results.get('walk')
     if walk:
-        for kind in ('sim_time', 'real_time'):
+        labels = {'sim_time': 'walk (sim time)', 'real_time': 'one step (real time)',
+                  'real_time_grouped': 'one step (real time, controllers grouped)'}
+        for kind in [k for k in labels if k in walk]:
             data = walk[kind]
             steps = [s for s in data['steps'] if s['success']]
-            label = 'walk (sim time)' if kind == 'sim_time' else 'one step (real time)'
+            label = labels[kind]
             holds = data.get('safe_holds', [])
             add(f'{label}: reached {data["target"]}; safe holds resumed from (watchdogs)',
                 f'{"yes" if data["reached"] else "no"}; {len(holds)}', 'reached; 0 holds',

@@ -114,6 +114,23 @@ def test_figures_judge_the_targets():
     assert [r['met'] for r in scaling] == [True, False]
 
 
+def test_composition_rows_cover_each_arrangement_measured():
+    windows = {kind: _window(1.0, 0, 1.2) for kind in ('processes', 'grouped', 'composed')}
+    results = {'composition': {'real_time_500hz': windows, 'real_time_1000hz': windows,
+                               'sim_time_walking': windows}}
+    figures = [row['figure'] for row in run_benchmarks.figures(results)]
+    for kind in ('processes', 'grouped', 'composed'):
+        assert f'{kind}: real time 1000 Hz round trip median / p99 / max; missed' in figures
+        assert f'{kind}: sim time walking: real-time factor; round trip median / p99' in figures
+    # results of a run before the grouped arrangement and 1 kHz: their rows, no others
+    older = {'composition': {'real_time_500hz': {k: windows[k] for k in ('processes',
+                                                                         'composed')},
+                             'sim_time_walking': {k: windows[k] for k in ('processes',
+                                                                          'composed')}}}
+    figures = [row['figure'] for row in run_benchmarks.figures(older)]
+    assert len(figures) == 8 and not any('grouped' in f or '1000 Hz' in f for f in figures)
+
+
 def test_summary_json_schema(tmp_path):
     rows = [{'figure': 'f', 'value': 'v', 'target': 't', 'met': False}]
     machine = {'cpus': 2, 'load_average_1_5_15': [1.0, 1.0, 1.0],
