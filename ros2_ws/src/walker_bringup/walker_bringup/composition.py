@@ -7,13 +7,14 @@ parameters are the same; only the process boundary goes. ``ros2 run walker_bring
 composed_graph --sim-time`` runs it; ``run_all.py --composed`` starts it under the same
 supervision as the separate processes.
 
-Executors: the plant, the five controllers and the planner share one executor, the one
+Executors: the plant and the five controllers share one executor, the one
 :func:`walker_core.spinning.make_executor` selects (the events executor by default), in the
-main thread. The supervisor keeps the default ``SingleThreadedExecutor``, as in its own
-process (its action execution awaits futures of service and action calls, which failed inside
-the events executor), and so does the recorder (it subscribes to topics as they appear, which
-the events executor does not pick up after a node was added); those two share a second thread.
-The planner streams from its own thread, as in its process. All threads share one Python
+main thread. The supervisor and the planner keep the default ``SingleThreadedExecutor``, as
+in their own processes (their actions' executions await futures, which failed inside the
+events executor, or made its every spin return at once), and so does the recorder (it
+subscribes to topics as they appear, which the events executor does not pick up after a node
+was added); those three share a second thread. The planner streams from its own thread (on
+the events executor), as in its process. All threads share one Python
 interpreter: the whole graph gets at most one core of Python, where the separate processes
 can use every core; what it saves is the process boundary (no inter-process transport, no
 wake-up of another process per message).
@@ -74,7 +75,8 @@ COMPONENTS: dict[tuple[str, str], Component] = {
     ('walker_control', 'joint_controllers_node'): Component(
         'walker_control.joint_controllers_node', 'JointControllersNode'),
     ('walker_planner', 'planner_node'): Component(
-        'walker_planner.planner_node', 'PlannerNode', start='start_streaming'),
+        'walker_planner.planner_node', 'PlannerNode', default_executor=True,
+        start='start_streaming'),
     ('walker_supervisor', 'supervisor_node'): Component(
         'walker_supervisor.supervisor_node', 'SupervisorNode', default_executor=True),
     ('walker_bag', 'recorder_node'): Component(

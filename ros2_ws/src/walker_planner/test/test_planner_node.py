@@ -306,6 +306,44 @@ def test_follow_trajectory_streams_with_feedback_and_cancel_holds(graph, context
     probe.clear()
 
 
+def _cpu_seconds(pid: int) -> float:
+    """CPU time [s] a process has used so far, all its threads (/proc)."""
+    import os
+
+    with open(f'/proc/{pid}/stat') as stat:
+        fields = stat.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def test_the_planner_idles_between_setpoints_while_a_goal_streams(graph, context, stance):
+    """A goal under way must not keep the planner busy while no state comes to stream on.
+
+    Its execution awaits the stream's end; under the events executor an awaited future made
+    the node's spin loop return at once, over and over, and the planner burnt a core for the
+    whole of every stream (at the decision priority, in real time).
+    """
+    probe, planner = graph
+    settle(probe, stance)
+    planned = probe.call(trajectory_type='joint_parabolic_time', base_gripper='a',
+                         start=stance.tolist(), goal=(stance + 0.05).tolist(), duration=1.0)
+    assert planned.success, planned.message
+    probe.clear()
+    sent = probe.follow.send_goal_async(probe.Goal(trajectory=planned.trajectory))
+    assert probe.spin_until(sent.done)
+    handle = sent.result()
+    assert handle.accepted
+    assert probe.spin_until(lambda: probe.count() >= 1)  # streaming, waiting for states
+    before = _cpu_seconds(planner.process.pid)
+    probe.spin_until(lambda: False, timeout=2.0)
+    used = _cpu_seconds(planner.process.pid) - before
+    assert used < 0.5, f'the planner used {used:.2f} s of CPU in 2 s while it waited'
+    cancelling = handle.cancel_goal_async()
+    assert probe.spin_until(cancelling.done)
+    result = handle.get_result_async()
+    assert probe.spin_until(result.done)
+    probe.clear()
+
+
 def test_stop_trajectory_ends_a_stream_started_by_the_service(graph, context, stance):
     from std_srvs.srv import Trigger
 

@@ -26,7 +26,7 @@ import numpy as np
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.task import Future
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -443,7 +443,10 @@ def main(args=None) -> int:
         node = PlannerNode()
         node.start_streaming()
         node.request_realtime_scheduling()
-        spin_nodes(node, stop=stop)
+        # The default executor: a goal's execution awaits its stream's end, and under the
+        # events executor an awaited future makes every spin return at once (a core burnt for
+        # the whole stream). The stream node, the busy one, keeps the events executor.
+        spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
     except ParameterError as error:
         print(f'planner: invalid parameters, not starting: {error}', flush=True)
         return 1
