@@ -21,7 +21,8 @@ from collections.abc import Iterator
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
-           'processes_with', 'running_graph', 'realtime_permitted', 'thread_policies']
+           'processes_with', 'running_graph', 'realtime_permitted', 'thread_policies',
+           'spin_executor_until', 'set_stamp']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 # Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
@@ -217,6 +218,22 @@ class SharedMemoryGuard:
             with contextlib.suppress(OSError):
                 os.link(self._SHM / name, self._dir / name)
                 self._links[name] = ((self._dir / name).stat().st_ino, owners)
+
+
+def spin_executor_until(executor, predicate, timeout: float) -> bool:
+    """Spin ``executor`` until ``predicate()`` holds or ``timeout`` [s] passes; return it."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        executor.spin_once(timeout_sec=0.01)
+    return predicate()
+
+
+def set_stamp(message, stamp_ns: int):
+    """Stamp ``message`` (its header) with ``stamp_ns`` [ns]; return it."""
+    message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+    return message
 
 
 def attached_grippers(message) -> list[str]:

@@ -78,15 +78,14 @@ class StandInPlant:
         self.node.destroy_node()
 
     def spin_until(self, predicate, timeout=WAIT):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if predicate():
-                return True
-            self.executor.spin_once(timeout_sec=0.01)
-        return predicate()
+        from ros_test_support import spin_executor_until
+
+        return spin_executor_until(self.executor, predicate, timeout)
 
     def _stamp(self, msg, stamp_ns):
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+        from ros_test_support import set_stamp
+
+        set_stamp(msg, stamp_ns)
 
     def publish_state(self, acceleration=0.0):
         from sensor_msgs.msg import JointState

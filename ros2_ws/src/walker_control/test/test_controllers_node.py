@@ -10,7 +10,6 @@ timing is asserted.
 """
 
 import math
-import time
 
 import pytest
 
@@ -91,16 +90,14 @@ class StandIn:
         self.node.destroy_node()
 
     def spin_until(self, predicate, timeout=WAIT):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if predicate():
-                return True
-            self.executor.spin_once(timeout_sec=0.01)
-        return predicate()
+        from ros_test_support import spin_executor_until
+
+        return spin_executor_until(self.executor, predicate, timeout)
 
     def _stamped(self, msg, stamp_ns):
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
-        return msg
+        from ros_test_support import set_stamp
+
+        return set_stamp(msg, stamp_ns)
 
     def answers(self, ns, stamp_ns):
         return [e for e in self.efforts[ns][-5:] if _ns(e.header.stamp) == stamp_ns]
