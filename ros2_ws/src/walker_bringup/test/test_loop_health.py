@@ -2,7 +2,7 @@
 
 import pytest
 
-from walker_bringup.loop_health import loop_health
+from walker_bringup.loop_health import loop_health, sources_not_heard
 
 JOINTS = ('a_yaw_joint', 'a_pitch_joint', 'vertex_joint', 'b_pitch_joint', 'b_yaw_joint')
 
@@ -57,3 +57,12 @@ def test_a_sim_time_loop_reports_its_lock_step(timeouts, words):
 ])
 def test_a_status_that_is_not_the_plants_is_ignored(message, values):
     assert loop_health(message, values) is None
+
+
+def test_the_sources_the_supervisor_has_not_heard_from_are_named():
+    values = {'phase': 'IDLE', 'base gripper': 'a', 'plant joint states': 'OK: fresh',
+              'controller a_yaw_joint': 'ERROR: not heard from yet',
+              'controller vertex_joint': 'ERROR: silent for 2.1 s',
+              'controller b_yaw_joint': 'ERROR: not heard from yet'}
+    assert sources_not_heard(values) == ['controller a_yaw_joint', 'controller b_yaw_joint']
+    assert sources_not_heard({'phase': 'IDLE', 'plant joint states': 'OK: fresh'}) == []

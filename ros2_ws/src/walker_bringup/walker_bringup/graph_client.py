@@ -23,7 +23,8 @@ from diagnostic_msgs.msg import DiagnosticArray
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
-from walker_bringup.loop_health import PLANT_STATUS_SUFFIX, LoopHealth, loop_health
+from walker_bringup.loop_health import (
+    PLANT_STATUS_SUFFIX, SUPERVISOR_STATUS_SUFFIX, LoopHealth, loop_health, sources_not_heard)
 from walker_core.spinning import TopicSampler, destroy_actions
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
@@ -97,6 +98,10 @@ class GraphClient:
         # the plant's record of the loop's timing, at 1 Hz (see loop_health)
         self.loop: LoopHealth | None = None
         self._plant_status = f'{namespace.rstrip("/")}/plant{PLANT_STATUS_SUFFIX}'
+        # the supervisor's sources it has not heard from yet (None: no status of it yet); it
+        # refuses a walk until it has heard from every one
+        self.unheard: list[str] | None = None
+        self._supervisor_status = f'{namespace.rstrip("/")}/supervisor{SUPERVISOR_STATUS_SUFFIX}'
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
                                       _DIAGNOSTICS)
 
@@ -111,6 +116,8 @@ class GraphClient:
             if status.name == self._plant_status:
                 health = loop_health(status.message, {v.key: v.value for v in status.values})
                 self.loop = health or self.loop
+            elif status.name == self._supervisor_status:
+                self.unheard = sources_not_heard({v.key: v.value for v in status.values})
 
     @property
     def plant_stepping(self) -> bool:
@@ -158,7 +165,10 @@ class GraphClient:
                    'gripper_command service': self.gripper_client.service_is_ready(),
                    'plan_trajectory service': self.plan_client.service_is_ready(),
                    'joint states advancing': self.plant_stepping,
-                   'gripper states': self.grippers is not None}
+                   'gripper states': self.grippers is not None,
+                   'the supervisor hearing '
+                   + (', '.join(self.unheard) if self.unheard else 'every source'):
+                   self.unheard == []}
         for name, up in servers.items():
             (ready if up else missing).append(name)
         return Readiness(ready, missing)

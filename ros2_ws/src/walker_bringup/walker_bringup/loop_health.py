@@ -8,6 +8,10 @@ commands``), the lock-step timeouts (sim time) and, on the wall clock, the longe
 between two of its ticks. :func:`loop_health` reads that status and :meth:`LoopHealth.summary`
 says in one line what a user of ``run_all.py`` needs to know: whether the loop kept real time.
 
+:func:`sources_not_heard` reads the supervisor's status the same way (``<supervisor node>:
+walker``, a value per watched source): the sources it has not heard from yet, which make it
+refuse a walk; ``run_all.py`` counts the graph ready only once there are none.
+
 Plain Python: the graph client hands over the status's message and values as strings.
 """
 
@@ -17,10 +21,23 @@ import dataclasses
 import re
 from collections.abc import Mapping
 
-__all__ = ['LoopHealth', 'loop_health', 'PLANT_STATUS_SUFFIX']
+__all__ = ['LoopHealth', 'loop_health', 'sources_not_heard', 'PLANT_STATUS_SUFFIX',
+           'SUPERVISOR_STATUS_SUFFIX']
 
 #: The plant's status is named after its node: ``/walker/plant: plant``.
 PLANT_STATUS_SUFFIX = ': plant'
+#: The supervisor's: ``/walker/supervisor: walker``.
+SUPERVISOR_STATUS_SUFFIX = ': walker'
+_NOT_HEARD = 'not heard from yet'
+
+
+def sources_not_heard(values: Mapping[str, str]) -> list[str]:
+    """Return the sources the supervisor's status says it has not heard from yet, in order.
+
+    Each watched source is a value ``<source>: <LEVEL>: <message>`` (``controller
+    a_yaw_joint``: ``ERROR: not heard from yet``).
+    """
+    return [name for name, value in values.items() if value.endswith(_NOT_HEARD)]
 
 _MESSAGE = re.compile(r'^(?P<mode>\w+), t=(?P<time>[-+0-9.eE]+) s')
 
