@@ -32,7 +32,8 @@ starts, in a ROS domain of its own, discovery on loopback, the plant timed from 
   and with the controllers grouped.
 * ``scaling``: 1, 2 and 4 walkers (namespaces ``/walker``, ``/walker_2``, ...), each walking
   back and forth on the same truss layout (separate physics worlds: they do not collide), in
-  sim time: per-walker real-time factor, round trip and CPU; and 1 and 2 walkers in real time.
+  sim time: per-walker real-time factor, round trip and CPU; and 1 and 2 walkers in real time;
+  again with each walker's controllers grouped (1, 2 and 4 in real time).
 * ``soak`` (only with ``--soak``): a long walk back and forth; memory, open files and shared
   memory over time, drift of the step figures.
 * ``profile`` (only with ``--profile``): py-spy samples of the plant, a controller, the planner
@@ -267,16 +268,28 @@ def part_composition(suite: Suite) -> dict:
 
 
 def part_scaling(suite: Suite) -> dict:
-    """Several walkers in one ROS graph: how per-walker cost and speed grow."""
+    """Several walkers in one ROS graph: how per-walker cost and speed grow.
+
+    As separate processes (the top-level keys) and with each walker's controllers grouped in
+    one process (``grouped``).
+    """
+    result = _scaling(suite, grouped=False)
+    result['grouped'] = _scaling(suite, grouped=True)
+    return result
+
+
+def _scaling(suite: Suite, grouped: bool) -> dict:
     sim = suite.seconds(40.0, 15.0)
     real = suite.seconds(15.0, 6.0)
     counts = (1, 2) if suite.quick else (1, 2, 4)
     result = {'sim_time_walking': {str(n): suite.window(sim_time=True, walking=True,
-                                                        walkers=n, seconds=sim, warmup=5.0)
+                                                        walkers=n, seconds=sim, warmup=5.0,
+                                                        grouped=grouped)
                                    for n in counts},
               'real_time_holding': {str(n): suite.window(sim_time=False, walking=False,
-                                                         walkers=n, rate=500.0, seconds=real)
-                                    for n in counts[:2]}}
+                                                         walkers=n, rate=500.0, seconds=real,
+                                                         grouped=grouped)
+                                    for n in (counts if grouped else counts[:2])}}
     base = _mean([w['cpu_seconds_per_sim_second']
                   for w in result['sim_time_walking']['1']['per_walker']])
     growth = {}
@@ -651,25 +664,28 @@ def figures(results: dict) -> list[dict]:
                 f'{100 * data["usage"]["cpu_fraction_total"]:.0f} % of a core; '
                 f'{data["usage"]["peak_rss_bytes_total"] / 2**20:.0f} MiB')
     scaling = results.get('scaling')
-    if scaling:
-        for n, growth in scaling['growth'].items():
-            window = scaling['sim_time_walking'][n]
+    for label, data in (('', scaling), ('controllers grouped, ', (scaling or {}).get('grouped'))):
+        if not data:
+            continue
+        for n, growth in data['growth'].items():
+            window = data['sim_time_walking'][n]
             p99 = _mean([w['loop'].get('all_five_latency', {}).get('p99_ms')
                          for w in window['per_walker']])
             relative = growth['relative_to_one_walker']
-            add(f'{n} walker(s), sim time walking: per walker real-time factor; round trip '
-                'p99; CPU per simulated second (x one walker)',
+            add(f'{n} walker(s), {label}sim time walking: per walker real-time factor; round '
+                'trip p99; CPU per simulated second (x one walker)',
                 f'{_fmt(growth["real_time_factor_per_walker"])}; {_fmt(p99)} ms; '
                 f'{_fmt(growth["cpu_seconds_per_sim_second_per_walker"])} s '
                 f'({_fmt(relative)} x)'
                 + (f'; {len(window["errors"])} errors' if window['errors'] else ''),
                 'per-walker cost <= linear',
                 relative is not None and relative <= 1.25 and not window['errors'])
-        for n, window in scaling['real_time_holding'].items():
+        for n, window in data['real_time_holding'].items():
             missed = _mean([w['loop'].get('missed_fraction') for w in window['per_walker']])
             p99 = _mean([w['loop'].get('all_five_latency', {}).get('p99_ms')
                          for w in window['per_walker']])
-            add(f'{n} walker(s), real time 500 Hz holding: round trip p99; missed periods',
+            add(f'{n} walker(s), {label}real time 500 Hz holding: round trip p99; missed '
+                'periods',
                 f'{_fmt(p99)} ms; {_fmt(missed, 100, 1)} %', 'p99 <= 2 ms',
                 p99 is not None and p99 <= 2.0)
     soak = results.get('soak')

@@ -114,6 +114,27 @@ def test_figures_judge_the_targets():
     assert [r['met'] for r in scaling] == [True, False]
 
 
+def test_scaling_rows_of_grouped_controllers_are_labelled_and_judged():
+    growth = {'1': {'real_time_factor_per_walker': 1.3, 'relative_to_one_walker': 1.0,
+                    'cpu_seconds_per_sim_second_per_walker': 1.0},
+              '2': {'real_time_factor_per_walker': 0.6, 'relative_to_one_walker': 1.1,
+                    'cpu_seconds_per_sim_second_per_walker': 1.1}}
+    grouped = {'sim_time_walking': {'1': _window(2.0, 0, 1.3), '2': _window(9.0, 0, 0.6)},
+               'real_time_holding': {'1': _window(1.0, 0), '2': _window(2.5, 3)},
+               'growth': growth}
+    results = {'scaling': {'sim_time_walking': {'1': _window(3.0, 0, 1.0, 1.0)},
+                           'real_time_holding': {}, 'growth': {'1': growth['1']},
+                           'grouped': grouped}}
+    met = {row['figure']: row['met'] for row in run_benchmarks.figures(results)}
+    sim = ('{} walker(s), controllers grouped, sim time walking: per walker real-time '
+           'factor; round trip p99; CPU per simulated second (x one walker)')
+    real = '{} walker(s), controllers grouped, real time 500 Hz holding: round trip p99; ' \
+        'missed periods'
+    assert met[sim.format(1)] is True and met[sim.format(2)] is True
+    assert met[real.format(1)] is True and met[real.format(2)] is False  # 2.5 ms > 2 ms
+    assert sum('walker(s)' in figure for figure in met) == 5  # one walker as processes
+
+
 def test_composition_rows_cover_each_arrangement_measured():
     windows = {kind: _window(1.0, 0, 1.2) for kind in ('processes', 'grouped', 'composed')}
     results = {'composition': {'real_time_500hz': windows, 'real_time_1000hz': windows,
