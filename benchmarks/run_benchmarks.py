@@ -83,6 +83,9 @@ def _arguments(argv: list[str]) -> argparse.Namespace:
                         help='run only the soak: this many minutes of simulated walking '
                              '(default 10)')
     parser.add_argument('--profile', action='store_true', help='run only the py-spy profiles')
+    parser.add_argument('--grouped-controllers', dest='grouped', action='store_true',
+                        help="run the soak with the five joint controllers in one process "
+                             "(run_all.py's --grouped-controllers)")
     parser.add_argument('--output', type=Path, default=HERE / 'results',
                         help='results directory (default: benchmarks/results)')
     args = parser.parse_args(argv)
@@ -104,6 +107,7 @@ class Suite:
     def __init__(self, args: argparse.Namespace, scratch: Path) -> None:
         self.quick = args.quick
         self.soak_minutes = args.soak
+        self.grouped = getattr(args, 'grouped', False)
         self.scratch = scratch
         self._windows: dict[tuple, dict] = {}
         self._runs = 0
@@ -391,12 +395,12 @@ def part_soak(suite: Suite) -> dict:
     minutes = suite.soak_minutes or 10.0
     targets = (DEFAULT_TARGET, 'n1_1')
     suite.say(f'soak: walking {targets[0]} <-> {targets[1]} until {minutes:g} min of '
-              'simulated walking')
+              'simulated walking' + (', controllers grouped' if suite.grouped else ''))
     samples, legs = [], []
     suite._runs += 1
     began = time.monotonic()
     with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, True, record=True,
-                  probe=False) as run:
+                  probe=False, grouped=suite.grouped) as run:
         client = run.clients[0]
         pids = run.pids()
 
@@ -454,7 +458,7 @@ def part_soak(suite: Suite) -> dict:
                 'slope_per_step': float(slope),
                 'slope_standard_error': float(np.sqrt(covariance[0, 0]))}
 
-    return {'minutes_walked': round(walked / 60, 2), 'wall_minutes':
+    return {'grouped': suite.grouped, 'minutes_walked': round(walked / 60, 2), 'wall_minutes':
             round((time.monotonic() - began) / 60, 2), 'legs': legs, 'steps': len(rows),
             'failed_steps': sum(1 for r in rows if not r.success),
             'safe_holds': sum(len(leg['safe_holds']) for leg in legs),
@@ -693,14 +697,15 @@ def figures(results: dict) -> list[dict]:
         growth = max(soak['rss_growth_after_first_leg_bytes'].values(), default=0)
         files = max((lasting_open_files_change(soak['samples']) if soak.get('samples')
                      else soak['open_files_change_after_first_leg']).values(), default=0)
-        add(f'soak: {soak["minutes_walked"]:g} min walked ({soak["steps"]} steps, '
+        label = 'soak (controllers grouped)' if soak.get('grouped') else 'soak'
+        add(f'{label}: {soak["minutes_walked"]:g} min walked ({soak["steps"]} steps, '
             f'{soak["failed_steps"]} failed, {soak.get("safe_holds", 0)} safe holds resumed '
             'from): largest RSS growth after the first leg; '
             'open files change', f'{growth / 2**20:.1f} MiB; {files:+d}',
             'no leak', growth < 20 * 2**20 and files <= 0)
         duration = soak['drift']['duration_s']
         if duration:
-            add('soak: step time first third / last third of the steps',
+            add(f'{label}: step time first third / last third of the steps',
                 f'{duration["first_third_mean"]:.2f} / {duration["last_third_mean"]:.2f} s',
                 'no drift')
     return rows
