@@ -122,3 +122,18 @@ def test_floor_command_prints_the_sweeps(capsys):
     out = capsys.readouterr().out
     assert "Joint 1's fastest sweep with the tip at 0.9 m" in out and '1 mm' in out
     assert [line.split('|')[0].strip() for line in out.splitlines()[2:]] == ['90', '180']
+
+
+@pytest.mark.parametrize('option, value', [('--tolerance', '-1'), ('--tolerance', '0'),
+                                           ('--radius', '-0.5'), ('--radius', 'nan')])
+def test_floor_command_refuses_a_bad_radius_or_tolerance(option, value, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        analysis.main(['floor', option, value])
+    assert exit_info.value.code == 2
+    assert 'expected a finite number > 0' in capsys.readouterr().err
+
+
+def test_floor_command_refuses_a_tip_out_of_reach(capsys):
+    assert analysis.main(['floor', '--radius', '5']) == 2
+    out = capsys.readouterr().out
+    assert out.startswith('refused:') and 'out of reach' in out

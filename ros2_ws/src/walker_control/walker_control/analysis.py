@@ -678,15 +678,31 @@ def _run_floor(args: argparse.Namespace) -> int:
     except ParameterError as error:
         print(f'refused: {error}')
         return 2
+    try:
+        floors = sweep_floors(settings, radius, args.tolerance)
+    except ValueError as error:  # a tip out of reach, among others: said, nothing computed
+        print(f'refused: {error}')
+        return 2
     filters = settings.control.filter
     print(f"Joint 1's fastest sweep with the tip at {radius:g} m, until the tip is within "
           f'{args.tolerance * 1e3:g} mm of the target for good (full torque and rate; '
           f'{FLOOR_SAMPLE_TIME * 1e3:g} ms programme)')
     print(f' sweep | no filter | through its filter ({filters.kind} {filters.order[0]} '
           f'@ {filters.corner[0]:g} rad/s)')
-    for floor in sweep_floors(settings, radius, args.tolerance):
+    for floor in floors:
         print(f' {floor.sweep:5.0f} | {floor.unfiltered:7.2f} s | {floor.filtered:.2f} s')
     return 0
+
+
+def _positive(text: str) -> float:
+    """Return an option's value as a finite number > 0 (argparse refuses anything else)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f'expected a finite number > 0, got {text!r}')
+    return value
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -708,10 +724,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             command.add_argument('--model', choices=('plant', 'two-mass'), default='plant',
                                  help='plant to run on (default: the pybullet plant)')
         if name == 'floor':
-            command.add_argument('--radius', type=float, default=None,
+            command.add_argument('--radius', type=_positive, default=None,
                                  help='tip distance from the base yaw axis [m] (default: the '
                                       'truss spacing)')
-            command.add_argument('--tolerance', type=float, default=0.0005,
+            command.add_argument('--tolerance', type=_positive, default=0.0005,
                                  help='arrival band at the tip [m] (default: 0.0005, the '
                                       "supervisor's insertion_alignment)")
     args = parser.parse_args(argv)
