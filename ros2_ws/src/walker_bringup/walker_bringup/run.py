@@ -7,7 +7,8 @@ the same supervision. ``--grouped-controllers`` runs the five joint controllers 
 side by side in the namespaces ``/walker``, ``/walker_2``, ..., each from its own start on the
 same truss layout and each walking the same route moved with its start (their plants are
 separate physics worlds: they do not collide). A graph counts as up when every node is in the
-ROS graph and every server answers (not after a sleep).
+ROS graph, every server answers and the supervisor has heard from every source it watches
+(checked, not after a sleep).
 A child that dies is reported at once with the end of its log, the walk is stopped safely (the
 supervisor is told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does
 the same. Nothing is left running: each child is interrupted, then terminated, then killed.

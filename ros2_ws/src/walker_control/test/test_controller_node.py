@@ -369,6 +369,10 @@ def test_refuses_to_start_on_a_bad_joint_or_unstable_gains(ros_env, tmp_path):
                      ros_env) as bad_joint:
         assert bad_joint.process.wait(timeout=WAIT) == 2
         assert 'elbow' in bad_joint.output and 'refusing to start' in bad_joint.output
+    with NodeProcess([controller_executable(), '--ros-args', '-p', 'joint_name:=5'],
+                     ros_env) as bad_type:
+        assert bad_type.process.wait(timeout=WAIT) == 2
+        assert 'joint_name refused' in bad_type.output and 'Traceback' not in bad_type.output
     params = tmp_path / 'unstable.yaml'
     params.write_text('/**:\n  ros__parameters:\n    control:\n      coarse:\n'
                       '        acceleration_feedback: [0.5, 0.0, 0.0, 1.5, 0.0]\n')

@@ -209,7 +209,8 @@ def test_a_subset_of_joints_is_answered_alone(ros_env, rclpy_context):
 
 
 @pytest.mark.parametrize('names, wrong', [('[vertex_joint, elbow]', 'elbow'),
-                                          ('[vertex_joint, vertex_joint]', 'distinct')])
+                                          ('[vertex_joint, vertex_joint]', 'distinct'),
+                                          ('[]', 'distinct'), ('5', 'joint_names refused')])
 def test_refuses_to_start_on_unknown_or_repeated_joints(ros_env, names, wrong):
     with start_grouped(ros_env, '-p', f'joint_names:={names}') as node:
         assert node.process.wait(timeout=WAIT) == 2

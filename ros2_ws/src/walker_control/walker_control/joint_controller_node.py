@@ -30,6 +30,7 @@ import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -81,7 +82,10 @@ class ControllerNode(Node):
 
     def __init__(self, node_name: str, **kwargs) -> None:
         super().__init__(node_name, **kwargs)
-        joints = self._declare_joints()
+        try:
+            joints = self._declare_joints()
+        except ParameterException as error:  # a value of the wrong type, say
+            raise ValueError(f'parameter {self._joints_parameter} refused: {error}') from None
         unknown = [j for j in joints if j not in PHYSICAL_JOINT_NAMES]
         if unknown or not joints or len(set(joints)) != len(joints):
             single = self._joints_parameter == 'joint_name'

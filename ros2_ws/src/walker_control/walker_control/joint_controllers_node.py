@@ -56,7 +56,8 @@ class JointControllersNode(ControllerNode):
             'joint_names', list(PHYSICAL_JOINT_NAMES), ParameterDescriptor(
                 type=ParameterType.PARAMETER_STRING_ARRAY,
                 description='physical joints this node drives, each once (of: '
-                            + ', '.join(PHYSICAL_JOINT_NAMES) + ')', read_only=True)).value)
+                            + ', '.join(PHYSICAL_JOINT_NAMES) + ')', read_only=True)).value
+                    or ())  # an empty list arrives as no value
 
 
 def main(args: list[str] | None = None) -> int:
