@@ -667,7 +667,6 @@ def sweep_floors(settings, radius: float, tip_tolerance: float,
 
 
 def _run_floor(args: argparse.Namespace) -> int:
-    from walker_core.parameter_schema import ParameterError
     from walker_control.core.config import load_controller_settings
 
     from walker_core.robot_parameters import load_walker_parameters
@@ -675,12 +674,8 @@ def _run_floor(args: argparse.Namespace) -> int:
     try:
         settings = load_controller_settings(args.params_file)
         radius = args.radius or load_walker_parameters(args.params_file).truss.spacing
-    except ParameterError as error:
-        print(f'refused: {error}')
-        return 2
-    try:
         floors = sweep_floors(settings, radius, args.tolerance)
-    except ValueError as error:  # a tip out of reach, among others: said, nothing computed
+    except ValueError as error:  # invalid parameters, a tip out of reach: said, nothing shown
         print(f'refused: {error}')
         return 2
     filters = settings.control.filter
