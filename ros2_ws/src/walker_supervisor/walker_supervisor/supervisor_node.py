@@ -90,6 +90,15 @@ _SENSOR = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
 # vibration figures.
 _POSES = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT,
                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+#: [s] shortest window of the residual vibration figures (five poses at 100 Hz)
+_MIN_VIBRATION_WINDOW = 0.05
+
+
+def _vibration_window(settings: SupervisorParameters) -> float:
+    """Window [s] of the figures at the mouth: the settle time, in which the joints are still."""
+    return max(settings.settle_time, _MIN_VIBRATION_WINDOW)
+
+
 _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
                    GripperState.ATTACHED: 'attached', GripperState.UNSCREWING: 'unscrewing',
                    GripperState.JAMMED: 'jammed'}
@@ -132,7 +141,7 @@ class SupervisorNode(TeleopServer, Node):
         self.truss = Truss.from_parameters(self.params)
         self.sequencer = StepSequencer(self.settings, self.kinematics, 'a',
                                        self.params.gripper.screw_time)
-        self.vibration = VibrationMeter(window=max(self.settings.settle_time, 0.2))
+        self.vibration = VibrationMeter(window=_vibration_window(self.settings))
         self.walk: Walk | None = None
         self._walk_stance: Stance | None = None
         self._goal_handle = None
@@ -233,6 +242,7 @@ class SupervisorNode(TeleopServer, Node):
     def _apply_settings(self, settings: SupervisorParameters) -> None:
         self.settings = settings
         self.sequencer.parameters = settings
+        self.vibration.window = _vibration_window(settings)
 
     # ------------------------------------------------------------------ measurements
     def _now(self) -> float:
@@ -948,6 +958,10 @@ class SupervisorNode(TeleopServer, Node):
         success = result is not None and result.success
         message = 'no result' if result is None else result.message
         self._execute(self.sequencer.trajectory_done(success, message, self._now()))
+        if self.sequencer.phase == Phase.INSERTION and self.sequencer.stage == 'settling':
+            # at the mouth: the residual vibration and the true error are of the arm at rest
+            # there, not of the descent's last centimetres
+            self.vibration.clear()
         self._tick()  # the next motion or phase is decided now, not at the next tick
 
     def _cancel_trajectory(self) -> None:
