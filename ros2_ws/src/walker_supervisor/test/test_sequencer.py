@@ -25,7 +25,8 @@ TRUSS = Truss.from_parameters(PARAMS)
 SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
-                                  coarse_start_tolerance=0.02, relaxation_wait=0.3)
+                                  coarse_start_tolerance=0.02, relaxation_wait=0.3,
+                                  mouth_settle_time=0.1)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -252,9 +253,10 @@ def test_a_tip_over_the_hole_and_slow_descends_without_waiting_to_settle():
 
     The insertion settles at the mouth before the screw-in, so the fine phase need not wait
     ``settle_time`` too: here (ideal tracking) the coarse motion ends on the point above the
-    hole, and the descent is requested at once; the mouth still settles for ``settle_time``.
+    hole, and the descent is requested at once; the mouth settles for ``mouth_settle_time``,
+    not for the longer ``settle_time``.
     """
-    parameters = dataclasses.replace(SUPERVISOR, settle_time=0.5)
+    parameters = dataclasses.replace(SUPERVISOR, settle_time=0.5, mouth_settle_time=0.2)
     world = World()
     world.sequencer = StepSequencer(parameters, KIN, 'a')
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
@@ -266,7 +268,22 @@ def test_a_tip_over_the_hole_and_slow_descends_without_waiting_to_settle():
     assert arriving and descent and mouth and screw
     # the motion ends, its last step still moving; the next ticks are still: down at once
     assert descent[0] - arriving[-1] <= 3 * DT + 1e-9 < 0.1 * parameters.settle_time
-    assert screw[0] - mouth[0] >= parameters.settle_time - 1e-9  # the mouth waits
+    at_mouth = min(t for t in mouth if t > descent[0])
+    waited = screw[0] - at_mouth  # still from the first tick at the mouth (ideal tracking)
+    assert parameters.mouth_settle_time - 1e-9 <= waited < parameters.settle_time
+
+
+def test_a_correction_line_waits_settle_time_not_mouth_settle_time():
+    """A tip that stopped short waits ``settle_time`` before its line: joint 1 may yet come in."""
+    parameters = dataclasses.replace(SUPERVISOR, settle_time=0.4, mouth_settle_time=0.05)
+    world = World(coarse_miss=0.004)  # 3.6 mm short at 0.9 m
+    world.sequencer = StepSequencer(parameters, KIN, 'a')
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    settling = _stage_times(world, 'settling')
+    line = _stage_times(world, 'moving')
+    fine_line_start = min(t for t in line if t > settling[0])
+    assert fine_line_start - settling[0] >= parameters.settle_time - 1e-9
 
 
 def test_an_aligned_tip_still_moving_is_not_lowered():
@@ -664,7 +681,7 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():

@@ -95,8 +95,8 @@ _MIN_VIBRATION_WINDOW = 0.05
 
 
 def _vibration_window(settings: SupervisorParameters) -> float:
-    """Window [s] of the figures at the mouth: the settle time, in which the joints are still."""
-    return max(settings.settle_time, _MIN_VIBRATION_WINDOW)
+    """Window [s] of the figures at the mouth: the settle time there, the joints still."""
+    return max(settings.mouth_settle_time, _MIN_VIBRATION_WINDOW)
 
 
 _GRIPPER_STATES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',

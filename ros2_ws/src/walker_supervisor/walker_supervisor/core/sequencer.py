@@ -27,7 +27,8 @@ Rules it enforces:
   section 5) from where it settled, up to ``MAX_FINE_LINES`` times before insertion is tried
   anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis to its mouth; the descent moves the joints, which
-  stop in their friction again, so once they have settled the tip is checked again, now
+  stop in their friction again, so once they have been still for ``mouth_settle_time`` (the
+  links ring far less after the vertical descent than after a sweep) the tip is checked again, now
   across the hole's axis: more than ``insertion_alignment`` off it, a fine line at the mouth
   takes it there (up to ``MAX_FINE_LINES`` times), and only then is the gripper screwed in; a
   jammed screw-in is retried up to
@@ -103,10 +104,12 @@ class SupervisorParameters:
         'm', 1e-5, 0.05, read_only=False)
     settle_velocity: float = parameter(
         'joints slower than this count as still: the descent starts with every joint below '
-        'it, the screw-in after settle_time below it',
+        'it, the screw-in after mouth_settle_time below it',
         'rad/s', 1e-4, 1.0, read_only=False)
-    settle_time: float = parameter('time the joints must stay settled', 's', 0.0, 10.0,
-                                   read_only=False)
+    settle_time: float = parameter(
+        'time the joints must stay still before the tip is judged where it came to rest: '
+        'a coarse motion or fine line that ended short of the point above the hole, before '
+        'a correction line', 's', 0.0, 10.0, read_only=False)
     phase_timeout: float = parameter(
         'time a phase may overrun its planned duration before the step is aborted', 's',
         0.1, 600.0, read_only=False)
@@ -127,6 +130,10 @@ class SupervisorParameters:
         '(control.relaxation.duration) needs to free the joints from the bend the seat locked '
         'in: the next step measures its stance only after it (during its unscrewing, with the '
         'chain still closed), and a walk ends only after it (0: no wait)', 's', 0.0, 5.0,
+        read_only=False)
+    mouth_settle_time: float = parameter(
+        "time the joints must stay still at the hole's mouth, after the descent, before the "
+        'tip is checked against the axis and the gripper screwed in', 's', 0.0, 10.0,
         read_only=False)
 
     def __post_init__(self) -> None:
@@ -354,7 +361,7 @@ class StepSequencer:
 
         EXTRACTION, COARSE and INSERTION go by time: the time in the phase over its planned
         duration, the sum of its timed parts (EXTRACTION: the unscrewing, ``screw_time``, and
-        the lift; COARSE: the coarse motion; INSERTION: the descent, ``settle_time`` and the
+        the lift; COARSE: the coarse motion; INSERTION: the descent, ``mouth_settle_time`` and the
         screw-in), each motion as planned once it streams and, until then, as the last one of
         its kind was (0 before the first). FINE goes by the tip error: 0 at
         ``coarse_to_fine_region``, 1 at ``insertion_alignment``. The value never decreases
@@ -375,7 +382,7 @@ class StepSequencer:
             planned = {
                 Phase.EXTRACTION: self._screw_time + motions.get('extraction', 0.0),
                 Phase.COARSE: motions.get('coarse', 0.0),
-                Phase.INSERTION: motions.get('insertion', 0.0) + parameters.settle_time
+                Phase.INSERTION: motions.get('insertion', 0.0) + parameters.mouth_settle_time
                 + self._screw_time}[self.phase]
             value = (now - self._phase_started) / planned if planned > 0.0 else 0.0
         if math.isfinite(value):
@@ -606,7 +613,7 @@ class StepSequencer:
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
             return self._enter_fine(now, correction=False)
         if self.phase == Phase.COARSE and self.stage == 'arriving' \
-                and self._settled(now, velocities):
+                and self._settled(now, velocities, self.parameters.settle_time):
             # the coarse motion ended and the arm came to rest outside the region (friction,
             # overshoot): fine motion, with its higher gains and a fine line, takes it there
             return self._enter_fine(now, correction=True)
@@ -616,7 +623,9 @@ class StepSequencer:
             # over the hole and slow: the descent need not wait for the links to stop ringing,
             # the insertion settles at the mouth and checks the tip again before it screws in
             return self._enter_insertion(now)
-        if self.stage == 'settling' and self._settled(now, velocities):
+        if self.stage == 'settling' and self._settled(
+                now, velocities, self.parameters.mouth_settle_time
+                if self.phase == Phase.INSERTION else self.parameters.settle_time):
             if self.phase == Phase.FINE:
                 if self.tip_error() <= self.parameters.insertion_alignment \
                         or self._fine_lines >= MAX_FINE_LINES:
@@ -872,14 +881,15 @@ class StepSequencer:
         return [self._trajectory('insertion', self._theta, self._targets.at_to,
                                  self._targets.point_above_to, self._targets.point_to)]
 
-    def _settled(self, now: float, velocities: np.ndarray) -> bool:
+    def _settled(self, now: float, velocities: np.ndarray, duration: float) -> bool:
+        """Return True once every joint has been below ``settle_velocity`` for ``duration`` [s]."""
         still = bool(np.all(np.abs(velocities) < self.parameters.settle_velocity))
         if not still:
             self._settled_since = None
             return False
         if self._settled_since is None:
             self._settled_since = now
-        return now - self._settled_since >= self.parameters.settle_time
+        return now - self._settled_since >= duration
 
     @property
     def relaxed_at(self) -> float:
