@@ -54,7 +54,10 @@ def test_vibration_amplitude_of_a_sine_over_the_window():
         meter.add(t, np.array([1.0 + 0.001 * math.sin(2 * math.pi * 10 * t), 2.0, 0.0]))
     assert meter.amplitude() == pytest.approx(0.001, rel=0.02)
     np.testing.assert_allclose(meter.mean(), [1.0, 2.0, 0.0], atol=1e-4)
+    last = 999 / 500
+    np.testing.assert_allclose(
+        meter.latest(), [1.0 + 0.001 * math.sin(2 * math.pi * 10 * last), 2.0, 0.0])
     meter.clear()
-    assert math.isnan(meter.amplitude())
+    assert math.isnan(meter.amplitude()) and np.all(np.isnan(meter.latest()))
     with pytest.raises(ValueError):
         VibrationMeter(0.0)

@@ -742,7 +742,9 @@ class SupervisorNode(TeleopServer, Node):
     def _request_gripper(self, request: GripperRequest) -> None:
         if request.action == 'screw_in' and self.sequencer.phase == Phase.INSERTION:
             self._residual_vibration = self.vibration.amplitude()
-            tip = self.vibration.mean()
+            # where the tip is as the screw-in starts (what the plant's thread checks), not a
+            # mean over the settle window, which the ring biases when the window is short
+            tip = self.vibration.latest()
             hole = self.truss.position(self.sequencer.step.to_node)
             self._true_insertion_error = float(np.linalg.norm(tip[:2] - hole[:2]))
         self._when_ready(self.gripper_client.service_is_ready,

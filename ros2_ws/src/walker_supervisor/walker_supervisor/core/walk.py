@@ -127,3 +127,7 @@ class VibrationMeter:
     def mean(self) -> np.ndarray:
         """Mean tip position [m] over the window."""
         return np.array(self._points).mean(axis=0) if self._points else np.full(3, math.nan)
+
+    def latest(self) -> np.ndarray:
+        """Return the newest tip position [m]; NaN when empty."""
+        return self._points[-1].copy() if self._points else np.full(3, math.nan)
