@@ -286,6 +286,23 @@ def test_a_correction_line_waits_settle_time_not_mouth_settle_time():
     assert fine_line_start - settling[0] >= parameters.settle_time - 1e-9
 
 
+def test_the_descent_is_planned_on_entering_fine_and_streams_unchanged():
+    """The descent asked for when FINE ends is the one prepared as FINE began (no replanning)."""
+    world = World(coarse_miss=0.004)  # a correction line too: the descent stays the same
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    prepared = [c.request for c in world.log
+                if isinstance(c, PrepareTrajectory) and c.request.purpose == 'insertion']
+    descents = [c for c in world.log
+                if isinstance(c, TrajectoryRequest) and c.purpose == 'insertion']
+    assert len(prepared) == 1 and len(descents) == 1
+    assert prepared[0].same_motion(descents[0])
+    # straight down the axis, from the point above the hole to its mouth
+    np.testing.assert_allclose(descents[0].start_point[:2], descents[0].goal_point[:2])
+    np.testing.assert_allclose(KIN.forward(descents[0].start)[:3], descents[0].start_point,
+                               atol=1e-9)
+
+
 def test_an_aligned_tip_still_moving_is_not_lowered():
     """Over the hole but a joint faster than ``settle_velocity``: no descent until it slows."""
     world = World()

@@ -36,7 +36,7 @@ TRAJECTORY_TYPES = {
     'jog_tip': ('cartesian_line', True),
 }
 #: Motions that start where the joints are now (the others start at a planned point).
-_FROM_MEASURED = frozenset({'fine', 'insertion', 'retry_lift', 'recover', 'jog_tip'})
+_FROM_MEASURED = frozenset({'fine', 'retry_lift', 'recover', 'jog_tip'})
 
 
 def _vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:

@@ -14,7 +14,8 @@ Rules it enforces:
   chain, which the controllers' relaxation dither frees after it (``relaxation_wait``), so the
   frame is measured again once the relaxation is over, while the gripper is still unscrewing
   and the chain still closed; the extraction and coarse motions are then planned at once
-  (:class:`PrepareTrajectory`), so that they stream the moment they are due;
+  (:class:`PrepareTrajectory`), so that they stream the moment they are due; so is the descent,
+  on entering FINE;
 * coarse motion (controllers in COARSE mode: low gains, acceleration feedback) ends when the tip
   error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``:
   the controllers then switch to FINE mode (higher gains, integral action) while the coarse
@@ -804,6 +805,8 @@ class StepSequencer:
             self._deadline = now + self.parameters.phase_timeout if not self._trajectory_running \
                 else self._deadline
             commands.append(SetControlMode('fine', self._step.base_gripper))
+            # the descent starts where every fine motion ends: plan it now, stream it when due
+            commands.append(PrepareTrajectory(self._insertion_request()))
         if not correction:
             return commands
         self._fine_lines += 1
@@ -878,8 +881,18 @@ class StepSequencer:
         self._insertion_error = self.tip_error()
         self._mouth_lines = 0
         self._enter(Phase.INSERTION, now, 'descending')
-        return [self._trajectory('insertion', self._theta, self._targets.at_to,
-                                 self._targets.point_above_to, self._targets.point_to)]
+        return [self._issue(self._insertion_request())]
+
+    def _insertion_request(self) -> TrajectoryRequest:
+        """Return the descent: straight down the hole's axis from the point above it to its mouth.
+
+        It starts at the configuration above the hole, where the coarse motion and every fine
+        line leave the setpoints (the joints normally within ``insertion_alignment`` of it;
+        the planner refuses a stream that starts farther than its start tolerance), so it can
+        be planned on entering FINE and streamed the moment FINE ends.
+        """
+        t = self._targets
+        return self._request('insertion', t.above_to, t.at_to, t.point_above_to, t.point_to)
 
     def _settled(self, now: float, velocities: np.ndarray, duration: float) -> bool:
         """Return True once every joint has been below ``settle_velocity`` for ``duration`` [s]."""
