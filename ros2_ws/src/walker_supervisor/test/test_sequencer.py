@@ -338,6 +338,23 @@ def test_a_tip_that_settles_off_the_hole_axis_after_the_descent_is_aligned_at_th
     assert world.sequencer.mouth_offset() < 1e-9  # screwed in on the axis
 
 
+def test_after_a_line_at_the_mouth_the_screw_in_waits_settle_time():
+    """A line at the mouth moves joint 1, which may yet come in: the long wait, not the mouth's."""
+    parameters = dataclasses.replace(SUPERVISOR, settle_time=0.4, mouth_settle_time=0.05)
+    world = World(descent_miss=0.0015)  # 1.35 mm off the axis: one line at the mouth
+    world.sequencer = StepSequencer(parameters, KIN, 'a')
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    descent, aligning = _stage_times(world, 'descending'), _stage_times(world, 'aligning')
+    settling, screw = _stage_times(world, 'settling'), _stage_times(world, 'screwing')
+    after_descent = min(t for t in settling if t > descent[-1])
+    after_line = min(t for t in settling if t > aligning[-1])
+    # after the descent the short wait, then the line; after the line the long one
+    assert parameters.mouth_settle_time - 1e-9 <= aligning[0] - after_descent \
+        < parameters.settle_time
+    assert screw[0] - after_line >= parameters.settle_time - 1e-9
+
+
 def test_a_mouth_that_will_not_align_is_screwed_into_after_a_bounded_number_of_lines():
     world = World(descent_miss=0.0015, mouth_lines_miss=True)
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])

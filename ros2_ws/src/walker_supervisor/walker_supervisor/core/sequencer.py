@@ -29,7 +29,8 @@ Rules it enforces:
   anyway (the screw-in itself is the final check);
 * insertion descends along the hole axis to its mouth; the descent moves the joints, which
   stop in their friction again, so once they have been still for ``mouth_settle_time`` (the
-  links ring far less after the vertical descent than after a sweep) the tip is checked again, now
+  vertical descent hardly moves joint 1; after a line at the mouth, which does, for
+  ``settle_time``) the tip is checked again, now
   across the hole's axis: more than ``insertion_alignment`` off it, a fine line at the mouth
   takes it there (up to ``MAX_FINE_LINES`` times), and only then is the gripper screwed in; a
   jammed screw-in is retried up to
@@ -108,9 +109,10 @@ class SupervisorParameters:
         'it, the screw-in after mouth_settle_time below it',
         'rad/s', 1e-4, 1.0, read_only=False)
     settle_time: float = parameter(
-        'time the joints must stay still before the tip is judged where it came to rest: '
-        'a coarse motion or fine line that ended short of the point above the hole, before '
-        'a correction line', 's', 0.0, 10.0, read_only=False)
+        'time the joints must stay still before the tip is judged where it came to rest '
+        'after a motion that moved joint 1: a coarse motion or fine line that ended short of '
+        'the point above the hole, before a correction line; a line at the mouth, before the '
+        'screw-in', 's', 0.0, 10.0, read_only=False)
     phase_timeout: float = parameter(
         'time a phase may overrun its planned duration before the step is aborted', 's',
         0.1, 600.0, read_only=False)
@@ -134,7 +136,8 @@ class SupervisorParameters:
         read_only=False)
     mouth_settle_time: float = parameter(
         "time the joints must stay still at the hole's mouth, after the descent, before the "
-        'tip is checked against the axis and the gripper screwed in', 's', 0.0, 10.0,
+        'tip is checked against the axis and the gripper screwed in (after a correction line '
+        'at the mouth: settle_time)', 's', 0.0, 10.0,
         read_only=False)
 
     def __post_init__(self) -> None:
@@ -624,9 +627,7 @@ class StepSequencer:
             # over the hole and slow: the descent need not wait for the links to stop ringing,
             # the insertion settles at the mouth and checks the tip again before it screws in
             return self._enter_insertion(now)
-        if self.stage == 'settling' and self._settled(
-                now, velocities, self.parameters.mouth_settle_time
-                if self.phase == Phase.INSERTION else self.parameters.settle_time):
+        if self.stage == 'settling' and self._settled(now, velocities, self._settle_wait()):
             if self.phase == Phase.FINE:
                 if self.tip_error() <= self.parameters.insertion_alignment \
                         or self._fine_lines >= MAX_FINE_LINES:
@@ -893,6 +894,17 @@ class StepSequencer:
         """
         t = self._targets
         return self._request('insertion', t.above_to, t.at_to, t.point_above_to, t.point_to)
+
+    def _settle_wait(self) -> float:
+        """How long [s] the joints must be still before the tip is judged where it came to rest.
+
+        ``mouth_settle_time`` after the descent, which moves joint 1 hardly at all; else (above
+        the hole, or after a line at the mouth, both of which move joint 1, which comes in
+        behind its filter slowly enough to look still for a moment) ``settle_time``.
+        """
+        if self.phase == Phase.INSERTION and self._mouth_lines == 0:
+            return self.parameters.mouth_settle_time
+        return self.parameters.settle_time
 
     def _settled(self, now: float, velocities: np.ndarray, duration: float) -> bool:
         """Return True once every joint has been below ``settle_velocity`` for ``duration`` [s]."""
