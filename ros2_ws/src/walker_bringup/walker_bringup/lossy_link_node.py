@@ -27,7 +27,7 @@ from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -165,7 +165,10 @@ def main(args: list[str] | None = None) -> int:
     code = 0
     try:
         node = LossyLinkNode()
-        spin_nodes(node, stop=stop)
+        # Not the events executor: destroying a publisher or subscription while it relays at
+        # the control rate can abort the process at its shutdown under that executor (a race
+        # with its event callbacks, ros2/rclpy#1644; seen once in the fault tests).
+        spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ValueError, ParameterException) as error:
