@@ -303,6 +303,22 @@ def test_the_descent_is_planned_on_entering_fine_and_streams_unchanged():
                                atol=1e-9)
 
 
+def test_joints_away_from_the_prepared_start_descend_from_where_they_are():
+    """A wrist turned another way (a resumed step's way back) is not sent the prepared descent."""
+    world = World()
+    world.run_step(possible_steps(TRUSS, world.stance)[0], max_time=0.0)  # unscrewing
+    while world.sequencer.phase != Phase.FINE:
+        world.advance()
+    while world.motion is not None:  # the coarse motion runs on to its end
+        world.advance()
+    turned = world.targets.above_to + np.array([0.0, 0.0, 0.0, 0.0, 1.0])  # J5 a radian off
+    commands = world.sequencer.tick(world.now + DT, turned, np.zeros(5), dict(world.grippers))
+    descents = [c for c in commands if isinstance(c, TrajectoryRequest)]
+    assert [c.purpose for c in descents] == ['insertion']
+    np.testing.assert_allclose(descents[0].start, turned)
+    np.testing.assert_allclose(descents[0].goal_point, world.targets.point_to)
+
+
 def test_an_aligned_tip_still_moving_is_not_lowered():
     """Over the hole but a joint faster than ``settle_velocity``: no descent until it slows."""
     world = World()

@@ -84,6 +84,9 @@ class Phase(enum.IntEnum):
 
 #: Fine correction lines tried before insertion is attempted anyway.
 MAX_FINE_LINES = 3
+#: [rad] The descent planned ahead (on entering FINE) starts at the configuration above the
+#: hole; joints farther than this from it (any joint) descend from where they are instead.
+PREPARED_DESCENT_TOLERANCE = 0.02
 #: [s] A step starts no earlier than this before the unscrewing would end with the relaxation
 #: still running, so that the stance is measured after the relaxation, with the chain closed.
 STANCE_MARGIN = 0.1
@@ -882,15 +885,22 @@ class StepSequencer:
         self._insertion_error = self.tip_error()
         self._mouth_lines = 0
         self._enter(Phase.INSERTION, now, 'descending')
-        return [self._issue(self._insertion_request())]
+        request = self._insertion_request()
+        if float(np.max(np.abs(self._theta - request.start))) > PREPARED_DESCENT_TOLERANCE:
+            # not where the step's own motions leave the arm (a resumed step's way back turns
+            # the wrist its own way): straight down from where the joints are
+            t = self._targets
+            request = self._request('insertion', self._theta, t.at_to, t.point_above_to,
+                                    t.point_to)
+        return [self._issue(request)]
 
     def _insertion_request(self) -> TrajectoryRequest:
         """Return the descent: straight down the hole's axis from the point above it to its mouth.
 
         It starts at the configuration above the hole, where the coarse motion and every fine
-        line leave the setpoints (the joints normally within ``insertion_alignment`` of it;
-        the planner refuses a stream that starts farther than its start tolerance), so it can
-        be planned on entering FINE and streamed the moment FINE ends.
+        line leave the setpoints, so it can be planned on entering FINE and streamed the moment
+        FINE ends; joints farther than :data:`PREPARED_DESCENT_TOLERANCE` from it get a descent
+        from where they are instead.
         """
         t = self._targets
         return self._request('insertion', t.above_to, t.at_to, t.point_above_to, t.point_to)
