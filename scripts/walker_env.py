@@ -188,6 +188,10 @@ def _base_environment() -> dict[str, str]:
     env['VIRTUAL_ENV'] = str(VENV_DIR)
     env['AMENT_PREFIX_PATH'] = str(VENV_DIR)
     env['CMAKE_PREFIX_PATH'] = str(VENV_DIR)
+    # The ROS wheels' libraries: rclpy's extension finds librcl_action.so only through another
+    # library's search path, so whether `import rclpy` works depended on what was loaded first
+    # (two fresh-clone test runs failed to import it while collecting)
+    env['LD_LIBRARY_PATH'] = str(VENV_DIR / 'lib')
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['RMW_IMPLEMENTATION'] = 'rmw_fastrtps_cpp'
     env['PYTHONWARNINGS'] = 'ignore::DeprecationWarning'
