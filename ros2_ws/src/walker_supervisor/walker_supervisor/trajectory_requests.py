@@ -58,9 +58,11 @@ def plan_request(request: TrajectoryRequest, kinematics: WalkerKinematics
                  ) -> PlanTrajectory.Request:
     """Build the ``plan_trajectory`` request for one motion of a step.
 
-    A Cartesian motion starts from the measured joints made exact: the tip where their forward
-    kinematics puts it, the gripper vertical, on their IK branch and with their tip yaw, so the
-    planner's first setpoint is where the joints are and nothing jumps.
+    A Cartesian motion of :data:`_FROM_MEASURED` starts from the measured joints made exact:
+    the tip where their forward kinematics puts it, the gripper vertical, on their IK branch and
+    with their tip yaw, so the planner's first setpoint is where the joints are and nothing
+    jumps. The others (extraction, coarse motion, descent) start at their planned point, on the
+    IK branch and tip yaw of the request's start joints.
     """
     type_name, cartesian = TRAJECTORY_TYPES[request.purpose]
     call = PlanTrajectory.Request(trajectory_type=type_name, base_gripper=request.base_gripper)

@@ -888,7 +888,8 @@ class StepSequencer:
         request = self._insertion_request()
         if float(np.max(np.abs(self._theta - request.start))) > PREPARED_DESCENT_TOLERANCE:
             # not where the step's own motions leave the arm (a resumed step's way back turns
-            # the wrist its own way): straight down from where the joints are
+            # the wrist its own way): the same line down the axis, planned from the measured
+            # joints' IK branch and tip yaw (the planner checks its first setpoint against them)
             t = self._targets
             request = self._request('insertion', self._theta, t.at_to, t.point_above_to,
                                     t.point_to)
@@ -899,8 +900,8 @@ class StepSequencer:
 
         It starts at the configuration above the hole, where the coarse motion and every fine
         line leave the setpoints, so it can be planned on entering FINE and streamed the moment
-        FINE ends; joints farther than :data:`PREPARED_DESCENT_TOLERANCE` from it get a descent
-        from where they are instead.
+        FINE ends; for joints farther than :data:`PREPARED_DESCENT_TOLERANCE` from it the same
+        line is planned on their IK branch and tip yaw instead.
         """
         t = self._targets
         return self._request('insertion', t.above_to, t.at_to, t.point_above_to, t.point_to)
