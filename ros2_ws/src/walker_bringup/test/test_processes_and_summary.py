@@ -33,16 +33,14 @@ def test_the_graph_has_every_node_with_its_arguments():
     assert command[:6] == ['/bin/true', '--ros-args', '-r', '__node:=controller_a_yaw',
                            '-r', '__ns:=/walker']
     assert '--params-file' in command and 'joint_name:=a_yaw_joint' in command
-    # controllers run on the state stream's stamps and need no /clock; the others take it
-    assert not any('use_sim_time' in arg for arg in command)
-    assert all('use_sim_time:=true' in n.command('/bin/true') for n in graph
-               if not n.name.startswith('controller_'))
+    # every node is told the clock mode: the controllers wait for owed setpoints in sim time
+    # (and ask for no real-time priority), never in real time
+    assert all('use_sim_time:=true' in n.command('/bin/true') for n in graph)
     assert all('use_sim_time:=false' in n.command('/bin/true')
-               for n in walker_graph('/tmp/walker.yaml') if not n.name.startswith('controller_'))
-    # they cannot tell the clock mode: a sim-time graph keeps them off real-time scheduling
-    assert 'timing.realtime_priority:=0' in command
-    assert not any('realtime_priority' in arg
-                   for n in walker_graph('/tmp/walker.yaml') for arg in n.command('/bin/true'))
+               for n in walker_graph('/tmp/walker.yaml'))
+    assert not any('realtime_priority' in arg for sim_time in (False, True)
+                   for n in walker_graph('/tmp/walker.yaml', sim_time=sim_time)
+                   for arg in n.command('/bin/true'))
     assert controller_node_name('vertex_joint') == 'controller_vertex'
 
 

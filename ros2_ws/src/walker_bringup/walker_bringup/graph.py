@@ -178,10 +178,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
                           plant + parameters, remaps))
     # The controllers run on the plant's state stream and its stamps (watchdogs on the steady
-    # clock): use_sim_time would only add a /clock subscription every period. So they cannot
-    # tell the clock mode themselves, and a sim-time graph, lock-stepped and without deadlines,
-    # tells them to leave their scheduling alone (timing.realtime_priority 0).
-    controller = (('timing.realtime_priority', '0'),) if sim_time else ()
+    # clock); use_sim_time tells them they are lock-stepped: a state then waits for the
+    # setpoint the planner's stream owes it, and no real-time priority is asked for.
+    controller = common
     if grouped_controllers:
         nodes.append(NodeSpec('walker_control', 'joint_controllers_node',
                               GROUPED_CONTROLLERS_NODE, namespace, params_file,

@@ -243,6 +243,64 @@ def test_a_stopped_setpoint_stream_makes_the_joint_hold_and_report_it(ros_env, p
         assert controller.wait_for_output('stale', WAIT), controller.output
 
 
+def start_paced_stream(plant, position, states=10):
+    """COARSE, then ``states`` states each with its setpoint sent a period ahead (the planner)."""
+    from walker_msgs.msg import ControlMode
+
+    plant.step()
+    plant.command(ControlMode.COARSE, 'a')
+    plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+    for _ in range(states):
+        plant.setpoint(plant.stamp_ns + PERIOD_NS, position)
+        plant.step()
+    assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(position)
+
+
+def publish_late_state(plant):
+    """Publish the next state without the setpoint its stream owes it; say if it is answered."""
+    plant.stamp_ns += PERIOD_NS
+    plant.publish_state()
+    return plant.spin_until(lambda: plant.answered(plant.stamp_ns), timeout=1.0)
+
+
+@pytest.mark.parametrize('sim_time', [True, False], ids=['sim time', 'real time'])
+def test_a_state_waits_for_the_setpoint_its_stream_owes_it_in_sim_time_only(ros_env, plant,
+                                                                           sim_time):
+    with start_controller(ros_env, '-p', f'use_sim_time:={str(sim_time).lower()}',
+                          '-p', 'control.sim_time_setpoint_wait:=10.0') as controller:
+        start_paced_stream(plant, 0.01)
+        answered = publish_late_state(plant)
+        if sim_time:
+            # lock-stepped: the plant waits for the effort, the effort for the setpoint
+            assert not answered, 'a sim-time state was answered without its setpoint'
+            plant.setpoint(plant.stamp_ns, 0.02)
+            assert plant.spin_until(lambda: plant.answered(plant.stamp_ns))
+            plant.spin_until(lambda: plant.state_for(plant.stamp_ns) is not None)
+            assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(0.02)
+        else:
+            # like hardware: never wait; the older setpoint (at rest) is carried on
+            assert answered, 'a real-time state waited for its setpoint'
+            plant.spin_until(lambda: plant.state_for(plant.stamp_ns) is not None)
+            assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(0.01)
+        assert controller.process.poll() is None, controller.output
+
+
+def test_a_state_waits_no_longer_than_its_bound_and_a_dead_stream_only_once(ros_env, plant):
+    with start_controller(ros_env, '-p', 'use_sim_time:=true',
+                          '-p', 'control.sim_time_setpoint_wait:=0.3') as controller:
+        start_paced_stream(plant, 0.01)
+        plant.stamp_ns += PERIOD_NS
+        plant.publish_state()
+        assert plant.spin_until(lambda: plant.answered(plant.stamp_ns))  # after the bound
+        assert controller.wait_for_output('answered without it', WAIT), controller.output
+        # the stream is no longer paced: the next states are answered at once, from the last
+        # setpoint, until the setpoint timeout makes the joint hold
+        for _ in range(3):
+            assert publish_late_state(plant), 'a state waited again for a stream that stopped'
+        assert plant.spin_until(lambda: plant.state_for(plant.stamp_ns) is not None)
+        assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(0.01)
+
+
 def test_a_new_tracking_mode_after_a_stale_hold_reports_fresh_inputs_at_once(ros_env, plant):
     from walker_msgs.msg import ControlMode
 

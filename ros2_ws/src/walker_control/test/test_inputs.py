@@ -6,8 +6,8 @@ import pytest
 
 from walker_control.core.config import load_controller_settings
 from walker_control.core.inputs import (
-    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, carry_forward,
-    validate_setpoint)
+    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StreamPacing,
+    carry_forward, validate_setpoint)
 
 DRIVE = load_controller_settings().drive(1)
 
@@ -61,7 +61,59 @@ def test_the_buffer_is_bounded_and_can_be_cleared():
         buffer.add(float(k), Setpoint(position=float(k)))
     assert len(buffer) == 3 and buffer.select(6.5) is None
     buffer.clear()
-    assert buffer.select(100.0) is None
+    assert buffer.select(100.0) is None and buffer.newest_stamp() is None
+
+
+T = 0.002  # [s] a control period
+
+
+def paced_stream(pacing, buffer, states):
+    """Answer states 1..states of a stream sent one period ahead, as the planner does."""
+    buffer.add(T, Setpoint(position=0.0))
+    for k in range(1, states + 1):
+        buffer.add((k + 1) * T, Setpoint(position=0.0))  # sent on the state stamped k T
+        assert not pacing.owed(k * T, buffer.newest_stamp())
+        pacing.used(k * T, buffer.select(k * T)[0])
+
+
+def test_a_paced_stream_owes_each_state_its_setpoint_until_it_comes():
+    pacing, buffer = StreamPacing(), SetpointBuffer()
+    assert not pacing.owed(T, None)  # nothing streamed yet: nothing owed
+    paced_stream(pacing, buffer, 5)
+    assert pacing.paced
+    # the stream is late: the setpoint for 7 T (due on the state 6 T) has not come
+    assert pacing.owed(7 * T, buffer.newest_stamp())
+    buffer.add(7 * T, Setpoint(position=0.1))
+    assert not pacing.owed(7 * T, buffer.newest_stamp())
+    # stamps computed in another way (another process's float arithmetic) still match
+    pacing.used(7 * T + 1e-9, 7 * T)
+    assert pacing.owed(8 * T, buffer.newest_stamp())
+
+
+def test_a_state_answered_without_its_setpoint_ends_the_pacing():
+    pacing, buffer = StreamPacing(), SetpointBuffer()
+    paced_stream(pacing, buffer, 3)
+    assert pacing.owed(5 * T, buffer.newest_stamp())
+    pacing.used(5 * T, buffer.select(5 * T)[0])  # waited long enough: the older one used
+    assert not pacing.paced and not pacing.owed(6 * T, buffer.newest_stamp())
+    pacing.used(6 * T, None)  # holding, or not tracking
+    assert not pacing.owed(7 * T, None)
+    paced_stream(pacing, buffer, 3)
+    pacing.reset()  # a mode change drops the setpoints: nothing owed until paced again
+    assert not pacing.owed(5 * T, None)
+
+
+def test_an_operators_setpoints_are_never_waited_for():
+    """Unstamped setpoints take the last state's stamp on arrival; sparse ones their own."""
+    pacing, buffer = StreamPacing(), SetpointBuffer()
+    last = T
+    for k in range(2, 20):
+        if k % 3 == 0:  # one arrives now and then, stamped with the last state answered
+            buffer.add(last, Setpoint(position=0.01 * k))
+        assert not pacing.owed(k * T, buffer.newest_stamp())
+        selected = buffer.select(k * T)
+        pacing.used(k * T, None if selected is None else selected[0])
+        last = k * T
 
 
 def test_watchdog_state_stream():

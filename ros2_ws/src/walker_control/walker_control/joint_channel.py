@@ -21,7 +21,7 @@ from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
     InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
-    carry_forward, validate_setpoint)
+    StreamPacing, carry_forward, validate_setpoint)
 from walker_control.core.joint_controller import (
     ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,
     RoleChangeError)
@@ -70,10 +70,13 @@ class JointChannel:
         Steady-clock time [s].
     log_prefix : str
         Put before this channel's log lines (the joint's name in a node of several joints).
+    after_setpoint : callable, optional
+        Called after each setpoint message is taken (or refused): the node answers a state
+        that waited for it.
     """
 
     def __init__(self, node: Node, joint: str, settings: ControllerSettings, steady_now,
-                 log_prefix: str = '') -> None:
+                 log_prefix: str = '', after_setpoint=None) -> None:
         self.joint = joint
         self._node = node
         self._logger = node.get_logger()
@@ -82,6 +85,8 @@ class JointChannel:
         self._settings = settings
         self.controller = JointController(settings, joint, 'a')
         self._setpoints = SetpointBuffer()
+        self._pacing = StreamPacing()
+        self._after_setpoint = after_setpoint
         control = settings.control
         self.watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout)
         self._setpoint_resubscription = Resubscription(
@@ -101,7 +106,8 @@ class JointChannel:
     def subscribe_setpoints(self):
         """Subscribe to ``controllers/<joint>/setpoint`` (the node keeps the order)."""
         self._setpoint_sub = self._node.create_subscription(
-            JointCommand, f'controllers/{self.joint}/setpoint', self.on_setpoint, COMMAND_QOS)
+            JointCommand, f'controllers/{self.joint}/setpoint', self._on_setpoint_message,
+            COMMAND_QOS)
         return self._setpoint_sub
 
     def setpoint_resubscription_due(self, now: float) -> bool:
@@ -139,12 +145,18 @@ class JointChannel:
         self.setpoint_lagging = False
         if (controller.mode, controller.base_gripper) != before:
             self._setpoints.clear()
+            self._pacing.reset()
             self._logger.info(f'{self._prefix}mode {controller.mode.name}, base gripper '
                               f'{controller.base_gripper}, role J{controller.role}')
         self.watchdog.expect_setpoints(mode.tracks_setpoints)
         # Judge the inputs again now: the next states must not report a staleness that this
         # command has ended (the supervisor would take it for a fault of the motion it starts).
         self.stale = self.watchdog.check(self._steady_now())
+
+    def _on_setpoint_message(self, msg: JointCommand) -> None:
+        self.on_setpoint(msg)
+        if self._after_setpoint is not None:
+            self._after_setpoint()
 
     def on_setpoint(self, msg: JointCommand) -> None:
         """Take one setpoint of the joint's stream; refuse (and hold) an invalid one."""
@@ -167,6 +179,16 @@ class JointChannel:
         self.watchdog.setpoint_received(self._steady_now())
 
     # --------------------------------------------------------------------------- update
+    def owes_setpoint(self, stamp: float) -> bool:
+        """Say whether the state stamped ``stamp`` [s] lacks the setpoint its stream owes it.
+
+        True only while tracking a stream paced by the states (see
+        :class:`~walker_control.core.inputs.StreamPacing`) whose setpoint for ``stamp`` has not
+        come yet; in sim time the node then waits for it before answering.
+        """
+        return self.controller.mode.tracks_setpoints \
+            and self._pacing.owed(stamp, self._setpoints.newest_stamp())
+
     def answer(self, header, stamp: float, measurement: Measurement) -> float | None:
         """Compute the joint's effort [N*m] for a state stamped ``stamp`` [s].
 
@@ -218,13 +240,14 @@ class JointChannel:
         return stamp - self.last_stamp
 
     def _select_setpoint(self, stamp: float) -> Setpoint | None:
-        if not self.controller.mode.tracks_setpoints:
-            return None
-        selected = self._setpoints.select(stamp)
+        selected = self._setpoints.select(stamp) if self.controller.mode.tracks_setpoints \
+            else None
+        self._pacing.used(stamp, None if selected is None else selected[0])
         if selected is None:
             return None
         lag = self.watchdog.setpoint_lag(stamp, selected[0])
         if lag:
+            self._pacing.reset()
             self.setpoint_lagging = True
             self.controller.hold(f'setpoint stream stale: {lag}')
             self._logger.warning(f'{self._prefix}setpoint stream stale: {lag}; holding')

@@ -24,6 +24,7 @@ joint, ``joint_controllers_node`` for several in one process. No control math he
 
 from __future__ import annotations
 
+import math
 import sys
 
 import rclpy
@@ -106,7 +107,8 @@ class ControllerNode(Node):
         # and the acceleration that arrived with a state are taken before the state itself.
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, MODE_QOS)
         self._channels = [JointChannel(self, joint, self._settings, self._steady_now,
-                                       f'{joint}: ' if several else '')
+                                       f'{joint}: ' if several else '',
+                                       after_setpoint=self._answer_waiting_state)
                           for joint in self._joints]
         self._state_resubscription = Resubscription(
             RESUBSCRIBE_AFTER_TIMEOUTS * self._settings.control.state_timeout)
@@ -118,6 +120,10 @@ class ControllerNode(Node):
         self._accelerations: tuple[float, list[float | None]] | None = None
         self._last_stamp: float | None = None
         self._last_effort: JointState | None = None
+        # A state waiting for the setpoints its stream owes it (sim time), and since when [s]
+        self._waiting: JointState | None = None
+        self._waiting_stamp: float | None = None
+        self._waiting_since = 0.0
         self._effort_msg = JointState(name=list(self._joints))
         # QoS event handlers (incompatible QoS or type warnings) stay on the low-rate topics;
         # on the control-rate ones each handler would cost the executor on every wake-up.
@@ -149,9 +155,8 @@ class ControllerNode(Node):
 
         Called by :func:`run_controller_node`, for the process the node owns: a node built
         inside another process (a composed graph, a test) leaves that process's scheduling
-        alone. The controller runs on the plant's stamps and cannot tell the clock mode: with
-        ``use_sim_time`` true, or ``timing.realtime_priority`` 0 (what a sim-time graph of
-        ``walker_bringup`` gives it), nothing is asked.
+        alone. With ``use_sim_time`` true (what a sim-time graph of ``walker_bringup`` gives
+        it: lock-stepped, no deadlines), or ``timing.realtime_priority`` 0, nothing is asked.
         """
         if self.get_parameter('use_sim_time').value:
             return False
@@ -163,8 +168,8 @@ class ControllerNode(Node):
     # ------------------------------------------------------------------------- parameters
     def _create_watchdog_timer(self):
         control = self._settings.control
-        period = min(control.state_timeout, control.setpoint_timeout) \
-            / _WATCHDOG_CHECKS_PER_TIMEOUT
+        period = min(control.state_timeout, control.setpoint_timeout,
+                     control.sim_time_setpoint_wait or math.inf) / _WATCHDOG_CHECKS_PER_TIMEOUT
         return self.create_timer(period, self._on_watchdog, clock=self._steady)
 
     def _subscribe_states(self):
@@ -225,6 +230,7 @@ class ControllerNode(Node):
     def _on_control_mode(self, msg: ControlMode) -> None:
         for channel in self._channels:
             channel.on_control_mode(msg)
+        self._answer_waiting_state()
 
     def _on_accelerations(self, msg: JointAccelerations) -> None:
         names = tuple(msg.name)
@@ -245,6 +251,48 @@ class ControllerNode(Node):
         if stamp == self._last_stamp and self._last_effort is not None:
             self._effort_pub.publish(self._last_effort)  # the plant asked again
             return
+        if self._must_wait(stamp, now):
+            self._waiting = msg
+            return
+        self._waiting = None
+        self._answer(msg, stamp)
+
+    def _must_wait(self, stamp: float, now: float) -> bool:
+        """Say whether the state stamped ``stamp`` [s] waits for the setpoints owed to it.
+
+        Only in sim time (``use_sim_time``), where the plant waits for the efforts: a state
+        whose stream's setpoint has not come waits for it, for at most
+        ``control.sim_time_setpoint_wait`` seconds of steady time, so that a slow planner
+        slows the simulation instead of changing the motion. In real time a state never waits.
+        """
+        wait = self._settings.control.sim_time_setpoint_wait
+        if wait <= 0.0 or not any(channel.owes_setpoint(stamp) for channel in self._channels) \
+                or not self.get_parameter('use_sim_time').value:
+            return False
+        if stamp != self._waiting_stamp:
+            self._waiting_stamp, self._waiting_since = stamp, now
+        if now - self._waiting_since < wait:
+            return True
+        late = [c.joint for c in self._channels if c.owes_setpoint(stamp)]
+        self.get_logger().warning(
+            f'the state at t = {stamp:.3f} s waited {wait:g} s for the setpoint of '
+            f'{", ".join(late)} from its stream: answered without it',
+            throttle_duration_sec=1.0)
+        return False
+
+    def _answer_waiting_state(self) -> None:
+        """Answer the state that waited for its setpoints, once they are in (or overdue)."""
+        msg = self._waiting
+        if msg is None:
+            return
+        stamp = seconds(msg.header.stamp)
+        if self._must_wait(stamp, self._steady_now()):
+            return
+        self._waiting = None
+        self._answer(msg, stamp)
+
+    def _answer(self, msg: JointState, stamp: float) -> None:
+        """Compute every joint's effort for the state ``msg`` and publish them together."""
         positions = self._positions(msg)
         if positions is None:
             return
@@ -283,6 +331,7 @@ class ControllerNode(Node):
             channel.check_inputs(now)
         if any(channel.stale.any for channel in self._channels):
             self._resubscribe_silent_streams(now)
+        self._answer_waiting_state()
 
     # ---------------------------------------------------------------------------- helpers
     def _positions(self, msg: JointState) -> list[float] | None:

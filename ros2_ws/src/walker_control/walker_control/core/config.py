@@ -199,6 +199,11 @@ class ControlParameters:
         'longest time a streamed setpoint is carried forward along its velocity and '
         'acceleration while the next one is late (0: held as it is)', 's', 0.0, 1.0,
         read_only=False)
+    sim_time_setpoint_wait: float = parameter(
+        'in sim time (use_sim_time), the longest wall-clock time a state waits for the '
+        'setpoint a stream paced by the states owes it before the effort is computed without '
+        'it; below the plant sim.lockstep_timeout (0: never waits)', 's', 0.0, 10.0,
+        read_only=False)
     state_rate: float = parameter(
         'rate of the controller state messages (plots and bags; every period at or above the '
         'control rate)', 'Hz', 1.0, 5000.0, read_only=False)

@@ -7,6 +7,8 @@
   stamp is not later than ``t``.
 * :func:`carry_forward`: when that setpoint is older than the state (the next one is late), it
   is carried forward along its own velocity and acceleration, for a bounded time.
+* :class:`StreamPacing`: in sim time, whether a state must wait for the setpoint a stream
+  paced by the states owes it, instead of carrying an older one forward.
 * :class:`InputWatchdog`: decides, on a steady clock, whether the state or setpoint stream has
   stopped for longer than its timeout.
 * :class:`Resubscription`: decides when a stream silent for long has its subscription made
@@ -25,7 +27,7 @@ import math
 from walker_core.robot_parameters import Drive
 
 __all__ = ['Setpoint', 'SetpointError', 'validate_setpoint', 'carry_forward', 'SetpointBuffer',
-           'InputWatchdog', 'StaleInputs', 'Resubscription']
+           'StreamPacing', 'InputWatchdog', 'StaleInputs', 'Resubscription']
 
 
 class SetpointError(ValueError):
@@ -158,6 +160,10 @@ class SetpointBuffer:
             del self._stamps[0]
             del self._setpoints[0]
 
+    def newest_stamp(self) -> float | None:
+        """Stamp [s] of the newest setpoint held, or None when there is none."""
+        return self._stamps[-1] if self._stamps else None
+
     def select(self, stamp: float) -> tuple[float, Setpoint] | None:
         """Newest ``(stamp, setpoint)`` with a stamp not later than ``stamp``, or None.
 
@@ -169,6 +175,54 @@ class SetpointBuffer:
         del self._stamps[:index]
         del self._setpoints[:index]
         return self._stamps[0], self._setpoints[0]
+
+
+class StreamPacing:
+    """Whether a state must wait for the setpoint that a stream paced by the states owes it.
+
+    The planner streams on the plant's states: for the state stamped ``t`` it sends the
+    setpoint stamped ``t + T``, one period ahead, so that it is in place before the next state.
+    In sim time the plant waits for the controllers' efforts before it steps, and a controller
+    can therefore wait for that setpoint too, instead of carrying an older one forward
+    (:func:`carry_forward`) when the streaming process was slow: the motion is then the same
+    however loaded the machine is. A stream counts as paced while the setpoint used for the
+    last state answered was stamped with that state's own time; an operator's setpoints
+    (unstamped, or at their own rate) are not, and are never waited for. A mode or role change
+    (the setpoints are dropped) starts afresh: nothing is owed until a setpoint stamped with
+    its state's time has been used again.
+
+    Parameters
+    ----------
+    tolerance : float
+        Largest difference [s] between two stamps taken as the same time.
+    """
+
+    def __init__(self, tolerance: float = 1e-6) -> None:
+        self.tolerance = tolerance
+        self.paced = False
+
+    def reset(self) -> None:
+        """Forget the stream (the setpoints were dropped: a mode or role change)."""
+        self.paced = False
+
+    def used(self, state_stamp: float, setpoint_stamp: float | None) -> None:
+        """Record that the state stamped ``state_stamp`` [s] was answered with a setpoint.
+
+        ``setpoint_stamp``: the stamp [s] of the setpoint used, None when there was none (the
+        joint held or did not track).
+        """
+        self.paced = setpoint_stamp is not None \
+            and abs(setpoint_stamp - state_stamp) <= self.tolerance
+
+    def owed(self, state_stamp: float, newest_setpoint_stamp: float | None) -> bool:
+        """Say whether the state stamped ``state_stamp`` [s] should wait for its setpoint.
+
+        True while the stream is paced and no setpoint stamped at or after the state has come.
+        """
+        if not self.paced:
+            return False
+        return newest_setpoint_stamp is None \
+            or newest_setpoint_stamp < state_stamp - self.tolerance
 
 
 @dataclasses.dataclass(frozen=True)
