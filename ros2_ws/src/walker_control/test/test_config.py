@@ -101,6 +101,9 @@ def test_a_filter_corner_above_nyquist_is_refused():
     ('control.setpoint_extrapolation', -0.01, 'below the minimum'),
     ('control.setpoint_extrapolation', 0.6, r'setpoint_extrapolation \(0.6 s\) must not exceed '
                                             r'control\.setpoint_timeout'),
+    ('control.sim_time_setpoint_wait', -0.1, 'below the minimum'),
+    ('control.sim_time_setpoint_wait', 0.5, r'sim_time_setpoint_wait \(0.5 s\) must be below '
+                                            r'control\.state_timeout'),
 ])
 def test_malformed_values_are_refused_by_name(name, value, words):
     with pytest.raises(ParameterError, match=words):

@@ -202,7 +202,8 @@ class ControlParameters:
     sim_time_setpoint_wait: float = parameter(
         'in sim time (use_sim_time), the longest wall-clock time a state waits for the '
         'setpoint a stream paced by the states owes it before the effort is computed without '
-        'it; below the plant sim.lockstep_timeout (0: never waits)', 's', 0.0, 10.0,
+        'it; below control.state_timeout and the plant sim.lockstep_timeout (0: never waits)',
+        's', 0.0, 10.0,
         read_only=False)
     state_rate: float = parameter(
         'rate of the controller state messages (plots and bags; every period at or above the '
@@ -215,6 +216,12 @@ class ControlParameters:
                 f'control.setpoint_extrapolation ({self.setpoint_extrapolation:g} s) must not '
                 f'exceed control.setpoint_timeout ({self.setpoint_timeout:g} s): a stream that '
                 f'stopped is held, then refused as stale, never carried on')
+        if self.sim_time_setpoint_wait >= self.state_timeout:
+            raise ParameterError(
+                f'control.sim_time_setpoint_wait ({self.sim_time_setpoint_wait:g} s) must be '
+                f'below control.state_timeout ({self.state_timeout:g} s): while one joint waits '
+                f'for its setpoint the plant sends no state, and the other joints would take '
+                f'the state stream for stopped')
 
     def gains(self, mode: Mode) -> ModeGains:
         """Return the gain section of ``mode`` (HOLD, COARSE or FINE)."""
