@@ -274,6 +274,73 @@ def test_a_lossy_late_setpoint_link_still_walks_and_a_cut_one_holds_then_resumes
     graph.resume_and_complete(step)
 
 
+# ---------------------------------------------------------------------- a starved planner
+def test_a_starved_planner_slows_the_simulation_and_leaves_the_motion_as_planned(graph):
+    """In sim time the controllers wait for the setpoints a stalled planner owes them.
+
+    Without the wait, a planner stalled during the sweep made the controllers carry old
+    setpoints on and the stream jump when it came back; a sim-time walk on a busy machine once
+    overshot the node by 42 mrad of joint 1 that way.
+    """
+    import numpy as np
+    from action_msgs.msg import GoalStatus
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from trajectory_msgs.msg import JointTrajectory
+    from walker_msgs.msg import ControllerState, StepPhase
+
+    step = graph.one_step()
+    joint_1 = f'{step.base_gripper}_yaw_joint'
+    setpoints = []  # (stamp [s], setpoint in force [rad]) of joint 1 in the sweep
+    streamed = []  # the trajectories the planner started streaming
+    node = graph.client.node
+    subscriptions = [
+        node.create_subscription(
+            ControllerState, f'controllers/{joint_1}/state',
+            lambda m: setpoints.append((m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
+                                        m.position_setpoint))
+            if m.mode == ControllerState.COARSE else None, 100),
+        node.create_subscription(
+            JointTrajectory, 'planned_trajectory',
+            lambda m: streamed.append(m) if m.header.stamp.sec or m.header.stamp.nanosec
+            else None,
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL))]
+    try:
+        reports = len(graph.step_reports)
+        started = time.monotonic()
+        handle = graph.start_walk(step.to_node)
+        graph.wait_phase(StepPhase.COARSE, TIMEOUT, started)
+        planner = graph.processes['planner'].popen.pid
+        for _ in range(5):  # starved for 0.15 s five times in the sweep, half the wait each
+            time.sleep(0.1)
+            os.killpg(planner, signal.SIGSTOP)
+            try:
+                time.sleep(0.15)
+            finally:
+                os.killpg(planner, signal.SIGCONT)
+        wrapped = graph.result(handle)
+    finally:
+        for subscription in subscriptions:
+            node.destroy_subscription(subscription)
+    assert wrapped.status == GoalStatus.STATUS_SUCCEEDED and wrapped.result.success, \
+        wrapped.result.message
+    graph.wait_until(lambda: len(graph.step_reports) > reports, FAULT_TIMEOUT,
+                     'the step report')
+    report = graph.step_reports[-1]
+    assert report.success and report.insertion_attempts == 1 and report.insertion_error < 1e-3
+    # every setpoint joint 1 used in the sweep is the coarse plan's sample at its stamp
+    sweep = max(streamed, key=lambda m: len(m.points))
+    origin = sweep.header.stamp.sec + sweep.header.stamp.nanosec * 1e-9
+    times = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9
+                      for p in sweep.points])
+    column = list(sweep.joint_names).index(joint_1)
+    planned = np.array([p.positions[column] for p in sweep.points])
+    during = [(t, q) for t, q in setpoints if 0.0 < t - origin < times[-1]]
+    assert len(during) > 50, f'{len(during)} controller states of the sweep'
+    off = max(abs(q - np.interp(t - origin, times, planned)) for t, q in during)
+    assert off < 1e-6, f'joint 1 used setpoints {off:.3g} rad off its plan'
+
+
 # ---------------------------------------------------------------------- a silent publisher
 def test_a_frozen_plant_is_reported_and_the_walker_resumes_when_it_is_back(graph):
     from walker_msgs.msg import StepPhase
