@@ -188,10 +188,13 @@ def _base_environment() -> dict[str, str]:
     env['VIRTUAL_ENV'] = str(VENV_DIR)
     env['AMENT_PREFIX_PATH'] = str(VENV_DIR)
     env['CMAKE_PREFIX_PATH'] = str(VENV_DIR)
-    # The ROS wheels' libraries: rclpy's extension finds librcl_action.so only through another
-    # library's search path, so whether `import rclpy` works depended on what was loaded first
-    # (two fresh-clone test runs failed to import it while collecting)
-    env['LD_LIBRARY_PATH'] = str(VENV_DIR / 'lib')
+    # The ROS wheels' libraries: rclpy's extension carries a search path that points outside
+    # the environment, and found librcl_action.so (in .venv/lib) and the libraries the wheels
+    # vendor (libtinyxml2-*, libssl-*, ... in site-packages/ros_*.libs) only through the search
+    # paths of libraries already loaded, so whether `import rclpy` worked depended on what was
+    # loaded first (three fresh-clone test runs failed to import it while collecting)
+    vendored = sorted(str(p) for p in VENV_DIR.glob('lib/python3*/site-packages/ros_*.libs'))
+    env['LD_LIBRARY_PATH'] = os.pathsep.join([str(VENV_DIR / 'lib'), *vendored])
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['RMW_IMPLEMENTATION'] = 'rmw_fastrtps_cpp'
     env['PYTHONWARNINGS'] = 'ignore::DeprecationWarning'
