@@ -848,6 +848,38 @@ def test_resume_in_the_hole_lifts_straight_up_from_where_the_gripper_drifted():
     _run_to_the_end(world)
 
 
+def test_resume_with_the_gripper_tilted_at_the_mouth_turns_it_upright_before_the_line():
+    """A fault in the descent left the gripper tilted: turned upright first, then the line.
+
+    A line (gripper vertical) from there would start away from the joints, and the planner
+    refuses such a stream every time.
+    """
+    world = World()
+    _hold_during(world, Phase.INSERTION)
+    world.theta = world.theta + np.array([0.0, 0.0, 0.0, 0.06, 0.0])  # the wrist, J4
+    held = world.theta.copy()
+    tip = KIN.forward(held)
+    assert abs(tip[3]) > 0.05  # the gripper tilted
+    upright = _resume(world)
+    assert upright.purpose == 'upright' and upright.mode == 'fine'
+    np.testing.assert_allclose(upright.start, held)
+    goal = KIN.forward(upright.goal)
+    np.testing.assert_allclose(goal[:3], tip[:3], atol=1e-9)  # the tip stays where it is
+    assert goal[3] == pytest.approx(0.0, abs=1e-9)  # the gripper vertical
+    np.testing.assert_allclose(upright.goal_point, tip[:3], atol=1e-12)
+    _run_to_the_end(world)
+    purposes = [c.purpose for c in world.log if isinstance(c, TrajectoryRequest)]
+    after = purposes[purposes.index('upright') + 1]
+    assert after == 'fine', purposes  # then the line, from where the gripper stood upright
+
+
+def test_resume_with_the_gripper_upright_takes_the_line_at_once():
+    world = World()
+    _hold_during(world, Phase.INSERTION)
+    world.theta = world.theta + np.array([0.0, 0.0, 0.0, 0.01, 0.0])  # within the tolerance
+    assert _resume(world).purpose == 'recover'
+
+
 def test_a_way_back_the_planner_refuses_is_taken_again_in_joint_space_once():
     world = World()
     _hold_during(world, Phase.COARSE)

@@ -12,13 +12,12 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import roles_to_physical
-from walker_core.kinematics import KinematicsError, WalkerKinematics
+from walker_core.kinematics import WalkerKinematics
 from walker_supervisor.core.sequencer import TrajectoryRequest
-from walker_supervisor.core.way_back import ik_branch
+from walker_supervisor.core.way_back import vertical_configuration
 
 __all__ = ['TRAJECTORY_TYPES', 'plan_request']
 
@@ -32,26 +31,13 @@ TRAJECTORY_TYPES = {
     'recover': ('cartesian_parabolic_accel', True),
     # back to above the target where no straight tip line is followable (core/way_back.py)
     'recover_joint': ('joint_min_jerk', False),
+    # the gripper turned vertical where it is, before a way back that is a line
+    'upright': ('joint_min_jerk', False),
     'jog_joint': ('joint_min_jerk', False),  # teleoperation (core/teleop.py)
     'jog_tip': ('cartesian_line', True),
 }
 #: Motions that start where the joints are now (the others start at a planned point).
 _FROM_MEASURED = frozenset({'fine', 'retry_lift', 'recover', 'jog_tip'})
-
-
-def _vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:
-    """Joint angles (role order) with the tip at ``point`` and the gripper vertical, near ``near``.
-
-    Falls back to ``near`` itself where no such configuration exists (the planner then refuses
-    the request with the reason).
-    """
-    near = np.asarray(near, dtype=float)
-    elbow, reach = ik_branch(kinematics, near)
-    try:
-        return kinematics.inverse([*point, 0.0, near[4]], elbow, reach, reference=near,
-                                  check_limits=False)
-    except KinematicsError:
-        return near
 
 
 def plan_request(request: TrajectoryRequest, kinematics: WalkerKinematics
@@ -69,7 +55,7 @@ def plan_request(request: TrajectoryRequest, kinematics: WalkerKinematics
     if cartesian:
         start = kinematics.forward(request.start)[:3] if request.purpose in _FROM_MEASURED \
             else request.start_point
-        joints = _vertical_configuration(kinematics, start, request.start)
+        joints = vertical_configuration(kinematics, start, request.start)
         call.start = [float(v) for v in start]
         call.goal = [float(v) for v in request.goal_point]
         call.start_joints = [float(v) for v in roles_to_physical(joints, request.base_gripper)]

@@ -62,7 +62,8 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
-from walker_supervisor.core.way_back import ik_branch, line_is_followable, lowest_tip_height
+from walker_supervisor.core.way_back import (
+    ik_branch, line_is_followable, lowest_tip_height, vertical_configuration)
 
 __all__ = [
     'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',
@@ -128,8 +129,10 @@ class SupervisorParameters:
         read_only=False)
     coarse_start_tolerance: float = parameter(
         'largest joint distance from the start of the coarse motion at which it may begin: '
-        'the lifted arm waits in EXTRACTION until it is there (keep it below '
-        'planner.stream.start_tolerance, which refuses a stream that starts farther)', 'rad',
+        'the lifted arm waits in EXTRACTION until it is there; and from the first point of a '
+        'way back that is a line (gripper vertical), beyond which the gripper is first turned '
+        'vertical where it is (keep it below planner.stream.start_tolerance, which refuses a '
+        'stream that starts farther)', 'rad',
         1e-4, 0.5, read_only=False)
     relaxation_wait: float = parameter(
         "time after a screw-in that the controllers' relaxation dither "
@@ -825,11 +828,22 @@ class StepSequencer:
 
         ``line`` (a Cartesian line: 'fine' or 'recover') where the arm can follow one; else
         ``recover_joint`` (a joint-space line) if the tip stays at least half the approach
-        height above the truss along it (:mod:`walker_supervisor.core.way_back`).
+        height above the truss along it (:mod:`walker_supervisor.core.way_back`). A line
+        starts with the gripper vertical: with the gripper tilted by more than
+        ``coarse_start_tolerance`` of joint angle (a fault at the hole's mouth), ``upright``
+        first turns it vertical where it is, and the line follows as a correction.
         """
         if line_is_followable(self.kinematics, self._theta, self._targets.point_above_to):
+            if float(np.max(np.abs(self._upright() - self._theta))) \
+                    > self.parameters.coarse_start_tolerance:
+                return 'upright'
             return line
         return 'recover_joint' if self._joint_way_is_clear() else None
+
+    def _upright(self) -> np.ndarray:
+        """Joints with the tip where it is and the gripper vertical (a line's first point)."""
+        return vertical_configuration(self.kinematics, self.kinematics.forward(self._theta)[:3],
+                                      self._theta)
 
     def _joint_way_is_clear(self) -> bool:
         """Return True if the joint-space line to above the target keeps the tip up."""
@@ -839,6 +853,8 @@ class StepSequencer:
 
     def _way_back(self, purpose: str) -> TrajectoryRequest:
         tip = self.kinematics.forward(self._theta)[:3]
+        if purpose == 'upright':  # the tip stays where it is
+            return self._trajectory(purpose, self._theta, self._upright(), tip, tip)
         return self._trajectory(purpose, self._theta, self._targets.above_to, tip,
                                 self._targets.point_above_to)
 

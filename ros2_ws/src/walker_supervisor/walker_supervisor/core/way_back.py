@@ -4,7 +4,11 @@ A fine correction and the resume of an interrupted step move the tip from where 
 are to the point above the target hole. A straight Cartesian line is the natural path, but
 from where a coarse motion stopped mid-sweep (the arm folded near the base) that line may
 leave the workspace: the planner refuses it, and every resume would fail the same way. Then a
-straight line in joint space is the way back, if it keeps the tip above the truss.
+straight line in joint space is the way back, if it keeps the tip above the truss. A line keeps
+the gripper vertical from its first point on: where the arm stopped with the gripper tilted (a
+fault at the hole's mouth), the gripper is first turned vertical where it is
+(:func:`vertical_configuration`), or the planner would refuse a line that does not start where
+the joints are.
 """
 
 from __future__ import annotations
@@ -15,7 +19,8 @@ import numpy as np
 
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 
-__all__ = ['ik_branch', 'line_is_followable', 'lowest_tip_height', 'PATH_SAMPLES']
+__all__ = ['ik_branch', 'vertical_configuration', 'line_is_followable', 'lowest_tip_height',
+           'PATH_SAMPLES']
 
 #: Points checked along a path.
 PATH_SAMPLES = 60
@@ -33,6 +38,29 @@ def ik_branch(kinematics: WalkerKinematics, theta: np.ndarray) -> tuple[str, str
     l1, l2 = kinematics.l1, kinematics.l2
     reach = l2 * math.sin(t2) + l2 * math.sin(t2 + t3) + l1 * math.sin(t2 + t3 + t4)
     return ('up' if t3 >= 0 else 'down'), ('forward' if reach >= 0 else 'backward')
+
+
+def vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:
+    """Joint angles (role order) with the tip at ``point`` and the gripper vertical, near ``near``.
+
+    On the IK branch and with the tip yaw of ``near``; joint limits are not checked. Falls back
+    to ``near`` itself where no such configuration exists (a planner then refuses what starts
+    there, with the reason).
+
+    Parameters
+    ----------
+    point : array_like, shape (3,)
+        Tip position, base frame [m].
+    near : array_like, shape (5,)
+        Joint angles whose branch and tip yaw to keep, role order [rad].
+    """
+    near = np.asarray(near, dtype=float)
+    elbow, reach = ik_branch(kinematics, near)
+    try:
+        return kinematics.inverse([*point, 0.0, near[4]], elbow, reach, reference=near,
+                                  check_limits=False)
+    except KinematicsError:
+        return near
 
 
 def line_is_followable(kinematics: WalkerKinematics, theta: np.ndarray, goal_point: np.ndarray,
