@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from walker_core.kinematics import WalkerKinematics
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.robot_parameters import load_walker_parameters
 from walker_supervisor.core.health import controller_trouble, tell_mode_again
-from walker_supervisor.core.way_back import ik_branch, line_is_followable, lowest_tip_height
+from walker_supervisor.core.way_back import (
+    ik_branch, line_is_followable, lowest_tip_height, vertical_configuration, vertical_ik)
 
 KIN = WalkerKinematics.from_parameters(load_walker_parameters())
 ABOVE_TARGET = np.array([0.0, -0.9, 0.03])  # half a turn from (0, 0.9)
@@ -49,6 +50,27 @@ def test_the_branch_is_the_elbow_and_reach_of_the_joints():
         for reach in ('forward', 'backward'):
             theta = KIN.inverse([0.0, 0.9, 0.03, 0.0, 0.0], elbow, reach, check_limits=False)
             assert ik_branch(KIN, theta) == (elbow, reach)
+
+
+def test_the_vertical_configuration_turns_a_tilted_gripper_upright_where_the_tip_is():
+    level = KIN.inverse([0.3, 0.6, 0.004, 0.0, 0.2])
+    tilted = level + np.array([0.0, 0.02, -0.03, 0.055, 0.0])  # a fault at the mouth
+    tip = KIN.forward(tilted)[:3]
+    for upright in (vertical_ik(KIN, tip, tilted), vertical_configuration(KIN, tip, tilted)):
+        pose = KIN.forward(upright)
+        np.testing.assert_allclose(pose[:3], tip, atol=1e-9)  # the tip stays
+        assert pose[3] == pytest.approx(0.0, abs=1e-9)  # the gripper vertical
+        assert pose[4] == pytest.approx(KIN.forward(tilted)[4], abs=1e-9)  # its yaw kept
+        assert ik_branch(KIN, upright) == ik_branch(KIN, tilted)
+        assert np.max(np.abs(upright - tilted)) > 0.02  # it is a move, not the joints again
+
+
+def test_without_a_vertical_configuration_the_checked_one_refuses_and_the_other_stays():
+    theta = KIN.inverse([0.0, 0.9, 0.03, 0.0, 0.0])
+    out_of_reach = np.array([0.0, 3.0, 0.03])
+    with pytest.raises(KinematicsError):
+        vertical_ik(KIN, out_of_reach, theta)
+    np.testing.assert_array_equal(vertical_configuration(KIN, out_of_reach, theta), theta)
 
 
 @pytest.mark.parametrize('stale, holding, tracking, words', [

@@ -63,7 +63,7 @@ from walker_core.parameter_schema import ParameterError, parameter
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.way_back import (
-    ik_branch, line_is_followable, lowest_tip_height, vertical_configuration)
+    line_is_followable, lowest_tip_height, vertical_configuration, vertical_ik)
 
 __all__ = [
     'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',
@@ -867,13 +867,10 @@ class StepSequencer:
         """
         tip = self.kinematics.forward(self._theta)[:3]
         point = np.array([tip[0], tip[1], above[2]])
-        elbow, reach = ik_branch(self.kinematics, self._theta)
         try:
-            joints = self.kinematics.inverse([*point, 0.0, self._theta[4]], elbow, reach,
-                                             reference=self._theta)
+            return vertical_ik(self.kinematics, point, self._theta), point
         except KinematicsError:
             return None
-        return joints, point
 
     def _no_way_back(self) -> str:
         tip = self.kinematics.forward(self._theta)[:3]

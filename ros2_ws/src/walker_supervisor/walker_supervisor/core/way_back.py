@@ -19,8 +19,8 @@ import numpy as np
 
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 
-__all__ = ['ik_branch', 'vertical_configuration', 'line_is_followable', 'lowest_tip_height',
-           'PATH_SAMPLES']
+__all__ = ['ik_branch', 'vertical_ik', 'vertical_configuration', 'line_is_followable',
+           'lowest_tip_height', 'PATH_SAMPLES']
 
 #: Points checked along a path.
 PATH_SAMPLES = 60
@@ -40,12 +40,11 @@ def ik_branch(kinematics: WalkerKinematics, theta: np.ndarray) -> tuple[str, str
     return ('up' if t3 >= 0 else 'down'), ('forward' if reach >= 0 else 'backward')
 
 
-def vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:
+def vertical_ik(kinematics: WalkerKinematics, point, near, check_limits: bool = True
+                ) -> np.ndarray:
     """Joint angles (role order) with the tip at ``point`` and the gripper vertical, near ``near``.
 
-    On the IK branch and with the tip yaw of ``near``; joint limits are not checked. Falls back
-    to ``near`` itself where no such configuration exists (a planner then refuses what starts
-    there, with the reason).
+    On the IK branch and with the tip yaw of ``near``.
 
     Parameters
     ----------
@@ -53,14 +52,30 @@ def vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndar
         Tip position, base frame [m].
     near : array_like, shape (5,)
         Joint angles whose branch and tip yaw to keep, role order [rad].
+    check_limits : bool
+        Refuse a configuration outside the joint limits.
+
+    Raises
+    ------
+    KinematicsError
+        No such configuration (out of reach, or outside the limits when checked).
     """
     near = np.asarray(near, dtype=float)
     elbow, reach = ik_branch(kinematics, near)
+    return kinematics.inverse([*point, 0.0, near[4]], elbow, reach, reference=near,
+                              check_limits=check_limits)
+
+
+def vertical_configuration(kinematics: WalkerKinematics, point, near) -> np.ndarray:
+    """:func:`vertical_ik` without the joint limits, or ``near`` itself where there is none.
+
+    Where no such configuration exists, a planner refuses what starts at ``near``, with the
+    reason.
+    """
     try:
-        return kinematics.inverse([*point, 0.0, near[4]], elbow, reach, reference=near,
-                                  check_limits=False)
+        return vertical_ik(kinematics, point, near, check_limits=False)
     except KinematicsError:
-        return near
+        return np.asarray(near, dtype=float)
 
 
 def line_is_followable(kinematics: WalkerKinematics, theta: np.ndarray, goal_point: np.ndarray,
