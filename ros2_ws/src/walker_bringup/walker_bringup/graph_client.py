@@ -15,7 +15,7 @@ import rclpy
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
@@ -25,18 +25,14 @@ from walker_msgs.srv import GripperCommand, PlanTrajectory
 
 from walker_bringup.loop_health import (
     PLANT_STATUS_SUFFIX, SUPERVISOR_STATUS_SUFFIX, LoopHealth, loop_health, sources_not_heard)
+from walker_core.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
 from walker_core.spinning import TopicSampler, destroy_actions
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
            'init_context']
 
 _POLL = 0.1  # [s]
-_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-_REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-_DIAGNOSTICS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.VOLATILE)
+_REPORTS = latched_qos(100)
 
 
 class GraphNotReadyError(RuntimeError):
@@ -92,9 +88,9 @@ class GraphClient:
         self._joint_states = self._sampler.subscribe(JointState, 'joint_states',
                                                      qos_profile_sensor_data)
         self.node.create_subscription(StepReport, 'step_reports', self.reports.append, _REPORTS)
-        self.node.create_subscription(StepPhase, 'phase', self._on_phase, _LATCHED)
+        self.node.create_subscription(StepPhase, 'phase', self._on_phase, LATCHED_QOS)
         self.node.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
-                                      _LATCHED)
+                                      LATCHED_QOS)
         # the plant's record of the loop's timing, at 1 Hz (see loop_health)
         self.loop: LoopHealth | None = None
         self._plant_status = f'{namespace.rstrip("/")}/plant{PLANT_STATUS_SUFFIX}'
@@ -103,7 +99,7 @@ class GraphClient:
         self.unheard: list[str] | None = None
         self._supervisor_status = f'{namespace.rstrip("/")}/supervisor{SUPERVISOR_STATUS_SUFFIX}'
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
-                                      _DIAGNOSTICS)
+                                      COMMAND_QOS)
 
     def _on_phase(self, msg: StepPhase) -> None:
         self.phase = msg

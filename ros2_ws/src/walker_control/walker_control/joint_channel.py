@@ -15,8 +15,9 @@ from __future__ import annotations
 
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
+
+from walker_core.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
 
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
@@ -30,17 +31,8 @@ from walker_control.core.modes import Mode
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel',
            'seconds']
 
-STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                       reliability=ReliabilityPolicy.BEST_EFFORT,
-                       durability=DurabilityPolicy.VOLATILE)
-COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.VOLATILE)
-# Depth 10: the HOLD that ends a step and the next step's mode (with the other base) are
-# published milliseconds apart; a reader keeping one could lose the HOLD and refuse the swap.
-MODE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                      reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: joint_states and joint_accelerations: best effort, newest only (walker_core.qos)
+STATE_QOS = SENSOR_QOS
 # A stream silent for this many of its timeouts has its subscription made anew, and again
 # as often while the silence lasts (see Resubscription): 2 s by default, the supervisor's
 # watchdog, so that a publisher merely stalled by a loaded machine is not matched anew

@@ -29,7 +29,6 @@ from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.task import Future
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
@@ -40,6 +39,7 @@ from walker_msgs.srv import PlanTrajectory
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_core.realtime import log_realtime_request, request_thread_priority
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
@@ -52,15 +52,6 @@ from walker_planner.core.streaming import SampledTrajectory, SetpointStream, che
 __all__ = ['PlannerNode', 'main']
 
 _RESULT_TIMEOUT = 30  # [s] how long a finished follow_trajectory goal keeps its result
-
-SETPOINT_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                          history=HistoryPolicy.KEEP_LAST)
-LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                         history=HistoryPolicy.KEEP_LAST)
-STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
-                       history=HistoryPolicy.KEEP_LAST)
-
 
 #: [s] how often the main thread completes ended streams and sends action feedback
 _RELAY_PERIOD = 0.02
@@ -120,12 +111,12 @@ class PlannerNode(Node):
         self._state_index: list[int] = []
         self._setpoint_publishers = {
             name: self._stream_node.create_publisher(
-                JointCommand, f'controllers/{name}/setpoint', SETPOINT_QOS)
+                JointCommand, f'controllers/{name}/setpoint', COMMAND_QOS)
             for name in PHYSICAL_JOINT_NAMES}
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
         self._stream_node.create_subscription(JointState, 'joint_states', self._on_joint_state,
-                                              STATE_QOS)
+                                              SENSOR_QOS)
         self._stream_node.create_subscription(ControlMode, 'control_mode',
                                               self._on_control_mode, LATCHED_QOS)
         self.create_timer(_RELAY_PERIOD, self._relay,

@@ -1,18 +1,19 @@
-"""Conversions between the plant core's state and ROS messages, and the plant's QoS profiles.
+"""Conversions between the plant core's state and ROS messages; the plant's QoS profiles.
 
 No node here: plain functions that the plant node calls, so that the node's callbacks stay one
-line of conversion and one call into the core. QoS as docs/architecture.md specifies.
+line of conversion and one call into the core. The QoS profiles are those of
+:mod:`walker_core.qos`, the same for every node.
 """
 
 from __future__ import annotations
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
+from walker_core.qos import CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_msgs.msg import GripperState, GripperStates, JointAccelerations
 from walker_sim.core.plant import GripperReport, PlantState, Pose
 
@@ -24,23 +25,6 @@ __all__ = [
 
 #: Frame of every pose the plant publishes: the truss (world) frame.
 TRUSS_FRAME = 'truss'
-
-#: joint_states, joint_accelerations, poses: best effort, newest only.
-SENSOR_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                        reliability=ReliabilityPolicy.BEST_EFFORT,
-                        durability=DurabilityPolicy.VOLATILE)
-#: effort_commands: reliable, keep last 10.
-COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.VOLATILE)
-#: gripper_states, robot_description: reliable, latched for late joiners.
-LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-#: /clock: reliable, keep last 1.
-CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                       reliability=ReliabilityPolicy.RELIABLE,
-                       durability=DurabilityPolicy.VOLATILE)
 
 _NS_PER_S = 1_000_000_000
 

@@ -42,6 +42,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
+from walker_core.qos import LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
@@ -64,28 +65,14 @@ from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['SupervisorNode', 'main']
 
-_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                      history=HistoryPolicy.KEEP_LAST)
-# Every mode command must reach every controller in order (a step's final HOLD and the next
-# step's mode follow each other within milliseconds), so more than the newest is kept.
-_MODE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                       history=HistoryPolicy.KEEP_LAST)
 # The phase is latched with a short history: a subscriber that matches late (a recorder
 # matching a restarted supervisor, seen to take more than a second over UDP) still receives
 # the phases it missed, a safe hold among them, and its newest message is the phase now.
-_PHASE_QOS = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                        history=HistoryPolicy.KEEP_LAST)
+_PHASE_QOS = latched_qos(20)
 #: [s] steady clock: least time between two mode commands re-sent to controllers that fell
 #: back to HOLD on a stall (one command serves all five)
 _TELL_MODE_AGAIN_PERIOD = 0.25
-_REPORTS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                      history=HistoryPolicy.KEEP_LAST)
-_SENSOR = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
-                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+_REPORTS = latched_qos(100)
 # Poses are kept between two decisions (at 100 Hz, two or three per 50 Hz tick) for the
 # vibration figures.
 _POSES = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT,
@@ -165,7 +152,7 @@ class SupervisorNode(TeleopServer, Node):
         self._waiting_requests: list[tuple] = []  # requests whose server is not yet discovered
         self._pending_adoption = False
 
-        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODE_QOS)
+        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', MODE_QOS)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', _PHASE_QOS)
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
         # The joint states (500 Hz) and the tip pose are sampled at the decision rate, not
@@ -173,11 +160,11 @@ class SupervisorNode(TeleopServer, Node):
         # every decision the supervisor makes.
         self._sampler = TopicSampler(f'{self.get_name()}_sampler', self.get_namespace(),
                                      self.context)
-        self._joint_states = self._sampler.subscribe(JointState, 'joint_states', _SENSOR)
+        self._joint_states = self._sampler.subscribe(JointState, 'joint_states', SENSOR_QOS)
         self._tip_poses = self._sampler.subscribe(PoseStamped, 'tip_pose', _POSES)
         self.create_subscription(GripperStates, 'gripper_states', self._on_gripper_states,
-                                 _LATCHED)
-        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, _LATCHED)
+                                 LATCHED_QOS)
+        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, LATCHED_QOS)
         self._state_file = step_state_path(self.get_namespace())
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
@@ -514,7 +501,7 @@ class SupervisorNode(TeleopServer, Node):
             self._mode_told_again = now
             if self._mode_repetition.repeat():
                 self.destroy_publisher(self.mode_pub)
-                self.mode_pub = self.create_publisher(ControlMode, 'control_mode', _MODE_QOS)
+                self.mode_pub = self.create_publisher(ControlMode, 'control_mode', MODE_QOS)
                 self.get_logger().warning(
                     f'controller {", ".join(fell_back)} still in HOLD after the mode was '
                     f'repeated {self._mode_repetition.renew_after} times: control_mode '

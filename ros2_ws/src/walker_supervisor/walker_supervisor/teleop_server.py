@@ -30,13 +30,13 @@ from collections.abc import Callable
 import numpy as np
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from walker_msgs.action import FollowTrajectory
 from walker_msgs.msg import GripperState, GripperStates
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip, PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_core.qos import LATCHED_QOS
 from walker_supervisor.core.sequencer import MAX_FINE_LINES, SequencerError, TrajectoryRequest
 from walker_supervisor.core.teleop import (
     JointJog, SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules,
@@ -46,9 +46,6 @@ from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['TeleopServer']
 
-_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                      history=HistoryPolicy.KEEP_LAST)
 _STATE_NAMES = {'free': GripperState.FREE, 'screwing': GripperState.SCREWING,
                 'attached': GripperState.ATTACHED, 'unscrewing': GripperState.UNSCREWING,
                 'jammed': GripperState.JAMMED}
@@ -96,7 +93,7 @@ class TeleopServer:
         self._teleop_gripper_msgs: dict[str, GripperState] = {}
         group = ReentrantCallbackGroup()
         self.create_subscription(GripperStates, 'gripper_states', self._teleop_on_grippers,
-                                 _LATCHED, callback_group=group)
+                                 LATCHED_QOS, callback_group=group)
         self.create_service(JogJoint, 'jog_joint', self._on_jog_joint, callback_group=group)
         self.create_service(JogTip, 'jog_tip', self._on_jog_tip, callback_group=group)
         self.create_service(GripperCommand, 'operate_gripper', self._on_operate_gripper,

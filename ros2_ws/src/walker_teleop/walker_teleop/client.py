@@ -21,14 +21,14 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import (
-    DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
+from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
+from walker_core.qos import LATCHED_QOS
 from walker_core.spinning import destroy_actions
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
@@ -37,9 +37,6 @@ __all__ = ['TeleopClient', 'GraphUnavailableError', 'CommandInterruptedError']
 
 _POLL = 0.1  # [s] longest wait before Ctrl-C is seen
 _LATCHED_GRACE = 0.5  # [s] wait for a latched topic that may never have been published
-_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                      history=HistoryPolicy.KEEP_LAST)
 
 
 class GraphUnavailableError(RuntimeError):
@@ -225,11 +222,11 @@ class TeleopClient:
             return lambda msg: received.__setitem__(name, msg)
 
         subscriptions = [
-            self.node.create_subscription(StepPhase, 'phase', keep('phase'), _LATCHED),
+            self.node.create_subscription(StepPhase, 'phase', keep('phase'), LATCHED_QOS),
             self.node.create_subscription(ControlMode, 'control_mode', keep('control_mode'),
-                                          _LATCHED),
+                                          LATCHED_QOS),
             self.node.create_subscription(GripperStates, 'gripper_states', keep('gripper_states'),
-                                          _LATCHED),
+                                          LATCHED_QOS),
             self.node.create_subscription(JointState, 'joint_states', keep('joint_states'),
                                           qos_profile_sensor_data)]
         for gripper in ('a', 'b'):

@@ -1,0 +1,52 @@
+"""The QoS profiles of the walker's topics, one definition for every publisher and subscriber.
+
+docs/architecture.md gives each topic its QoS; a publisher and a subscriber of one topic must
+agree (a best-effort publisher never reaches a reliable subscriber, and a volatile one never
+replays to a transient-local late joiner), and the recorder stores what the first publishers
+offer. So every node takes its profiles from here:
+
+* :data:`SENSOR_QOS`: high-rate state (``joint_states``, ``joint_accelerations``, the poses):
+  best effort, newest only; a slow subscriber never stalls the plant.
+* :data:`COMMAND_QOS`: commands and reports every period (``effort_commands``, the
+  setpoints, the controller states, ``/diagnostics``): reliable, keep last 10.
+* :data:`LATCHED_QOS`: latched state (``gripper_states``, ``robot_description``,
+  ``planned_trajectory``): reliable, transient local, depth 1.
+* :data:`MODE_QOS`: ``control_mode``: latched with depth 10, since a step's final HOLD and the
+  next step's mode follow each other within milliseconds and each must reach every controller.
+* :data:`CLOCK_QOS`: ``/clock``: reliable, keep last 1.
+* :func:`latched_qos`: latched with a history (the phase, the step reports).
+"""
+
+from __future__ import annotations
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+__all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'CLOCK_QOS', 'latched_qos']
+
+
+def latched_qos(depth: int) -> QoSProfile:
+    """Reliable, transient local, keep last ``depth``: a late subscriber gets the last ones.
+
+    Raises
+    ------
+    ValueError
+        If ``depth`` is not a positive integer.
+    """
+    if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
+        raise ValueError(f'a latched topic keeps at least one message, got depth {depth!r}')
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+SENSOR_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                        reliability=ReliabilityPolicy.BEST_EFFORT,
+                        durability=DurabilityPolicy.VOLATILE)
+COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.VOLATILE)
+LATCHED_QOS = latched_qos(1)
+MODE_QOS = latched_qos(10)
+CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
