@@ -301,6 +301,22 @@ def test_a_state_waits_no_longer_than_its_bound_and_a_dead_stream_only_once(ros_
         assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(0.01)
 
 
+def test_a_setpoint_sent_ahead_survives_the_switch_from_coarse_to_fine(ros_env, plant):
+    """The supervisor switches to FINE while the stream goes on: no period without it."""
+    from walker_msgs.msg import ControlMode
+
+    with start_controller(ros_env) as controller:
+        start_paced_stream(plant, 0.1)
+        plant.setpoint(plant.stamp_ns + PERIOD_NS, 0.1)  # the next state's, sent ahead
+        plant.command(ControlMode.FINE, 'a')
+        assert controller.wait_for_output('mode FINE', WAIT), controller.output
+        plant.step()  # the first state in FINE: its setpoint came before the mode
+        state = plant.state_for(plant.stamp_ns)
+        assert state.mode == ControlMode.FINE
+        assert state.position_setpoint == pytest.approx(0.1)  # not the measured 0.0, held
+        assert not state.stale
+
+
 def test_a_new_tracking_mode_after_a_stale_hold_reports_fresh_inputs_at_once(ros_env, plant):
     from walker_msgs.msg import ControlMode
 

@@ -55,6 +55,15 @@ def test_setpoints_arriving_out_of_order_are_sorted_and_duplicates_replaced():
     assert buffer.select(1.004) == (1.004, Setpoint(position=5.0))
 
 
+def test_dropping_until_a_stamp_keeps_only_the_later_setpoints():
+    buffer = SetpointBuffer()
+    for k in range(5):
+        buffer.add(k * 0.002, Setpoint(position=float(k)))
+    buffer.drop_until(0.004)
+    assert len(buffer) == 2 and buffer.select(0.0059) is None
+    assert buffer.select(0.006) == (0.006, Setpoint(position=3.0))
+
+
 def test_the_buffer_is_bounded_and_can_be_cleared():
     buffer = SetpointBuffer(capacity=3)
     for k in range(10):

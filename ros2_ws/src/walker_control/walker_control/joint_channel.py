@@ -136,7 +136,12 @@ class JointChannel:
             return
         self.setpoint_lagging = False
         if (controller.mode, controller.base_gripper) != before:
-            self._setpoints.clear()
+            # Setpoints sent ahead for the states to come stay (a stream that goes on from
+            # COARSE into FINE); older ones, and every one under another base, are dropped.
+            if controller.base_gripper != before[1] or self.last_stamp is None:
+                self._setpoints.clear()
+            else:
+                self._setpoints.drop_until(self.last_stamp)
             self._pacing.reset()
             self._logger.info(f'{self._prefix}mode {controller.mode.name}, base gripper '
                               f'{controller.base_gripper}, role J{controller.role}')

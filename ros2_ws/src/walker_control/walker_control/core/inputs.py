@@ -160,6 +160,12 @@ class SetpointBuffer:
             del self._stamps[0]
             del self._setpoints[0]
 
+    def drop_until(self, stamp: float) -> None:
+        """Forget the setpoints stamped at or before ``stamp`` [s]; keep the later ones."""
+        index = bisect.bisect_right(self._stamps, stamp)
+        del self._stamps[:index]
+        del self._setpoints[:index]
+
     def newest_stamp(self) -> float | None:
         """Stamp [s] of the newest setpoint held, or None when there is none."""
         return self._stamps[-1] if self._stamps else None
