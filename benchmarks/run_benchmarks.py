@@ -36,8 +36,9 @@ starts, in a ROS domain of its own, discovery on loopback, the plant timed from 
   again with each walker's controllers grouped (1, 2 and 4 in real time).
 * ``soak`` (only with ``--soak``): a long walk back and forth; memory, open files and shared
   memory over time, drift of the step figures.
-* ``profile`` (only with ``--profile``): py-spy samples of the plant, a controller, the planner
-  and the supervisor during a sim-time walk, and of the composed graph.
+* ``profile`` (only with ``--profile``): py-spy samples of the plant, a controller (or the
+  controllers' node, grouped), the planner and the supervisor during a sim-time walk, and of
+  the composed graph.
 
 The numbers come from a 2-core virtual machine shared with other work: they are noisy, and
 the load average is recorded beside them.
@@ -495,34 +496,44 @@ def lasting_open_files_change(samples: list[dict]) -> dict:
 
 
 def part_profile(suite: Suite) -> dict:
-    """py-spy samples of the busiest processes during sim-time walking."""
+    """py-spy samples of the busiest processes during sim-time walking, in each arrangement.
+
+    Separate processes (the plant, one controller, the planner, the supervisor), the
+    controllers grouped (the plant, the controllers' node, the planner, the supervisor) and
+    the graph composed in one process. Two processes are sampled at a time, so that the
+    samplers themselves take at most one core.
+    """
     from graph_runner import GraphRun, Walking, back_and_forth_targets
     from profiling import categorise, py_spy, record, top_functions
 
     if py_spy() is None:
         raise RuntimeError('py-spy is not installed: pip install py-spy (into .venv)')
     seconds = suite.seconds(10.0, 5.0)
+    arrangements = (
+        ('', False, False, ['/walker/plant', '/walker/controller_a_yaw', '/walker/planner',
+                            '/walker/supervisor']),
+        (' (grouped)', False, True, ['/walker/plant', '/walker/controllers', '/walker/planner',
+                                     '/walker/supervisor']),
+        (' (composed)', True, False, ['/walker/graph']))
     result = {}
-    for composed in (False, True):
+    for label, composed, grouped, names in arrangements:
         suite._runs += 1
         scratch = suite.scratch / f'run{suite._runs}'
-        with GraphRun(scratch, 1, composed, True) as run:
+        with GraphRun(scratch, 1, composed, True, grouped=grouped) as run:
             with Walking(run, [back_and_forth_targets(s) for _, s, _ in run.graphs]):
                 time.sleep(5.0)
                 pids = run.pids()
-                names = (['/walker/graph'] if composed else
-                         ['/walker/plant', '/walker/controller_a_yaw', '/walker/planner',
-                          '/walker/supervisor'])
                 files = {n: scratch / (n.strip('/').replace('/', '_') + '.txt') for n in names}
                 for pair in (names[i:i + 2] for i in range(0, len(names), 2)):
-                    suite.say(f'profiling {", ".join(pair)} for {seconds:g} s (walking)')
+                    suite.say(f'profiling {", ".join(pair)}{label} for {seconds:g} s '
+                              '(walking)')
                     recorders = {n: record(pids[n], seconds, files[n]) for n in pair}
                     for name, recorder in recorders.items():
                         _, error = recorder.communicate()
                         path = files[name]
                         if not path.exists():
                             raise RuntimeError(f'py-spy could not sample {name}: {error}')
-                        result[name + (' (composed)' if composed else '')] = {
+                        result[name + label] = {
                             **categorise(path), 'top_walker_functions': top_functions(path)}
     for name, profile in result.items():
         suite.say(f'  {name}: idle {100 * (profile["idle_share"] or 0):.0f} %; busy: '
