@@ -53,13 +53,18 @@ class GraphRun:
         bytes a control period: a run that measures memory (the soak) goes without.
     grouped : bool
         The five joint controllers as one node (``run_all.py --grouped-controllers``).
+    loop : bool
+        The plant and the grouped controllers in one process, the other nodes as processes of
+        their own (``run_all.py --composed-loop``; implies ``grouped``).
     """
 
     def __init__(self, scratch: Path, walkers: int = 1, composed: bool = False,
                  sim_time: bool = True, parameters: tuple[tuple[str, str], ...] = (),
-                 record: bool = False, probe: bool = True, grouped: bool = False) -> None:
+                 record: bool = False, probe: bool = True, grouped: bool = False,
+                 loop: bool = False) -> None:
         self.probe = probe
-        self.grouped = grouped
+        self.loop = loop
+        self.grouped = grouped or loop
         self.scratch = Path(scratch)
         self.count = walkers
         self.composed = composed
@@ -85,7 +90,7 @@ class GraphRun:
     def _start(self) -> None:
         sys.path.insert(0, str(REPO / 'tests'))
         from ros_test_support import isolated_domain, ros_environment
-        from walker_bringup.composition import composed_command
+        from walker_bringup.composition import LOOP_NODES, composed_command
         from walker_bringup.graph import NodeSpec, several_walkers
         from walker_bringup.graph_client import GraphClient, init_context
         from walker_bringup.processes import ProcessGroup
@@ -121,6 +126,19 @@ class GraphRun:
                 group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', namespace,
                                      str(params_file)),
                             [sys.executable, str(PROBE), 'composed', *command[1:]])
+                continue
+            if self.loop:
+                command = composed_command(
+                    params_file, namespace, self.sim_time, False, None,
+                    start if namespace != '/walker' else None,
+                    dict(plant.remaps).get('/clock'), self.parameters,
+                    grouped_controllers=True, only=LOOP_NODES)
+                group.start(NodeSpec('walker_bringup', 'composed_graph', 'loop', namespace,
+                                     str(params_file)),
+                            [sys.executable, str(PROBE), 'composed', *command[1:]])
+                for spec in nodes:
+                    if spec.name not in LOOP_NODES:
+                        group.start(spec)
                 continue
             for spec in nodes:
                 command = ([sys.executable, str(PROBE), 'plant', *spec.ros_arguments()]

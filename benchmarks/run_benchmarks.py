@@ -23,13 +23,14 @@ starts, in a ROS domain of its own, discovery on loopback, the plant timed from 
 * ``control_loop``: all the graph's processes up in real time (controllers holding), at
   500 Hz and 1 kHz: JointState-to-effort round trip (median, p99, max), missed periods, CPU.
 * ``composition``: the same graph as separate processes, with the five joint controllers
-  grouped in one process (``--grouped-controllers``), and as one process: the real-time loop
+  grouped in one process (``--grouped-controllers``), as one process, and with the loop (the
+  plant and the grouped controllers) in one process (``--composed-loop``): the real-time loop
   at 500 Hz and 1 kHz, and a sim-time walking window (real-time factor, round trip); CPU and
   memory.
 * ``walk``: a walk in sim time (the step reports: step time and its ratio to the time-optimal
   bound, tip error at insertion, residual vibration, walking speed; whole-graph CPU and peak
-  memory), and one step in real time with the loop timed during it, as separate processes
-  and with the controllers grouped.
+  memory), and one step in real time with the loop timed during it, as separate processes,
+  with the controllers grouped and with the loop composed.
 * ``scaling``: 1, 2 and 4 walkers (namespaces ``/walker``, ``/walker_2``, ...), each walking
   back and forth on the same truss layout (separate physics worlds: they do not collide), in
   sim time: per-walker real-time factor, round trip and CPU; and 1 and 2 walkers in real time;
@@ -123,14 +124,14 @@ class Suite:
 
     def window(self, *, sim_time: bool, walking: bool, walkers: int = 1,
                composed: bool = False, rate: float | None = None, seconds: float,
-               warmup: float = 3.0, grouped: bool = False) -> dict:
+               warmup: float = 3.0, grouped: bool = False, loop: bool = False) -> dict:
         """Bring graphs up, measure a window (walking or holding), bring them down.
 
         Returns per walker the loop figures (:func:`bench_support.loop_statistics`), its CPU
         (sum over its processes, fraction of one core), its CPU per simulated second and its
         processes' peak memory; and the whole run's CPU and the time the graphs took to come up.
         """
-        key = (sim_time, walking, walkers, composed, rate, seconds, grouped)
+        key = (sim_time, walking, walkers, composed, rate, seconds, grouped, loop)
         if key in self._windows:
             return self._windows[key]
         from bench_support import CpuMeter, loop_statistics
@@ -138,7 +139,7 @@ class Suite:
 
         self._runs += 1
         what = (f'{walkers} walker{"s" if walkers > 1 else ""}, '
-                f'{"composed" if composed else "processes"}, '
+                f'{"composed" if composed else "loop composed" if loop else "processes"}, '
                 + ('controllers grouped, ' if grouped else '') +
                 f'{"sim time" if sim_time else "real time"}'
                 + (f', {rate:g} Hz' if rate else '') + (', walking' if walking else ', holding'))
@@ -147,7 +148,7 @@ class Suite:
         began = time.monotonic()
         walking_context = None
         with GraphRun(self.scratch / f'run{self._runs}', walkers, composed, sim_time,
-                      parameters, grouped=grouped) as run:
+                      parameters, grouped=grouped, loop=loop) as run:
             startup = time.monotonic() - began
             if walking:
                 walking_context = Walking(run, [back_and_forth_targets(start)
@@ -189,6 +190,7 @@ class Suite:
                                     if walking_context else 0),
                 'safe_holds': walking_context.holds[index] if walking_context else []})
         result = {'walkers': walkers, 'composed': composed, 'grouped': grouped,
+                  'loop_composed': loop,
                   'sim_time': sim_time,
                   'rate_hz': rate or 1e9 / period_ns, 'walking': walking,
                   'startup_s': round(startup, 2), 'window_s': seconds,
@@ -251,8 +253,10 @@ def part_control_loop(suite: Suite) -> dict:
 
 
 #: The graph's arrangements the composition part compares: a process per node; the five
-#: joint controllers grouped in one node and process; the whole graph in one process.
-ARRANGEMENTS = {'processes': {}, 'grouped': {'grouped': True}, 'composed': {'composed': True}}
+#: joint controllers grouped in one node and process; the whole graph in one process; the
+#: loop (the plant and the grouped controllers) in one process, exchanging by call in sim time.
+ARRANGEMENTS = {'processes': {}, 'grouped': {'grouped': True}, 'composed': {'composed': True},
+                'loop': {'loop': True}}
 
 
 def part_composition(suite: Suite) -> dict:
@@ -312,17 +316,17 @@ def _scaling(suite: Suite, grouped: bool) -> dict:
 
 
 def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True,
-               grouped: bool = False) -> dict:
+               grouped: bool = False, loop: bool = False) -> dict:
     from bench_support import CpuMeter, loop_statistics
     from graph_runner import GraphRun, walk_resuming
     from walker_bringup.summary import rows_from_reports
 
     suite._runs += 1
     suite.say(f'walk to {target} in {"sim" if sim_time else "real"} time (recorded'
-              + (', controllers grouped)' if grouped else ')'))
+              + (', loop composed)' if loop else ', controllers grouped)' if grouped else ')'))
     began = time.monotonic()
     with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, sim_time, record=record,
-                  grouped=grouped) as run:
+                  grouped=grouped, loop=loop) as run:
         startup = time.monotonic() - began
         client = run.clients[0]
         meter = CpuMeter(run.pids())
@@ -350,7 +354,7 @@ def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True,
                       'residual_vibration_m': row.residual_vibration,
                       'attempts': row.attempts})
     wall = (end_ns - start_ns) / 1e9
-    return {'target': target, 'sim_time': sim_time, 'grouped': grouped,
+    return {'target': target, 'sim_time': sim_time, 'grouped': grouped, 'loop_composed': loop,
             'reached': bool(result.success),
             'message': result.message, 'safe_holds': holds, 'steps': steps,
             'startup_s': round(startup, 2),
@@ -362,14 +366,17 @@ def _walk_once(suite: Suite, sim_time: bool, target: str, record: bool = True,
 
 
 def part_walk(suite: Suite) -> dict:
-    """Walk in sim time, and one step in real time, read from the step reports."""
+    """Walk in sim time, and one step in real time in three arrangements, from the reports."""
     sim = _walk_once(suite, True, QUICK_TARGET if suite.quick else DEFAULT_TARGET)
     _report_walk(suite, sim)
     real = _walk_once(suite, False, REAL_TIME_TARGET)
     _report_walk(suite, real)
     grouped = _walk_once(suite, False, REAL_TIME_TARGET, grouped=True)
     _report_walk(suite, grouped)
-    return {'sim_time': sim, 'real_time': real, 'real_time_grouped': grouped}
+    loop = _walk_once(suite, False, REAL_TIME_TARGET, loop=True)
+    _report_walk(suite, loop)
+    return {'sim_time': sim, 'real_time': real, 'real_time_grouped': grouped,
+            'real_time_loop': loop}
 
 
 def _report_walk(suite: Suite, walk: dict) -> None:
@@ -637,7 +644,8 @@ def figures(results: dict) -> list[dict]:
     walk = results.get('walk')
     if walk:
         labels = {'sim_time': 'walk (sim time)', 'real_time': 'one step (real time)',
-                  'real_time_grouped': 'one step (real time, controllers grouped)'}
+                  'real_time_grouped': 'one step (real time, controllers grouped)',
+                  'real_time_loop': 'one step (real time, loop composed)'}
         for kind in [k for k in labels if k in walk]:
             data = walk[kind]
             steps = [s for s in data['steps'] if s['success']]

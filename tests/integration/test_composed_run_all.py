@@ -49,3 +49,27 @@ def test_run_all_walks_with_the_joint_controllers_grouped_in_one_process(tmp_pat
     step, = summary['steps']
     assert step['success'] and step['insertion_error'] < 1e-3, step  # [m]
     assert processes_with(namespace) == [], text
+
+
+def test_run_all_walks_with_the_loop_composed_and_exchanging_by_call(tmp_path):
+    """One step with the plant and the grouped controllers in one process, in sim time."""
+    namespace = f'/walker_loop_check_{os.getpid()}'
+    out = tmp_path / 'run'
+    with isolated_domain() as domain:
+        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
+                '--composed-loop', '--namespace', namespace, '--out', str(out),
+                '--target', 'n1_2', '--no-report']
+        run = subprocess.run(args, env=ros_environment(domain), stdout=subprocess.PIPE,
+                             stderr=subprocess.STDOUT, text=True, cwd=REPO_ROOT, timeout=300)
+    text = run.stdout
+    assert run.returncode == 0, text
+    assert 'with the loop (plant, controllers) in one process' in text
+    log = (out / 'logs' / 'loop.log').read_text()
+    assert 'the plant and the controllers exchange by call' in log, log
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['reached'] and summary['path'] == ['n1_2'], summary
+    assert summary['loop']['lockstep_timeouts'] == 0, summary['loop']
+    step, = summary['steps']
+    assert step['success'] and step['insertion_error'] < 1e-3, step  # [m]
+    assert (out / 'bag' / 'metadata.yaml').exists()  # the recorder, a process of its own
+    assert processes_with(namespace) == [], text

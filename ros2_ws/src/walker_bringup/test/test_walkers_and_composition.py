@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from walker_bringup.composition import (
-    COMPONENTS, ComposedGraph, CompositionError, component_of, composed_command,
+    COMPONENTS, LOOP_NODES, ComposedGraph, CompositionError, component_of, composed_command,
     graph_from_arguments, parse_arguments)
 from walker_bringup.graph import (
     NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
@@ -94,15 +94,19 @@ def test_run_all_refuses_a_bad_number_of_walkers(capsys):
     {'namespace': '/walker_2', 'start': StartStance('a', 'n1_2', 'n2_2'),
      'clock_topic': '/walker_2/clock', 'parameters': (('timing.control_rate', '1000.0'),)},
     {'sim_time': True, 'grouped_controllers': True},
+    {'sim_time': True, 'grouped_controllers': True, 'only': LOOP_NODES},
 ])
 def test_the_composed_command_describes_the_same_graph(options):
     keywords = {'namespace': '/walker', 'sim_time': False, 'record': False, 'bag_path': None,
                 'start': None, 'clock_topic': None, 'parameters': (),
                 'grouped_controllers': False, **options}
-    command = composed_command(PARAMS, executable='/bin/composed_graph', **keywords)
+    only = keywords.pop('only', None)
+    command = composed_command(PARAMS, executable='/bin/composed_graph', only=only, **keywords)
     assert command[0] == '/bin/composed_graph'
     composed = graph_from_arguments(parse_arguments(command[1:]))
-    expected = walker_graph(PARAMS, **keywords)
+    expected = [spec for spec in walker_graph(PARAMS, **keywords)
+                if only is None or spec.name in only]
+    assert [spec.name for spec in composed] == list(only or [s.name for s in expected])
     assert composed == expected
     assert all(component_of(spec) is COMPONENTS[(spec.package, spec.executable)]
                for spec in composed)
@@ -118,6 +122,20 @@ def test_composed_graph_refuses_malformed_options(argv, message, capsys):
     with pytest.raises(SystemExit):
         parse_arguments(argv)
     assert message in capsys.readouterr().err
+
+
+def test_composing_a_node_the_graph_has_not_is_refused_with_the_names_it_has():
+    args = parse_arguments(['--sim-time', '--only', 'plant,controllers'])  # not grouped
+    with pytest.raises(CompositionError, match=r'no node controllers \(it has .*controller_a_yaw'):
+        graph_from_arguments(args)
+
+
+def test_run_all_composes_the_loop_with_the_controllers_grouped_or_the_whole_graph(capsys):
+    args = run_arguments(['--composed-loop'])
+    assert args.composed_loop and args.grouped_controllers and not args.composed
+    with pytest.raises(SystemExit):
+        run_arguments(['--composed-loop', '--composed'])
+    assert 'choose one' in capsys.readouterr().err
 
 
 def test_an_executable_that_cannot_be_composed_is_named():
@@ -179,4 +197,65 @@ def test_a_node_that_refuses_to_start_is_named_and_nothing_is_left(tmp_path):
                                match=r'/walker/controller_a_yaw refused to start: .*elbow_joint'):
                 ComposedGraph(specs, context)
         finally:
+            rclpy.try_shutdown(context=context)
+
+
+@pytest.mark.integration
+def test_the_loop_by_call_steps_sim_time_and_still_serves_the_plants_timers():
+    """Plant and grouped controllers composed in sim time: they exchange by call, not DDS."""
+    import threading
+    import time
+
+    import rclpy
+    from rclpy.node import Node
+    from ros_test_support import isolated_domain
+    from sensor_msgs.msg import JointState
+    from walker_msgs.msg import GripperStates
+
+    from walker_core.qos import COMMAND_QOS, LATCHED_QOS
+
+    specs = [spec for spec in walker_graph(PARAMS, sim_time=True, grouped_controllers=True)
+             if spec.name in LOOP_NODES]
+    with isolated_domain() as domain:
+        context = rclpy.context.Context()
+        rclpy.init(context=context, domain_id=domain)
+        graph = listener = None
+        try:
+            graph = ComposedGraph(specs, context)
+            assert graph.loop_by_call
+            listener = Node('loop_listener', context=context)
+            heard = {'efforts': 0, 'heartbeats': 0}
+            listener.create_subscription(
+                JointState, '/walker/effort_commands',
+                lambda _: heard.__setitem__('efforts', heard['efforts'] + 1), COMMAND_QOS)
+            listener.create_subscription(
+                GripperStates, '/walker/gripper_states',
+                lambda _: heard.__setitem__('heartbeats', heard['heartbeats'] + 1), LATCHED_QOS)
+            stop = threading.Event()
+            executor = rclpy.executors.SingleThreadedExecutor(context=context)
+            executor.add_node(listener)
+
+            def listen():
+                while not stop.is_set():
+                    executor.spin_once(timeout_sec=0.05)
+
+            spinner = threading.Thread(target=listen)
+            spinner.start()
+            seconds = 3.0
+            start = time.monotonic()
+            graph.spin(lambda: time.monotonic() - start > seconds)
+            stop.set()
+            spinner.join()
+            plant = graph.node('plant')
+            assert plant.plant.time > 1.0  # [s] simulated: the loop ran (holding)
+            assert plant.lockstep.timeouts == 0
+            assert heard['efforts'] == 0  # nothing went through DDS
+            # the 10 Hz heartbeat (steady clock) kept coming while the loop ran flat out
+            assert heard['heartbeats'] >= 0.5 * seconds * 10, heard
+            executor.remove_node(listener)
+        finally:
+            if listener is not None:
+                listener.destroy_node()
+            if graph is not None:
+                graph.destroy()
             rclpy.try_shutdown(context=context)

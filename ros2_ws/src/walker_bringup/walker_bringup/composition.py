@@ -9,8 +9,9 @@ supervision as the separate processes.
 
 Executors: the plant and the five controllers share one executor, the one
 :func:`walker_core.spinning.make_executor` selects (the events executor by default), in the
-main thread. The supervisor and the planner keep the default ``SingleThreadedExecutor``, as
-in their own processes (their actions' executions await futures, which failed inside the
+main thread (rclpy's ``SingleThreadedExecutor`` when they exchange by call, below). The
+supervisor and the planner keep the default ``SingleThreadedExecutor``, as in their own
+processes (their actions' executions await futures, which failed inside the
 events executor, or made its every spin return at once), and so does the recorder (it
 subscribes to topics as they appear, which the events executor does not pick up after a node
 was added); those three share a second thread. The planner streams from its own thread (on
@@ -18,6 +19,13 @@ the events executor), as in its process. All threads share one Python
 interpreter: the whole graph gets at most one core of Python, where the separate processes
 can use every core; what it saves is the process boundary (no inter-process transport, no
 wake-up of another process per message).
+
+The loop by call: in sim time, with the five joint controllers as one node
+(``--grouped-controllers``), the plant hands each state to the controllers and takes their
+answer by a function call (``PlantNode.hand_states_to``) instead of two messages through DDS,
+as Gazebo's ros2_control plugin runs its controllers inside the simulator. ``--only
+plant,controllers`` composes just that loop, for the other nodes to run as processes of their
+own (``run_all.py --composed-loop``).
 
 Shutdown: SIGINT or SIGTERM stops the spinning, the recorder takes what it has received and
 closes its bag, then every node is destroyed (the planner last: destroying it shuts the
@@ -37,10 +45,17 @@ from pathlib import Path
 
 from walker_bringup.graph import NodeSpec, StartStance, executable_path, walker_graph
 
-__all__ = ['Component', 'COMPONENTS', 'CompositionError', 'ComposedGraph', 'component_of',
-           'composed_command', 'parse_arguments', 'graph_from_arguments', 'main']
+__all__ = ['Component', 'COMPONENTS', 'LOOP_NODES', 'CompositionError', 'ComposedGraph',
+           'component_of', 'composed_command', 'parse_arguments', 'graph_from_arguments',
+           'main']
+
+#: The nodes of the control loop, by their names in the graph (``--only``, ``run_all.py
+#: --composed-loop``): the plant and the five joint controllers as one node.
+LOOP_NODES = ('plant', 'controllers')
 
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
+# [s] the loop by call: longest slice of it between two turns of the executor
+_LOOP_SLICE = 0.002
 
 
 @dataclasses.dataclass(frozen=True)
@@ -124,6 +139,7 @@ class ComposedGraph:
     def __init__(self, specs: Sequence[NodeSpec], context) -> None:
         self.context = context
         self.nodes: list[tuple[NodeSpec, Component, object]] = []
+        self.loop_by_call = False  # the plant and the controllers exchange by call
         components = [component_of(spec) for spec in specs]
         try:
             for spec, component in zip(specs, components, strict=True):
@@ -136,9 +152,20 @@ class ComposedGraph:
                 self.nodes.append((spec, component, node))
                 if component.start:
                     getattr(node, component.start)()
+            self._close_the_loop_by_call()
         except BaseException:
             self.destroy()
             raise
+
+    def _close_the_loop_by_call(self) -> None:
+        """In sim time, connect the plant and the grouped controllers by call (module notes)."""
+        plants = [node for spec, _, node in self.nodes if spec.executable == 'plant_node']
+        grouped = [node for spec, _, node in self.nodes
+                   if spec.executable == 'joint_controllers_node']
+        if len(plants) == 1 and len(grouped) == 1 and plants[0].sim_time \
+                and len(grouped[0].joints) == 5:
+            plants[0].hand_states_to(grouped[0])
+            self.loop_by_call = True
 
     def node(self, name: str):
         """Return the node built from the spec named ``name`` (e.g. ``'plant'``)."""
@@ -154,7 +181,12 @@ class ComposedGraph:
 
         from walker_core.spinning import make_executor
 
-        fast = make_executor(self.context)
+        # The loop by call runs in this thread between turns of the executor, holding the
+        # interpreter: the events executor's timers (a thread of their own) then fell behind
+        # (the plant's 10 Hz heartbeat came once a second), rclpy's executor checks its timers
+        # itself on each turn.
+        fast = SingleThreadedExecutor(context=self.context) if self.loop_by_call \
+            else make_executor(self.context)
         default = SingleThreadedExecutor(context=self.context)
         for _, component, node in self.nodes:
             (default if component.default_executor else fast).add_node(node)
@@ -169,9 +201,15 @@ class ComposedGraph:
 
         thread = threading.Thread(target=spin_default, name='default-executor', daemon=True)
         thread.start()
+        plant = self.node('plant') if self.loop_by_call else None
         try:
             while running():
-                fast.spin_once(timeout_sec=_SPIN_TIMEOUT)
+                if plant is None:
+                    fast.spin_once(timeout_sec=_SPIN_TIMEOUT)
+                    continue
+                # one turn of the executor, one slice of the loop by call (module notes)
+                fast.spin_once(timeout_sec=0.0 if plant.handover_pending else _SPIN_TIMEOUT)
+                plant.hand_over_states(_LOOP_SLICE)
         finally:
             thread.join(timeout=5.0)
             for _, component, node in self.nodes:
@@ -226,6 +264,9 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
                         help='parameter override for every node (repeatable)')
     parser.add_argument('--grouped-controllers', action='store_true',
                         help='the five joint controllers as one node (joint_controllers_node)')
+    parser.add_argument('--only', default=None, metavar='NAME[,NAME...]',
+                        help='compose only these nodes of the graph (e.g. plant,controllers: '
+                             'the control loop); the others are left to run elsewhere')
     args = parser.parse_args(argv)
     parameters = []
     for text in args.param:
@@ -243,6 +284,10 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
         args.start = StartStance(*parts)
     if args.bag_path is not None and not args.record:
         parser.error('--bag-path needs --record')
+    if args.only is not None:
+        args.only = tuple(name for name in args.only.split(',') if name)
+        if not args.only:
+            parser.error('--only: expected node names, e.g. plant,controllers')
     return args
 
 
@@ -251,10 +296,19 @@ def graph_from_arguments(args: argparse.Namespace) -> list[NodeSpec]:
     from walker_core.robot_parameters import default_parameter_file
 
     params_file = Path(args.params_file or default_parameter_file()).resolve()
-    return walker_graph(params_file, args.namespace, sim_time=args.sim_time,
-                        record=args.record, bag_path=args.bag_path, start=args.start,
-                        clock_topic=args.clock_topic, parameters=args.param,
-                        grouped_controllers=args.grouped_controllers)
+    specs = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
+                         record=args.record, bag_path=args.bag_path, start=args.start,
+                         clock_topic=args.clock_topic, parameters=args.param,
+                         grouped_controllers=args.grouped_controllers)
+    only = getattr(args, 'only', None)
+    if only is None:
+        return specs
+    unknown = sorted(set(only) - {spec.name for spec in specs})
+    if unknown:
+        raise CompositionError(f'--only {",".join(only)}: the graph has no node '
+                               f'{", ".join(unknown)} (it has '
+                               f'{", ".join(spec.name for spec in specs)})')
+    return [spec for spec in specs if spec.name in only]
 
 
 def composed_command(params_file: str | Path, namespace: str = '/walker',
@@ -263,7 +317,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
                      clock_topic: str | None = None,
                      parameters: tuple[tuple[str, str], ...] = (),
                      executable: str | None = None,
-                     grouped_controllers: bool = False) -> list[str]:
+                     grouped_controllers: bool = False,
+                     only: Sequence[str] | None = None) -> list[str]:
     """Return the command line of the composed graph with :func:`walker_graph`'s arguments."""
     command = [executable or str(executable_path('walker_bringup', 'composed_graph')),
                '--params-file', str(params_file), '--namespace', namespace]
@@ -281,6 +336,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
         command += ['--param', f'{name}:={value}']
     if grouped_controllers:
         command.append('--grouped-controllers')
+    if only:
+        command += ['--only', ','.join(only)]
     return command
 
 
@@ -291,7 +348,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from walker_core.spinning import init_node_process
 
     args = parse_arguments(sys.argv[1:] if argv is None else argv)
-    specs = graph_from_arguments(args)
+    try:
+        specs = graph_from_arguments(args)
+    except CompositionError as error:
+        print(f'[composed_graph] {error}', file=sys.stderr, flush=True)
+        return 2
     context = rclpy.context.Context()
     stop = init_node_process(context=context)
     graph = None
@@ -299,7 +360,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         graph = ComposedGraph(specs, context)
         print(f'[composed_graph] {len(graph.nodes)} nodes in one process: '
-              + ', '.join(spec.full_name for spec, _, _ in graph.nodes), flush=True)
+              + ', '.join(spec.full_name for spec, _, _ in graph.nodes)
+              + ('; the plant and the controllers exchange by call' if graph.loop_by_call
+                 else ''), flush=True)
         # the process is the loop's: on the wall clock it asks for the plant's real-time
         # priority, as the plant's own process does (its other nodes share the interpreter)
         with contextlib.suppress(KeyError):  # a graph without its plant asks nothing

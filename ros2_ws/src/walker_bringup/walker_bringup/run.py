@@ -31,7 +31,7 @@ import threading
 import time
 from pathlib import Path
 
-from walker_bringup.composition import composed_command
+from walker_bringup.composition import LOOP_NODES, composed_command
 from walker_bringup.graph import (
     NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
@@ -82,6 +82,12 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
                              'process per node')
+    parser.add_argument('--composed-loop', action='store_true',
+                        help='run the control loop (the plant and the five joint controllers '
+                             'as one node) in one process, where in sim time they exchange '
+                             'states and efforts by call; the planner, the supervisor and the '
+                             'recorder as processes of their own (implies '
+                             '--grouped-controllers)')
     parser.add_argument('--grouped-controllers', action='store_true',
                         help='run the five joint controllers as one node and process '
                              '(joint_controllers_node: one state in, one effort message out '
@@ -90,7 +96,12 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
                              'each from its own start, walking the same route moved with it '
                              '(default: 1)')
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    if args.composed_loop and args.composed:
+        parser.error('--composed-loop composes the loop only; --composed the whole graph: '
+                     'choose one')
+    args.grouped_controllers = args.grouped_controllers or args.composed_loop
+    return args
 
 
 def _walker_count(text: str) -> int:
@@ -202,19 +213,25 @@ def _bag_paths(walkers: list[_Walker]) -> list[Path]:
 
 
 def _launch(walker: _Walker, args, params_file: Path) -> None:
-    """Start a walker's graph: one process per node, or one composed process."""
-    if not args.composed:
+    """Start a walker's graph: one process per node, the loop composed, or one process."""
+    if not (args.composed or args.composed_loop):
         for spec in walker.nodes:
             walker.group.start(spec)
         return
     plant = next(n for n in walker.nodes if n.executable == 'plant_node')
     bags = _bag_paths([walker])
+    loop = LOOP_NODES if args.composed_loop else None
     command = composed_command(params_file, walker.namespace, args.sim_time,
-                               bool(bags), bags[0] if bags else None, walker.start,
+                               bool(bags) and loop is None,
+                               bags[0] if bags and loop is None else None, walker.start,
                                dict(plant.remaps).get('/clock'),
-                               grouped_controllers=args.grouped_controllers)
-    walker.group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', walker.namespace,
+                               grouped_controllers=args.grouped_controllers, only=loop)
+    walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
+                                'graph' if loop is None else 'loop', walker.namespace,
                                 str(params_file)), command)
+    for spec in walker.nodes:
+        if loop is not None and spec.name not in loop:
+            walker.group.start(spec)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -259,7 +276,8 @@ def main(argv: list[str] | None = None) -> int:
     progress.say(
         f'[walker] starting {count} nodes '
         + (f'in {len(walkers)} composed process{"es" if len(walkers) > 1 else ""}'
-           if args.composed else 'as separate processes')
+           if args.composed else 'with the loop (plant, controllers) in one process'
+           if args.composed_loop else 'as separate processes')
         + f' ({"sim time" if args.sim_time else "real time"}'
         + (f', {len(walkers)} walkers' if len(walkers) > 1 else '') + '): '
         + ', '.join(n.name for n in walkers[0].nodes))

@@ -130,6 +130,9 @@ class ControllerNode(Node):
         self._effort_pub = self.create_publisher(
             JointState, 'effort_commands', COMMAND_QOS,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
+        # With the plant in this process, in sim time: where the answers go, by a call
+        # (see answer_plant_directly); None: published on effort_commands.
+        self._effort_sink = None
         self._acceleration_sub = None
         self._update_acceleration_subscription()
         self._state_sub = self._subscribe_states()
@@ -165,6 +168,37 @@ class ControllerNode(Node):
     def _steady_now(self) -> float:
         return self._steady.now().nanoseconds * 1e-9
 
+    def answer_plant_directly(self, effort_sink) -> None:
+        """Take the plant's states by call and answer them by calling ``effort_sink``.
+
+        For a plant in this process, in sim time (as Gazebo's ros2_control plugin runs its
+        controllers inside the simulator): the plant calls :meth:`take_state` (and
+        :meth:`take_accelerations` before it) with the messages it publishes, and each answer,
+        the ``effort_commands`` message, goes to ``effort_sink(message)`` instead of DDS. The
+        ``joint_states`` and ``joint_accelerations`` subscriptions are destroyed; setpoints,
+        modes, the watchdogs and the controller states are as before.
+        """
+        self._effort_sink = effort_sink
+        self.destroy_subscription(self._state_sub)
+        self._state_sub = None
+        if self._acceleration_sub is not None:
+            self.destroy_subscription(self._acceleration_sub)
+            self._acceleration_sub = None
+
+    def take_state(self, msg: JointState) -> None:
+        """Answer a joint state handed over by the plant (see :meth:`answer_plant_directly`)."""
+        self._on_joint_state(msg)
+
+    def take_accelerations(self, msg: JointAccelerations) -> None:
+        """Take the joint accelerations handed over with the next state."""
+        self._on_accelerations(msg)
+
+    def _send_effort(self, msg: JointState) -> None:
+        if self._effort_sink is None:
+            self._effort_pub.publish(msg)
+        else:
+            self._effort_sink(msg)
+
     # ------------------------------------------------------------------------- parameters
     def _create_watchdog_timer(self):
         control = self._settings.control
@@ -181,7 +215,7 @@ class ControllerNode(Node):
         """Make anew the subscription of a stream silent for long (see Resubscription)."""
         last_state = max((c.watchdog.last_state for c in self._channels
                           if c.watchdog.last_state is not None), default=None)
-        if self._state_resubscription.due(now, last_state):
+        if self._effort_sink is None and self._state_resubscription.due(now, last_state):
             self.destroy_subscription(self._state_sub)
             self._state_sub = self._subscribe_states()
             self.get_logger().warning(
@@ -191,7 +225,8 @@ class ControllerNode(Node):
         if silent:
             # the state's subscription is made after them again: it stays last in the
             # executor's order (a setpoint that arrived with a state is taken first)
-            self.destroy_subscription(self._state_sub)
+            if self._state_sub is not None:
+                self.destroy_subscription(self._state_sub)
             for channel in silent:
                 channel.destroy_setpoint_subscription()
                 channel.subscribe_setpoints()
@@ -199,13 +234,15 @@ class ControllerNode(Node):
                     f'{channel.joint}: no setpoint for '
                     f'{now - channel.watchdog.last_setpoint:.1f} s while tracking: '
                     'subscription made anew')
-            self._state_sub = self._subscribe_states()
+            if self._effort_sink is None:
+                self._state_sub = self._subscribe_states()
 
     def _update_acceleration_subscription(self) -> None:
         """Subscribe to joint_accelerations only while a role of a joint feeds it back."""
         gains = self._settings.control.coarse.acceleration_feedback
-        needed = any(gains[role_of_joint(joint, base) - 1] > 0.0
-                     for joint in self._joints for base in GRIPPERS)
+        needed = self._effort_sink is None and any(
+            gains[role_of_joint(joint, base) - 1] > 0.0
+            for joint in self._joints for base in GRIPPERS)
         if needed and self._acceleration_sub is None:
             self._acceleration_sub = self.create_subscription(
                 JointAccelerations, 'joint_accelerations', self._on_accelerations, STATE_QOS,
@@ -249,7 +286,7 @@ class ControllerNode(Node):
             channel.watchdog.state_received(now)
         stamp = seconds(msg.header.stamp)
         if stamp == self._last_stamp and self._last_effort is not None:
-            self._effort_pub.publish(self._last_effort)  # the plant asked again
+            self._send_effort(self._last_effort)  # the plant asked again
             return
         if self._must_wait(stamp, now):
             self._waiting = msg
@@ -318,7 +355,7 @@ class ControllerNode(Node):
         out.header.stamp = msg.header.stamp
         out.header.frame_id = msg.header.frame_id
         out.effort = efforts
-        self._effort_pub.publish(out)
+        self._send_effort(out)
         if len(efforts) == len(self._channels):
             self._last_stamp = stamp
             self._last_effort = out

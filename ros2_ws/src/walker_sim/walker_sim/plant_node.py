@@ -18,7 +18,10 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
 
 Clock modes (``sim.clock_mode``): ``real_time`` steps on a steady wall-clock timer, like
 hardware, stamping with the system clock; ``sim_time`` publishes ``/clock`` and is lock-stepped
-with the controllers (state for t_k out, wait for the five efforts stamped t_k, step).
+with the controllers (state for t_k out, wait for the five efforts stamped t_k, step). In sim
+time, with the five controllers as one node in the same process (``run_all.py
+--composed-loop``), the state goes to them and their efforts come back by call
+(:meth:`PlantNode.hand_states_to`), not through DDS.
 """
 
 from __future__ import annotations
@@ -113,6 +116,11 @@ class PlantNode(Node):
         self._longest_tick_interval = 0.0  # [s] the longest wall time between two ticks
         self._loop_closed = False  # every controller has answered (real time)
         self._started = not self.sim_time
+        # Controllers in this process that take the states by call (sim time), and the state
+        # not yet handed to them; see hand_states_to
+        self._controllers = None
+        self._handover: tuple | None = None
+        self._handing_over = False
         self._last_sent = self._steady_now()
         self._last_warning = -math.inf
         self._stamp = 0 if self.sim_time else self._system.now().nanoseconds
@@ -141,6 +149,62 @@ class PlantNode(Node):
         if self.sim_time:
             return False
         return log_realtime_request(self.get_logger(), self.params.timing.realtime_priority)
+
+    def hand_states_to(self, controllers) -> None:
+        """Sim time: hand each state to ``controllers`` in this process by a call.
+
+        ``controllers`` is a controller node of this process answering every joint
+        (``walker_control.joint_controllers_node``), connected with its
+        ``answer_plant_directly(self.take_efforts)``: the lock-step's exchange then costs two
+        calls instead of two messages through DDS and two processes woken, as Gazebo's
+        ros2_control plugin runs its controllers inside the simulator. ``joint_states`` and
+        ``joint_accelerations`` are still published for every other subscriber.
+
+        Raises
+        ------
+        ValueError
+            In real time: the wall clock paces the plant, and a controller's answer is not
+            waited for, so the exchange stays on DDS.
+        """
+        if not self.sim_time:
+            raise ValueError('states are handed to controllers by call only in sim time '
+                             '(sim.clock_mode: sim_time)')
+        self._controllers = controllers
+        controllers.answer_plant_directly(self.take_efforts)
+
+    def take_efforts(self, message: JointState) -> None:
+        """Take an ``effort_commands`` message from controllers in this process."""
+        self._on_effort(message)
+
+    @property
+    def handover_pending(self) -> bool:
+        """A state waits to be handed to the controllers (see :meth:`hand_over_states`)."""
+        return self._handover is not None
+
+    def hand_over_states(self, budget: float = 0.002) -> None:
+        """Hand the newest state to the controllers in this process, and the next, and so on.
+
+        Their answer steps the plant, which publishes the next state: the loop runs here, not
+        by recursion, until an answer does not come at once (a controller waiting for its
+        setpoint answers later, from its own callback, and the state after it is handed over
+        at the next call) or for ``budget`` seconds of wall time. The process's spin loop
+        calls it between two turns of its executor (``walker_bringup.composition``), so that
+        setpoints, modes, timers and services are served between two slices of the loop.
+        """
+        if self._handing_over:
+            return
+        self._handing_over = True
+        try:
+            end = self._steady_now() + budget
+            while self._handover is not None:
+                accelerations, state = self._handover
+                self._handover = None
+                self._controllers.take_accelerations(accelerations)
+                self._controllers.take_state(state)
+                if self._steady_now() > end:
+                    break
+        finally:
+            self._handing_over = False
 
     def destroy_node(self) -> None:
         """Release the simulator with the node."""
@@ -244,8 +308,10 @@ class PlantNode(Node):
                 or not 0 <= stamp - self._last_clock_stamp < 1e9 / self.sim.clock_rate - 1):
             self._last_clock_stamp = stamp
             self._clock_publisher.publish(clock_msg(stamp))
-        self._accelerations.publish(accelerations_msg(state, stamp))
-        self._joint_states.publish(joint_state_msg(state, stamp))
+        accelerations = accelerations_msg(state, stamp)
+        joint_states = joint_state_msg(state, stamp)
+        self._accelerations.publish(accelerations)
+        self._joint_states.publish(joint_states)
         if self._last_pose_stamp is None or not \
                 0 <= stamp - self._last_pose_stamp < 1e9 / self.sim.pose_rate - 1:
             self._last_pose_stamp = stamp
@@ -256,6 +322,10 @@ class PlantNode(Node):
         self._publish_grippers(state)
         self._last_sent = self._steady_now()
         self.lockstep.begin(stamp, self._last_sent)
+        if self._controllers is not None:
+            # handed over by hand_over_states, never from inside the controllers' own
+            # callbacks (their answer is still being sent)
+            self._handover = (accelerations, joint_states)
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
         key = (state.base, *((s.mode, s.node, s.message) for s in state.statuses.values()))
