@@ -70,6 +70,8 @@ class GraphRun:
         self.composed = composed
         self.sim_time = sim_time
         self.parameters = tuple(parameters)
+        if loop and sim_time:  # as run_all.py --composed-loop: the plant waits for decisions
+            self.parameters += (('sim.wait_for_decisions', 'true'),)
         self.record = record
         self.graphs = []          # (namespace, start, nodes)
         self.groups = []          # one ProcessGroup per walker

@@ -186,10 +186,12 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
     if args.walkers == 1:
         nodes = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                              record=args.record, bag_path=out / 'bag',
+                             parameters=_graph_parameters(args),
                              grouped_controllers=args.grouped_controllers)
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
     graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out,
+                             _graph_parameters(args),
                              grouped_controllers=args.grouped_controllers)
     targets = walker_targets(params_file, args.target, [start for _, start, _ in graphs])
     walkers = []
@@ -212,6 +214,17 @@ def _bag_paths(walkers: list[_Walker]) -> list[Path]:
     return bags
 
 
+def _graph_parameters(args) -> tuple[tuple[str, str], ...]:
+    """Return the overrides for every node: with the loop composed in sim time, the gate.
+
+    At two to three times real time the supervisor, outside the lock-step, decides late in
+    simulated time; the plant then waits for its release (``sim.wait_for_decisions``).
+    """
+    if args.composed_loop and args.sim_time:
+        return (('sim.wait_for_decisions', 'true'),)
+    return ()
+
+
 def _launch(walker: _Walker, args, params_file: Path) -> None:
     """Start a walker's graph: one process per node, the loop composed, or one process."""
     if not (args.composed or args.composed_loop):
@@ -224,7 +237,7 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
     command = composed_command(params_file, walker.namespace, args.sim_time,
                                bool(bags) and loop is None,
                                bags[0] if bags and loop is None else None, walker.start,
-                               dict(plant.remaps).get('/clock'),
+                               dict(plant.remaps).get('/clock'), _graph_parameters(args),
                                grouped_controllers=args.grouped_controllers, only=loop)
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
                                 'graph' if loop is None else 'loop', walker.namespace,

@@ -51,7 +51,8 @@ from walker_core.urdf import description_urdf
 from walker_core.spinning import init_node_process, spin_nodes
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
-from walker_sim.core.commands import CommandError, EffortCommands, LockStep, seconds_to_ns
+from walker_sim.core.commands import (
+    CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
 from walker_sim.core.config import SimParameters
 from walker_sim.core.grippers import GripperCommandError, GripperMode
 from walker_sim.core.plant import PlantState, WalkerPlant
@@ -88,6 +89,7 @@ class PlantNode(Node):
         self.period_ns = seconds_to_ns(self.period)
         self.commands = EffortCommands(self.sim.command_timeout)
         self.lockstep = LockStep(self.sim.lockstep_timeout)
+        self.gate = DecisionGate(self.sim.decision_timeout)
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._system = Clock(clock_type=ClockType.SYSTEM_TIME)
         self.sim_time = self.sim.clock_mode == 'sim_time'
@@ -105,6 +107,9 @@ class PlantNode(Node):
         self._clock_publisher = (self.create_publisher(ClockMsg, '/clock', CLOCK_QOS)
                        if self.sim_time else None)
         self.create_subscription(JointState, 'effort_commands', self._on_effort, COMMAND_QOS)
+        if self.sim_time:
+            self.create_subscription(ClockMsg, 'supervisor/decided_until', self._on_decided,
+                                     COMMAND_QOS)
         self.create_service(GripperCommand, 'gripper_command', self._on_gripper_command)
         guard_section_updates(self, SimParameters, 'sim.', lambda: self.sim, self._apply_sim)
 
@@ -219,6 +224,9 @@ class PlantNode(Node):
         self.sim = sim
         self.commands.command_timeout = sim.command_timeout
         self.lockstep.timeout = sim.lockstep_timeout
+        self.gate.timeout = sim.decision_timeout
+        if not sim.wait_for_decisions:
+            self.gate.until = None
         if sim.jam_screw_ins != self.plant.fouled_screw_ins:
             self.plant.foul_thread(sim.jam_screw_ins)
             self.get_logger().warning(
@@ -278,6 +286,9 @@ class PlantNode(Node):
         if not self._started:
             self._started = True
             self.get_logger().info('every controller answered: sim time starts')
+        if not self.gate.allows(self._stamp + self.period_ns):
+            self.gate.wait(self._steady_now())
+            return
         self.lockstep.count_misses(self.commands)
         self._advance()
 
@@ -289,6 +300,14 @@ class PlantNode(Node):
                 self._publish(self.plant.state())
                 self._warn(now, 'waiting for effort commands stamped t=0 from: '
                            + ', '.join(self.lockstep.waiting_for(self.commands)))
+            return
+        if not self.gate.allows(self._stamp + self.period_ns):
+            if self.gate.expired(now):
+                self.gate.drop()
+                self._warn(now, f'the supervisor has not decided beyond t={self._stamp * 1e-9:.3f}'
+                           f' s within {self.gate.timeout:g} s: not waiting for it until it '
+                           'does (sim.wait_for_decisions)')
+                self._try_advance()
             return
         if len(self.lockstep.lost) == len(self.lockstep.joints):
             self.lockstep.count_misses(self.commands)
@@ -303,9 +322,12 @@ class PlantNode(Node):
     # ------------------------------------------------------------------ publishing
     def _publish(self, state: PlantState) -> None:
         stamp = self._stamp
+        # /clock at its rate, and at every state the supervisor's release stops at: its
+        # ROS-time timer must see the time it released up to
         if self._clock_publisher is not None and (
                 self._last_clock_stamp is None
-                or not 0 <= stamp - self._last_clock_stamp < 1e9 / self.sim.clock_rate - 1):
+                or not 0 <= stamp - self._last_clock_stamp < 1e9 / self.sim.clock_rate - 1
+                or not self.gate.allows(stamp + self.period_ns)):
             self._last_clock_stamp = stamp
             self._clock_publisher.publish(clock_msg(stamp))
         accelerations = accelerations_msg(state, stamp)
@@ -352,6 +374,8 @@ class PlantNode(Node):
         values = {f'missed {joint}': count for joint, count in self.lockstep.missed.items()}
         values.update({f'{name} commands': count for name, count in self._counts.items()})
         values['lock-step timeouts'] = self.lockstep.timeouts
+        if self.sim.wait_for_decisions:
+            values['supervisor gate timeouts'] = self.gate.timeouts
         values['not waited for'] = ', '.join(sorted(self.lockstep.lost))
         if not self.sim_time:  # how long the loop stood still at worst, since it closed
             values['longest tick interval [ms]'] = f'{self._longest_tick_interval * 1e3:.1f}'
@@ -378,6 +402,14 @@ class PlantNode(Node):
             except CommandError as error:
                 self._warn(self._steady_now(), str(error))
         if self.sim_time:
+            self._try_advance()
+
+    def _on_decided(self, message: ClockMsg) -> None:
+        """Take the time up to which the supervisor has decided (``sim.wait_for_decisions``)."""
+        if not self.sim.wait_for_decisions:
+            return
+        self.gate.release(stamp_ns(message.clock))
+        if self._started and self.gate.allows(self._stamp + self.period_ns):
             self._try_advance()
 
     def _on_gripper_command(self, request: GripperCommand.Request,

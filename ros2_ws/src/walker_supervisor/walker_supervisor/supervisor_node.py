@@ -29,6 +29,7 @@ from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalRespons
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock as RosClock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import FollowTrajectory, Step, WalkTo
@@ -42,7 +43,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.qos import LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
+from walker_core.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
@@ -183,7 +184,13 @@ class SupervisorNode(TeleopServer, Node):
         self.create_service(Trigger, 'hold', self._on_hold)
         self.create_service(Trigger, 'resume', self._on_resume)
         self._init_teleop()
-        self.create_timer(TICK_PERIOD, self._tick)
+        self._tick_timer = self.create_timer(TICK_PERIOD, self._tick)
+        # Sim time: how far the plant may run before this node has decided again (the plant
+        # waits for it with sim.wait_for_decisions); gripper commands still unanswered
+        self._sim_time = bool(self.get_parameter('use_sim_time').value)
+        self._decided_pub = self.create_publisher(RosClock, '~/decided_until', COMMAND_QOS) \
+            if self._sim_time else None
+        self._gripper_calls = 0
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
         self._commanded_mode = self._commanded_base = ''  # the last mode command sent
@@ -518,7 +525,12 @@ class SupervisorNode(TeleopServer, Node):
         return self.health.faults(now, include_trouble=self.sequencer.busy)
 
     def _watch(self) -> None:
-        """Steady-clock watchdog: a source that falls silent stops the walker in safe hold."""
+        """Steady-clock watchdog: a source that falls silent stops the walker in safe hold.
+
+        It also releases the sim-time clock again (:meth:`_release_clock`): an answer that
+        came by a path that did not (a refusal) holds the plant for one watch period at most.
+        """
+        self._release_clock()
         self._sample_measurements()
         faults = [fault for fault in self.health.faults(self._steady_now(),
                                                         include_trouble=self.sequencer.busy)
@@ -596,6 +608,25 @@ class SupervisorNode(TeleopServer, Node):
         else:
             self._end_step_outside_walk()
         self._publish_phase()
+        self._release_clock()
+
+    def _release_clock(self) -> None:
+        """Sim time: let the plant run up to this node's next tick, or hold it here.
+
+        Held while a request to the planner or a gripper command is unanswered: the motion
+        it starts then begins at the same simulated time however long the answer takes. The
+        plant waits for it only with ``sim.wait_for_decisions``.
+        """
+        if self._decided_pub is None:
+            return
+        now = self.get_clock().now().nanoseconds
+        busy = self._awaited is not None or bool(self._waiting_requests) \
+            or self._gripper_calls > 0
+        ahead = self._tick_timer.time_until_next_call()
+        until = now if busy or ahead is None else now + max(0, ahead)
+        message = RosClock()
+        message.clock.sec, message.clock.nanosec = divmod(until, 1_000_000_000)
+        self._decided_pub.publish(message)
 
     def _advance_walk(self, walk: Walk, now: float) -> None:
         """Between steps: record the step that ended, then start the next or end the walk."""
@@ -769,10 +800,18 @@ class SupervisorNode(TeleopServer, Node):
             gripper=request.gripper,
             command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
             else GripperCommand.Request.UNSCREW)
+        self._gripper_calls += 1
         future = self.gripper_client.call_async(call)
         future.add_done_callback(self._on_gripper_response)
 
     def _on_gripper_response(self, future) -> None:
+        self._gripper_calls = max(0, self._gripper_calls - 1)
+        try:
+            self._take_gripper_response(future)
+        finally:
+            self._release_clock()
+
+    def _take_gripper_response(self, future) -> None:
         response = future.result()
         success, message = ((False, 'no response from the plant') if response is None
                             else (response.success, response.message))
@@ -898,6 +937,7 @@ class SupervisorNode(TeleopServer, Node):
             self.get_logger().error(f'planning the {request.purpose} motion failed: {reason}')
             self._execute(self.sequencer.trajectory_done(
                 False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
+            self._release_clock()
             return
         if request.purpose in _BOUNDED and request.purpose not in self._bounded:
             # the step's bound: its extraction, coarse motion and insertion at their limits,
@@ -937,6 +977,7 @@ class SupervisorNode(TeleopServer, Node):
         self.sequencer.trajectory_started(duration, self._now())
         handle.get_result_async().add_done_callback(
             lambda f: self._on_follow_done(f, generation))
+        self._release_clock()
 
     def _on_follow_done(self, future, generation: int) -> None:
         if generation != self._trajectory_generation:

@@ -179,3 +179,45 @@ class LockStep:
         for joint in late:
             self.missed[joint] += 1
         return late
+
+
+class DecisionGate:
+    """Sim time: how far the plant may step before the supervisor has decided.
+
+    The supervisor releases the clock up to a time (its next decision, or where it is when a
+    request of it is still unanswered); the plant steps to a stamp only if it is not later
+    than that, so the supervisor's decisions fall at the same simulated times however long
+    they take on the wall clock. Inactive until the first release. A wait longer than
+    ``timeout`` [s] of wall time drops the gate until the next release: a supervisor that
+    died does not stop the simulation.
+    """
+
+    def __init__(self, timeout: float) -> None:
+        self.timeout = timeout
+        self.until: int | None = None  # [ns] newest time released; None: not waiting for it
+        self.timeouts = 0
+        self._waiting_since = math.nan
+
+    def release(self, until: int) -> None:
+        """Take a release up to stamp ``until`` [ns]."""
+        self.until = int(until)
+        self._waiting_since = math.nan
+
+    def allows(self, stamp: int) -> bool:
+        """Say whether the plant may step to the state stamped ``stamp`` [ns]."""
+        return self.until is None or stamp <= self.until
+
+    def wait(self, wall_now: float) -> None:
+        """Note that the plant waits at the gate, from ``wall_now`` [s] if not already."""
+        if math.isnan(self._waiting_since):
+            self._waiting_since = wall_now
+
+    def expired(self, wall_now: float) -> bool:
+        """Return True when the plant has waited at the gate for ``timeout``."""
+        return wall_now - self._waiting_since >= self.timeout
+
+    def drop(self) -> None:
+        """Stop waiting for the supervisor until its next release; count it."""
+        self.until = None
+        self._waiting_since = math.nan
+        self.timeouts += 1

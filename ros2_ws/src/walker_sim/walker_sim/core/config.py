@@ -60,6 +60,15 @@ class SimParameters:
     lockstep_timeout: float = parameter(
         'sim time: wall-clock wait for the five efforts of a step before the last ones are '
         'applied', 's', 0.001, 60.0, read_only=False)
+    wait_for_decisions: bool = parameter(
+        'sim time: never step past the time up to which the supervisor has decided (its '
+        'supervisor/decided_until topic, once it publishes it), so that its decisions fall '
+        'at the same simulated times however long they take; a wait of decision_timeout '
+        'drops it until the next release', read_only=False)
+    decision_timeout: float = parameter(
+        'sim time, wait_for_decisions: wall-clock wait for the supervisor to release the '
+        'clock before stepping on without it (until its next release)', 's', 0.001, 60.0,
+        read_only=False)
     startup_resend_period: float = parameter(
         'sim time: wall-clock period at which the first state is re-sent until every '
         'controller answered', 's', 0.01, 10.0, read_only=False)
