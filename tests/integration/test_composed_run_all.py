@@ -29,47 +29,44 @@ def test_run_all_composed_brings_the_graph_up_in_one_process(tmp_path):
     assert processes_with(namespace) == [], text
 
 
-def test_run_all_walks_with_the_joint_controllers_grouped_in_one_process(tmp_path):
-    """One step with one controller process for the five joints, recorded, in sim time."""
-    namespace = f'/walker_grouped_check_{os.getpid()}'
+def walk_one_step(tmp_path, name, option):
+    """Run ``run_all.py --sim-time <option>`` to n1_2, recorded; return its output and files.
+
+    Asserts what every arrangement must give: exit 0, the step reached and screwed in within
+    1 mm, no lock-step timeout, and no process left behind.
+    """
+    namespace = f'/walker_{name}_check_{os.getpid()}'
     out = tmp_path / 'run'
     with isolated_domain() as domain:
-        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
-                '--grouped-controllers', '--namespace', namespace, '--out', str(out),
-                '--target', 'n1_2', '--no-report']
+        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time', option,
+                '--namespace', namespace, '--out', str(out), '--target', 'n1_2', '--no-report']
         run = subprocess.run(args, env=ros_environment(domain), stdout=subprocess.PIPE,
                              stderr=subprocess.STDOUT, text=True, cwd=REPO_ROOT, timeout=300)
     text = run.stdout
     assert run.returncode == 0, text
-    assert 'recorder, plant, controllers, planner, supervisor' in text
-    assert 'controller_' not in text.split('graph ready')[0]
     summary = json.loads((out / 'summary.json').read_text())
     assert summary['reached'] and summary['path'] == ['n1_2'], summary
     assert summary['loop']['lockstep_timeouts'] == 0, summary['loop']
     step, = summary['steps']
     assert step['success'] and step['insertion_error'] < 1e-3, step  # [m]
     assert processes_with(namespace) == [], text
+    return text, out, summary
+
+
+def test_run_all_walks_with_the_joint_controllers_grouped_in_one_process(tmp_path):
+    """One step with one controller process for the five joints, recorded, in sim time."""
+    text, _, _ = walk_one_step(tmp_path, 'grouped', '--grouped-controllers')
+    assert 'recorder, plant, controllers, planner, supervisor' in text
+    assert 'controller_' not in text.split('graph ready')[0]
 
 
 def test_run_all_walks_with_the_loop_composed_and_exchanging_by_call(tmp_path):
     """One step with the plant and the grouped controllers in one process, in sim time."""
-    namespace = f'/walker_loop_check_{os.getpid()}'
-    out = tmp_path / 'run'
-    with isolated_domain() as domain:
-        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
-                '--composed-loop', '--namespace', namespace, '--out', str(out),
-                '--target', 'n1_2', '--no-report']
-        run = subprocess.run(args, env=ros_environment(domain), stdout=subprocess.PIPE,
-                             stderr=subprocess.STDOUT, text=True, cwd=REPO_ROOT, timeout=300)
-    text = run.stdout
-    assert run.returncode == 0, text
+    text, out, summary = walk_one_step(tmp_path, 'loop', '--composed-loop')
     assert 'with the loop (plant, controllers) in one process' in text
     log = (out / 'logs' / 'loop.log').read_text()
     assert 'the plant and the controllers exchange by call' in log, log
-    summary = json.loads((out / 'summary.json').read_text())
-    assert summary['reached'] and summary['path'] == ['n1_2'], summary
-    assert summary['loop']['lockstep_timeouts'] == 0, summary['loop']
-    step, = summary['steps']
-    assert step['success'] and step['insertion_error'] < 1e-3, step  # [m]
+    # the plant waited for the supervisor's decisions (a loaded machine may time one out)
+    assert summary['loop']['decision_timeouts'] is not None, summary['loop']
+    assert "in sim time with the supervisor's decisions" in text
     assert (out / 'bag' / 'metadata.yaml').exists()  # the recorder, a process of its own
-    assert processes_with(namespace) == [], text

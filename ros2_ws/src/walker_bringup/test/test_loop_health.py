@@ -50,6 +50,17 @@ def test_a_sim_time_loop_reports_its_lock_step(timeouts, words):
     assert line.startswith('loop: lock-stepped in sim time, 12000 periods') and words in line
 
 
+@pytest.mark.parametrize('gate, words', [
+    ('0', "lock-stepped in sim time with the supervisor's decisions, 12000 periods, no timeout"),
+    ('2', 'and for the supervisor 2 times')])
+def test_a_sim_time_loop_waiting_for_the_supervisor_says_so(gate, words):
+    message, values = status(mode='sim_time', t='24.0')
+    values['supervisor gate timeouts'] = gate
+    health = loop_health(message, values)
+    assert health.decision_timeouts == int(gate) and words in health.summary(500.0)
+    assert loop_health(*status(mode='sim_time')).decision_timeouts is None  # it does not wait
+
+
 @pytest.mark.parametrize('message, values', [
     ('OK', {}),                                           # not the plant's status
     ('real_time, t=1.0 s, 0 missed', {'overruns commands': 'many'}),

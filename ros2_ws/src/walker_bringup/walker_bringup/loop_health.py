@@ -60,6 +60,9 @@ class LoopHealth:
         Times the plant stopped waiting for efforts (sim time).
     longest_tick_interval : float or None
         Longest wall time [s] between two of the plant's ticks (real time; None in sim time).
+    decision_timeouts : int or None
+        Times the plant stopped waiting for the supervisor's decisions (sim time with
+        ``sim.wait_for_decisions``; None when it does not wait for them).
     """
 
     clock_mode: str
@@ -68,6 +71,7 @@ class LoopHealth:
     late_efforts: dict[str, int]
     lockstep_timeouts: int
     longest_tick_interval: float | None
+    decision_timeouts: int | None = None
 
     def summary(self, control_rate: float) -> str:
         """Say in one line, for the end of a walk, whether the loop kept its period.
@@ -81,10 +85,15 @@ class LoopHealth:
         joint, late = max(self.late_efforts.items(), key=lambda item: item[1],
                           default=('', 0))
         if self.clock_mode == 'sim_time':
-            if not self.lockstep_timeouts:
-                return f'loop: lock-stepped in sim time, {periods} periods, no timeout'
-            return (f'loop: lock-stepped in sim time, {periods} periods; the plant stopped '
-                    f'waiting for late efforts {self.lockstep_timeouts} times')
+            with_decisions = '' if self.decision_timeouts is None \
+                else " with the supervisor's decisions"
+            if not self.lockstep_timeouts and not self.decision_timeouts:
+                return (f'loop: lock-stepped in sim time{with_decisions}, {periods} periods, '
+                        'no timeout')
+            return (f'loop: lock-stepped in sim time{with_decisions}, {periods} periods; the '
+                    f'plant stopped waiting for late efforts {self.lockstep_timeouts} times'
+                    + (f' and for the supervisor {self.decision_timeouts} times'
+                       if self.decision_timeouts else ''))
         text = (f'loop: {periods} periods of {1e3 / control_rate:g} ms in real time; the plant '
                 f'stepped {self.late_periods} late ({100.0 * self.late_periods / periods:.1f} %)')
         if self.longest_tick_interval is not None:
@@ -119,10 +128,12 @@ def loop_health(message: str, values: Mapping[str, str]) -> LoopHealth | None:
         late_efforts = {key[len('missed '):]: int(value) for key, value in values.items()
                         if key.startswith('missed ')}
         longest = values.get('longest tick interval [ms]')
+        decisions = values.get('supervisor gate timeouts')
         return LoopHealth(
             clock_mode=match['mode'], plant_time=float(match['time']),
             late_periods=int(values.get('overruns commands', 0)), late_efforts=late_efforts,
             lockstep_timeouts=int(values.get('lock-step timeouts', 0)),
-            longest_tick_interval=None if longest is None else float(longest) * 1e-3)
+            longest_tick_interval=None if longest is None else float(longest) * 1e-3,
+            decision_timeouts=None if decisions is None else int(decisions))
     except ValueError:
         return None

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-from walker_sim.core.commands import CommandError, EffortCommands, LockStep, seconds_to_ns
+from walker_sim.core.commands import (
+    CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
 
 MS = 1_000_000  # [ns]
 
@@ -88,3 +89,29 @@ def test_a_joint_that_times_out_is_not_waited_for_until_it_answers_again():
     commands.receive('b_yaw_joint', 0.0, 6 * MS)
     assert lockstep.waiting_for(commands) == list(PHYSICAL_JOINT_NAMES[:4])
     assert lockstep.lost == set()
+
+
+MS = 1_000_000  # [ns]
+
+
+def test_the_gate_lets_everything_through_until_the_supervisor_first_releases():
+    gate = DecisionGate(timeout=0.25)
+    assert gate.allows(10**12)
+    gate.release(20 * MS)
+    assert gate.allows(20 * MS) and not gate.allows(22 * MS)
+    gate.release(40 * MS)  # its next tick decided
+    assert gate.allows(40 * MS) and not gate.allows(42 * MS)
+
+
+def test_a_gate_waited_at_for_its_timeout_is_dropped_until_the_next_release():
+    gate = DecisionGate(timeout=0.25)
+    gate.release(20 * MS)
+    gate.wait(100.0)
+    gate.wait(100.2)  # still the same wait: it began at 100.0
+    assert not gate.expired(100.2) and gate.expired(100.25)
+    gate.drop()
+    assert gate.allows(10**12) and gate.timeouts == 1  # a dead supervisor stops nothing
+    gate.release(60 * MS)  # it speaks again: waited for again, the wait afresh
+    assert not gate.allows(62 * MS)
+    gate.wait(200.0)
+    assert not gate.expired(200.1)

@@ -345,3 +345,55 @@ def test_the_plant_runs_under_real_time_scheduling_on_the_wall_clock_only(ros_en
         else:
             assert policies == {(os.SCHED_OTHER, 0)}, policies
             assert 'SCHED_FIFO priority 50 refused' in plant.output, plant.output
+
+
+def test_with_wait_for_decisions_the_plant_steps_no_further_than_the_supervisor_released(
+        ros_env, probe):
+    """A stand-in supervisor releases the clock to 40 ms, then 60 ms, then falls silent."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import JointState
+
+    from walker_sim.messages import COMMAND_QOS, SENSOR_QOS
+
+    period = 2_000_000  # [ns]
+    node = probe.node
+    states, clocks = {}, []
+    efforts = node.create_publisher(JointState, f'{NAMESPACE}/effort_commands', COMMAND_QOS)
+    decided = node.create_publisher(Clock, f'{NAMESPACE}/supervisor/decided_until', COMMAND_QOS)
+
+    def on_state(message):
+        states.setdefault(stamp_ns(message.header.stamp), message)
+        for joint in JOINTS:  # every controller answers at once
+            answer = JointState(name=[joint], effort=[0.0])
+            answer.header.stamp = message.header.stamp
+            efforts.publish(answer)
+
+    def release(until):
+        message = Clock()
+        message.clock.sec, message.clock.nanosec = divmod(until, 1_000_000_000)
+        decided.publish(message)
+
+    node.create_subscription(JointState, f'{NAMESPACE}/joint_states', on_state, SENSOR_QOS)
+    node.create_subscription(Clock, '/clock', lambda m: clocks.append(stamp_ns(m.clock)),
+                             QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    with start_plant(ros_env, 'sim.clock_mode:=sim_time', 'sim.lockstep_timeout:=30.0',
+                     'sim.wait_for_decisions:=true', 'sim.decision_timeout:=2.0') as plant:
+        assert probe.spin_until(lambda: states, START_TIMEOUT), plant.output
+        wait_for_endpoints(probe, f'{NAMESPACE}/supervisor/decided_until', publishers=False)
+        release(0)  # the supervisor's first word: it has decided at t = 0
+        probe.spin_for(0.5)
+        held = max(states)
+        release(40 * period // 2)  # up to 40 ms
+        assert probe.spin_until(lambda: max(states) == 20 * period, 10.0), plant.output
+        probe.spin_for(0.5)
+        assert max(states) == 20 * period, 'stepped past the release'
+        release(23 * period)  # 46 ms: off the 10 ms grid of /clock
+        assert probe.spin_until(lambda: max(states) == 23 * period, 10.0), plant.output
+        probe.spin_until(lambda: clocks and max(clocks) == 23 * period, 5.0)
+        assert max(clocks) == 23 * period  # /clock reaches the release: the supervisor's
+        # ROS-time timer sees the time it released up to
+        # silent for longer than decision_timeout: the plant steps on without it
+        assert probe.spin_until(lambda: max(states) > 60 * period, 15.0), plant.output
+        assert plant.wait_for_output('has not decided beyond', 5.0), plant.output
+    assert held <= period  # held at the first release (t = 0; the first state answered)
