@@ -7,6 +7,7 @@ Usage::
     python3 benchmarks/run_benchmarks.py --quick      # shorter windows, fewer cases (~4 min)
     python3 benchmarks/run_benchmarks.py --only walk scaling
     python3 benchmarks/run_benchmarks.py --soak 10    # only the soak: 10 min of simulated walking
+    python3 benchmarks/run_benchmarks.py --soak 10 --composed-loop   # the soak, loop composed
     python3 benchmarks/run_benchmarks.py --profile    # only the py-spy profiles
 
 It sets up the environment like the other scripts, runs the parts, prints one table of the
@@ -88,6 +89,10 @@ def _arguments(argv: list[str]) -> argparse.Namespace:
     parser.add_argument('--grouped-controllers', dest='grouped', action='store_true',
                         help="run the soak with the five joint controllers in one process "
                              "(run_all.py's --grouped-controllers)")
+    parser.add_argument('--composed-loop', dest='loop', action='store_true',
+                        help="run the soak with the plant and the grouped controllers in one "
+                             "process, waiting for the supervisor's decisions (run_all.py's "
+                             "--composed-loop)")
     parser.add_argument('--output', type=Path, default=HERE / 'results',
                         help='results directory (default: benchmarks/results)')
     args = parser.parse_args(argv)
@@ -109,7 +114,8 @@ class Suite:
     def __init__(self, args: argparse.Namespace, scratch: Path) -> None:
         self.quick = args.quick
         self.soak_minutes = args.soak
-        self.grouped = getattr(args, 'grouped', False)
+        self.loop = getattr(args, 'loop', False)
+        self.grouped = getattr(args, 'grouped', False) or self.loop
         self.scratch = scratch
         self._windows: dict[tuple, dict] = {}
         self._runs = 0
@@ -403,12 +409,13 @@ def part_soak(suite: Suite) -> dict:
     minutes = suite.soak_minutes or 10.0
     targets = (DEFAULT_TARGET, 'n1_1')
     suite.say(f'soak: walking {targets[0]} <-> {targets[1]} until {minutes:g} min of '
-              'simulated walking' + (', controllers grouped' if suite.grouped else ''))
+              'simulated walking' + (', loop composed' if suite.loop else
+                                     ', controllers grouped' if suite.grouped else ''))
     samples, legs = [], []
     suite._runs += 1
     began = time.monotonic()
     with GraphRun(suite.scratch / f'run{suite._runs}', 1, False, True, record=True,
-                  probe=False, grouped=suite.grouped) as run:
+                  probe=False, grouped=suite.grouped, loop=suite.loop) as run:
         client = run.clients[0]
         pids = run.pids()
 
@@ -466,7 +473,8 @@ def part_soak(suite: Suite) -> dict:
                 'slope_per_step': float(slope),
                 'slope_standard_error': float(np.sqrt(covariance[0, 0]))}
 
-    return {'grouped': suite.grouped, 'minutes_walked': round(walked / 60, 2), 'wall_minutes':
+    return {'grouped': suite.grouped, 'loop_composed': suite.loop,
+            'minutes_walked': round(walked / 60, 2), 'wall_minutes':
             round((time.monotonic() - began) / 60, 2), 'legs': legs, 'steps': len(rows),
             'failed_steps': sum(1 for r in rows if not r.success),
             'safe_holds': sum(len(leg['safe_holds']) for leg in legs),
@@ -716,7 +724,8 @@ def figures(results: dict) -> list[dict]:
         growth = max(soak['rss_growth_after_first_leg_bytes'].values(), default=0)
         files = max((lasting_open_files_change(soak['samples']) if soak.get('samples')
                      else soak['open_files_change_after_first_leg']).values(), default=0)
-        label = 'soak (controllers grouped)' if soak.get('grouped') else 'soak'
+        label = ('soak (loop composed)' if soak.get('loop_composed')
+                 else 'soak (controllers grouped)' if soak.get('grouped') else 'soak')
         add(f'{label}: {soak["minutes_walked"]:g} min walked ({soak["steps"]} steps, '
             f'{soak["failed_steps"]} failed, {soak.get("safe_holds", 0)} safe holds resumed '
             'from): largest RSS growth after the first leg; '
