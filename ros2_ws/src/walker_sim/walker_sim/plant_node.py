@@ -11,7 +11,8 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
   ``/clock`` (sim time, at ``sim.clock_rate``);
   ``/diagnostics`` (1 Hz, wall clock: missed commands, refused and clamped torques);
 * subscribes to ``effort_commands`` (``sensor_msgs/JointState``: joint names and efforts,
-  stamped with the state they answer);
+  stamped with the state they answer) and, in sim time, ``supervisor/decided_until``
+  (``rosgraph_msgs/Clock``: with ``sim.wait_for_decisions`` no state is stepped to past it);
 * serves ``gripper_command`` (``walker_msgs/srv/GripperCommand``): answers at once with the
   gripper's new state (SCREWING, UNSCREWING, JAMMED, or the refusal); the screw-in or unscrew
   completes ``gripper.screw_time`` later, as ``gripper_states`` reports.
@@ -227,6 +228,8 @@ class PlantNode(Node):
         self.gate.timeout = sim.decision_timeout
         if not sim.wait_for_decisions:
             self.gate.until = None
+            if self.sim_time and self._started:
+                self._try_advance()  # it may have been waiting at the gate just dropped
         if sim.jam_screw_ins != self.plant.fouled_screw_ins:
             self.plant.foul_thread(sim.jam_screw_ins)
             self.get_logger().warning(

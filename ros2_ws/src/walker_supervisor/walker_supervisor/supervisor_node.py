@@ -190,7 +190,8 @@ class SupervisorNode(TeleopServer, Node):
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
         self._decided_pub = self.create_publisher(RosClock, '~/decided_until', COMMAND_QOS) \
             if self._sim_time else None
-        self._gripper_calls = 0
+        # [s] (wall) when each unanswered gripper command was sent, by its future
+        self._gripper_calls: dict[object, float] = {}
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
         self._commanded_mode = self._commanded_base = ''  # the last mode command sent
@@ -620,8 +621,11 @@ class SupervisorNode(TeleopServer, Node):
         if self._decided_pub is None:
             return
         now = self.get_clock().now().nanoseconds
+        # a gripper command unanswered for _ANSWER_WAIT (the plant gone) holds nothing: the
+        # watchdog deals with a dead plant, and a plant started again must not crawl
+        wall = time.monotonic()
         busy = self._awaited is not None or bool(self._waiting_requests) \
-            or self._gripper_calls > 0
+            or any(wall - sent < _ANSWER_WAIT for sent in self._gripper_calls.values())
         ahead = self._tick_timer.time_until_next_call()
         until = now if busy or ahead is None else now + max(0, ahead)
         message = RosClock()
@@ -800,12 +804,12 @@ class SupervisorNode(TeleopServer, Node):
             gripper=request.gripper,
             command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
             else GripperCommand.Request.UNSCREW)
-        self._gripper_calls += 1
         future = self.gripper_client.call_async(call)
+        self._gripper_calls[future] = time.monotonic()
         future.add_done_callback(self._on_gripper_response)
 
     def _on_gripper_response(self, future) -> None:
-        self._gripper_calls = max(0, self._gripper_calls - 1)
+        self._gripper_calls.pop(future, None)
         try:
             self._take_gripper_response(future)
         finally:
