@@ -50,6 +50,8 @@ def test_bad_parameter_updates_are_refused_and_nothing_moves(graph):
         ('controller_vertex', 'control.state_timeout', -1.0, 'state_timeout'),
         ('supervisor', 'supervisor.watchdog_timeout', 1000.0, 'watchdog_timeout'),
         ('supervisor', 'supervisor.insertion_alignment', 0.1, 'insertion_alignment'),
+        # inside its own range and the supervisor section's rules, wider than the gripper's
+        ('supervisor', 'supervisor.descent_region', 0.003, 'insertion_position_tolerance'),
         ('planner', 'gripper.insertion_position_tolerance', 0.5, 'read-only'),
     ]
     for node, name, value, words in cases:

@@ -89,7 +89,8 @@ def declare_section(node: Node, section_type: type, prefix: str = '',
 
 
 def guard_section_updates(node: Node, section_type: type, prefix: str,
-                          current: Callable[[], Any], apply: Callable[[Any], None]) -> None:
+                          current: Callable[[], Any], apply: Callable[[Any], None],
+                          check: Callable[[Any], None] | None = None) -> None:
     """Validate runtime updates of a section's parameters as a whole, then apply them.
 
     Parameters
@@ -98,6 +99,9 @@ def guard_section_updates(node: Node, section_type: type, prefix: str,
         Returns the section now in force.
     apply : callable
         Receives the new, validated section once the parameters have been set.
+    check : callable, optional
+        Checks a candidate section against what lies outside it (other sections) and raises
+        :class:`ParameterError` to refuse it.
     """
     names = {spec.name for spec in leaf_specs(section_type, prefix)}
     pending: dict[str, Any] = {}
@@ -108,6 +112,8 @@ def guard_section_updates(node: Node, section_type: type, prefix: str,
             return SetParametersResult(successful=True)
         try:
             candidate = replace_in_section(current(), updates, prefix)
+            if check is not None:
+                check(candidate)
         except ParameterError as error:
             return SetParametersResult(successful=False, reason=str(error))
         pending['section'] = candidate

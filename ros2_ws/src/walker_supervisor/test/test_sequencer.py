@@ -26,7 +26,7 @@ SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignmen
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,
-                                  mouth_settle_time=0.1)
+                                  mouth_settle_time=0.1, descent_region=0.002)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -305,7 +305,7 @@ def test_the_descent_is_planned_on_entering_fine_and_streams_unchanged():
 
 def test_joints_away_from_the_prepared_start_descend_from_where_they_are():
     """A wrist turned another way (a resumed step's way back) is not sent the prepared descent."""
-    world = World()
+    world = World(coarse_miss=0.004)  # at rest 3.6 mm short: no descent before the tick below
     world.run_step(possible_steps(TRUSS, world.stance)[0], max_time=0.0)  # unscrewing
     while world.sequencer.phase != Phase.FINE:
         world.advance()
@@ -337,6 +337,102 @@ def test_an_aligned_tip_still_moving_is_not_lowered():
     commands = sequencer.tick(world.now + 20 * DT, theta, np.zeros(5), dict(world.grippers))
     assert [c.purpose for c in commands if isinstance(c, TrajectoryRequest)] == ['insertion']
     assert sequencer.phase == Phase.INSERTION
+
+
+def _settling_above_the_hole(world):
+    """Run a step until its coarse motion has ended above the hole (FINE, 'settling').
+
+    ``world`` stops joint 1 short of the goal (``coarse_miss``), outside ``descent_region``.
+    """
+    world.run_step(possible_steps(TRUSS, world.stance)[0], max_time=0.0)  # unscrewing
+    while world.sequencer.phase != Phase.FINE:
+        world.advance()
+    while world.motion is not None:  # the coarse motion runs on to its end
+        world.advance()
+    assert world.sequencer.stage == 'settling'
+    return world.sequencer
+
+
+def _joint1_short_by(world, errors):
+    """Joint angles (roles) with the tip these distances [m] short of the point above the hole.
+
+    Joint 1 alone turns the tip about the base axis, as it does coming in behind its filter.
+    """
+    above = world.targets.above_to
+    thetas = []
+    for error in errors:
+        theta = above.copy()
+        # find the joint-1 offset that puts the tip this far from the point (bisection)
+        low, high = 0.0, 0.1
+        for _ in range(60):
+            middle = 0.5 * (low + high)
+            theta[0] = above[0] - middle
+            distance = np.linalg.norm(KIN.forward(theta)[:3] - world.targets.point_above_to)
+            low, high = (middle, high) if distance < error else (low, middle)
+        theta[0] = above[0] - 0.5 * (low + high)
+        thetas.append(theta)
+    return thetas
+
+
+def test_a_tip_still_closing_inside_the_descent_region_descends_at_once():
+    """Joint 1 coming in behind its filter: the descent starts inside ``descent_region``.
+
+    The joints are faster than ``settle_velocity`` and the tip farther than
+    ``insertion_alignment``, as when the sweep's setpoints have ended and joint 1's filtered
+    reference is still arriving; closing on the point, the tip starts down at the first tick
+    inside the region, and not before.
+    """
+    world = World(coarse_miss=0.004)  # 3.6 mm short at 0.9 m
+    sequencer = _settling_above_the_hole(world)
+    parameters = sequencer.parameters
+    errors = [4.0e-3, 3.0e-3, 2.4e-3, 1.6e-3, 1.0e-3]  # [m], 20 ms apart
+    moving = np.array([0.04, 0.0, 0.0, 0.0, 0.0])  # [rad/s] twice settle_velocity
+    assert moving[0] > parameters.settle_velocity
+    started = None
+    for k, theta in enumerate(_joint1_short_by(world, errors)):
+        commands = sequencer.tick(world.now + k * DT, theta, moving, dict(world.grippers))
+        if any(isinstance(c, TrajectoryRequest) for c in commands):
+            started = k
+            break
+    assert started is not None
+    assert errors[started] <= parameters.descent_region < errors[started - 1]
+    assert errors[started] > parameters.insertion_alignment
+    assert sequencer.phase == Phase.INSERTION
+
+
+def test_a_tip_swinging_through_or_at_rest_off_the_point_is_not_lowered():
+    """Through the point faster than it closes, or away, or still: not lowered.
+
+    Outside ``insertion_alignment`` at rest it settles and gets a correction line, as a tip
+    that stopped short always has.
+    """
+    world = World(coarse_miss=0.004)  # 3.6 mm short at 0.9 m
+    sequencer = _settling_above_the_hole(world)
+    parameters = sequencer.parameters
+    inside = 0.5 * (parameters.descent_region + parameters.insertion_alignment)
+    # [m] 20 ms apart: in by more than what remains each tick, through, out again, then still
+    errors = [1.5 * parameters.descent_region, 0.3 * parameters.descent_region, 0.0,
+              0.6 * inside, inside, inside]
+    moving = np.array([0.2, 0.0, 0.0, 0.0, 0.0])
+    for k, theta in enumerate(_joint1_short_by(world, errors)):
+        velocities = moving if k < 5 else np.zeros(5)
+        commands = sequencer.tick(world.now + k * DT, theta, velocities, dict(world.grippers))
+        assert not any(isinstance(c, TrajectoryRequest) for c in commands), k
+    assert sequencer.phase == Phase.FINE
+    at_rest = _joint1_short_by(world, [inside])[0]
+    requests = []
+    for k in range(int(round(parameters.settle_time / DT)) + 2):
+        requests += [c for c in sequencer.tick(world.now + (len(errors) + k) * DT, at_rest,
+                                               np.zeros(5), dict(world.grippers))
+                     if isinstance(c, TrajectoryRequest)]
+    assert [c.purpose for c in requests] == ['fine']  # a correction line, not the descent
+
+
+def test_parameters_refuse_a_descent_region_outside_alignment_and_region():
+    with pytest.raises(ParameterError, match='descent_region'):
+        dataclasses.replace(SUPERVISOR, descent_region=0.5 * SUPERVISOR.insertion_alignment)
+    with pytest.raises(ParameterError, match='descent_region'):
+        dataclasses.replace(SUPERVISOR, descent_region=SUPERVISOR.coarse_to_fine_region)
 
 
 def test_a_tip_that_settles_off_the_hole_axis_after_the_descent_is_aligned_at_the_mouth():
@@ -731,7 +827,7 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():

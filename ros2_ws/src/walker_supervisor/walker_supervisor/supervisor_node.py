@@ -124,7 +124,7 @@ class SupervisorNode(TeleopServer, Node):
         self.settings = declare_section(self, SupervisorParameters, 'supervisor.')
         self._check_alignment(self.settings)
         guard_section_updates(self, SupervisorParameters, 'supervisor.', lambda: self.settings,
-                              self._apply_settings)
+                              self._apply_settings, check=self._check_alignment)
         self.kinematics = WalkerKinematics.from_parameters(self.params)
         self.truss = Truss.from_parameters(self.params)
         self.sequencer = StepSequencer(self.settings, self.kinematics, 'a',
@@ -233,6 +233,11 @@ class SupervisorNode(TeleopServer, Node):
             raise ParameterError(
                 f'supervisor.insertion_alignment ({settings.insertion_alignment} m) must be '
                 f'smaller than gripper.insertion_position_tolerance ({tolerance} m)')
+        if settings.descent_region > tolerance:
+            raise ParameterError(
+                f'supervisor.descent_region ({settings.descent_region} m) must not exceed '
+                f'gripper.insertion_position_tolerance ({tolerance} m): the descent starts '
+                f'only with the tip inside it')
 
     def _apply_settings(self, settings: SupervisorParameters) -> None:
         self.settings = settings

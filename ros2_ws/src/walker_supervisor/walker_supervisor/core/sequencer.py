@@ -21,12 +21,14 @@ Rules it enforces:
   the controllers then switch to FINE mode (higher gains, integral action) while the coarse
   trajectory runs on to its end, the point above the hole;
 * fine motion ends, once the trajectory has ended, as soon as the tip is within
-  ``insertion_alignment`` of the point above the hole with every joint slower than
-  ``settle_velocity``: the descent need not wait for the links' ringing to decay, since the
-  insertion settles at the mouth and checks the tip again before anything screws in. A tip
-  that settles (``settle_time``) anywhere else gets a constant-velocity fine line (paper
-  section 5) from where it settled, up to ``MAX_FINE_LINES`` times before insertion is tried
-  anyway (the screw-in itself is the final check);
+  ``descent_region`` (the insertion tolerance) of the point above the hole and still closing
+  on it, joint 1 coming in behind its filter (not swinging through it), or within
+  ``insertion_alignment`` with every joint slower than ``settle_velocity``: the descent need
+  not wait for the tip to come to rest, since the insertion settles at the mouth and checks
+  the tip again, across the hole's axis, before anything screws in. A tip that settles
+  (``settle_time``) anywhere else gets a constant-velocity fine line (paper section 5) from
+  where it settled, up to ``MAX_FINE_LINES`` times before insertion is tried anyway (the
+  screw-in itself is the final check);
 * insertion descends along the hole axis to its mouth; the descent moves the joints, which
   stop in their friction again, so once they have been still for ``mouth_settle_time`` (the
   vertical descent hardly moves joint 1; after a line at the mouth, which does, for
@@ -145,11 +147,21 @@ class SupervisorParameters:
         'tip is checked against the axis and the gripper screwed in (after a correction line '
         'at the mouth: settle_time)', 's', 0.0, 10.0,
         read_only=False)
+    descent_region: float = parameter(
+        'largest tip distance from the point above the hole at which the descent may start '
+        'while the tip is still closing on it, once the motion there has ended (at or below '
+        'insertion_alignment it may also start with the tip at rest); at most '
+        "the gripper's insertion_position_tolerance", 'm', 1e-5, 0.05, read_only=False)
 
     def __post_init__(self) -> None:
         if self.insertion_alignment >= self.coarse_to_fine_region:
             raise ParameterError(
                 f'supervisor.insertion_alignment ({self.insertion_alignment} m) must be smaller '
+                f'than supervisor.coarse_to_fine_region ({self.coarse_to_fine_region} m)')
+        if not self.insertion_alignment <= self.descent_region < self.coarse_to_fine_region:
+            raise ParameterError(
+                f'supervisor.descent_region ({self.descent_region} m) must be at least '
+                f'supervisor.insertion_alignment ({self.insertion_alignment} m) and smaller '
                 f'than supervisor.coarse_to_fine_region ({self.coarse_to_fine_region} m)')
 
 
@@ -300,6 +312,8 @@ class StepSequencer:
         self._remeasure: Callable[[np.ndarray], StepTargets] | None = None
         self._screw_time = screw_time
         self._settled_since: float | None = None
+        # [m] tip_error() at this tick and the last (nan: none yet in this phase)
+        self._tip_error_now = self._last_tip_error = math.nan
         self._attempts = 0
         self._durations: dict[str, float] = {}
         self._fine_lines = 0
@@ -600,6 +614,7 @@ class StepSequencer:
         self._grippers = dict(grippers)
         if not self.busy:
             return []
+        self._last_tip_error, self._tip_error_now = self._tip_error_now, self.tip_error()
         if grippers.get(self._step.base_gripper) != 'attached':
             return self._abort(f'the base gripper {self._step.base_gripper} reports '
                                f'{grippers.get(self._step.base_gripper, "nothing")}', now)
@@ -627,11 +642,9 @@ class StepSequencer:
             # the coarse motion ended and the arm came to rest outside the region (friction,
             # overshoot): fine motion, with its higher gains and a fine line, takes it there
             return self._enter_fine(now, correction=True)
-        if self.phase == Phase.FINE and self.stage == 'settling' \
-                and self.tip_error() <= self.parameters.insertion_alignment \
-                and bool(np.all(np.abs(velocities) < self.parameters.settle_velocity)):
-            # over the hole and slow: the descent need not wait for the links to stop ringing,
-            # the insertion settles at the mouth and checks the tip again before it screws in
+        if self.phase == Phase.FINE and self.stage == 'settling' and self._may_descend(velocities):
+            # the descent need not wait for the tip to come to rest: the insertion settles at
+            # the mouth and checks the tip against the axis again before it screws in
             return self._enter_insertion(now)
         if self.stage == 'settling' and self._settled(now, velocities, self._settle_wait()):
             if self.phase == Phase.FINE:
@@ -652,6 +665,22 @@ class StepSequencer:
                 self._state_before_screwing = grippers.get(self._step.moving_gripper, '')
                 return [GripperRequest(self._step.moving_gripper, 'screw_in')]
         return []
+
+    def _may_descend(self, velocities: np.ndarray) -> bool:
+        """Return True if the tip is over the hole closely enough to start the descent.
+
+        Either it is within ``descent_region`` of the point above the hole and closing on it,
+        by less since the last tick than it still has to go (joint 1 coming in behind its
+        filter: it arrives on the axis during the descent, 0.3 s; a tip swinging through the
+        point is not closing so), or within ``insertion_alignment`` with every joint slower
+        than ``settle_velocity`` (at rest there, or nearly).
+        """
+        error = self._tip_error_now
+        closing = 0.0 < self._last_tip_error - error < error
+        if error <= self.parameters.descent_region and closing:
+            return True
+        return error <= self.parameters.insertion_alignment \
+            and bool(np.all(np.abs(velocities) < self.parameters.settle_velocity))
 
     def _follow_gripper(self, now: float, state: str) -> list:
         """Move on once the moving gripper reports free (unscrewed) or attached (screwed)."""
@@ -783,6 +812,7 @@ class StepSequencer:
             self._durations[name] = self._durations.get(name, 0.0) + now - self._phase_started
         self.phase, self.stage, self._phase_started = phase, stage, now
         self._settled_since = None
+        self._tip_error_now = math.nan  # errors to another target point are not compared
 
     def _start_coarse_when_there(self, now: float) -> list:
         """Enter COARSE once every joint is within ``coarse_start_tolerance`` of its start.
