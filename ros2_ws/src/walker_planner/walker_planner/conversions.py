@@ -7,9 +7,11 @@ from builtin_interfaces.msg import Duration, Time
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_planner.core.chaining import chain
 from walker_planner.core.streaming import SampledTrajectory
 
-__all__ = ['to_duration', 'to_seconds', 'to_time', 'trajectory_message', 'sampled_trajectory']
+__all__ = ['to_duration', 'to_seconds', 'to_time', 'trajectory_message', 'sampled_trajectory',
+           'chained_message']
 
 _NANOSECONDS = 1_000_000_000
 
@@ -67,3 +69,19 @@ def sampled_trajectory(message: JointTrajectory, robot=None) -> SampledTrajector
         message.joint_names, [to_seconds(p.time_from_start) for p in points],
         [p.positions for p in points], [p.velocities for p in points],
         [p.accelerations for p in points], robot)
+
+
+def chained_message(first: JointTrajectory, second: JointTrajectory,
+                    lead: float) -> JointTrajectory:
+    """One ``JointTrajectory`` of two, the second starting ``lead`` [s] before the first ends.
+
+    See :func:`walker_planner.core.chaining.chain` (over the overlap the motions add).
+
+    Raises
+    ------
+    PlanningError
+        Naming what is wrong with either trajectory or with joining them.
+    """
+    joined = chain(sampled_trajectory(first), sampled_trajectory(second), lead)
+    return trajectory_message(joined.times, joined.positions, joined.velocities,
+                              joined.accelerations)

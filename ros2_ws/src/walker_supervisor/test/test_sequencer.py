@@ -26,7 +26,8 @@ SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignmen
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,
-                                  mouth_settle_time=0.1, descent_region=0.002)
+                                  mouth_settle_time=0.1, descent_region=0.002,
+                                  sweep_lead=0.0)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -66,6 +67,7 @@ class World:
         self.phases = []
         self.stages = []  # (time [s], stage) at every tick
         self.motion = None
+        self.joined = []  # (time, phase, lift fraction, sweep fraction) of a joined motion
 
     def run_step(self, step, max_time=60.0):
         targets = plan_step_targets(KIN, self.frame, step, TRUSS.position(step.from_node),
@@ -83,8 +85,12 @@ class World:
             if isinstance(command, GripperRequest):
                 self.gripper(command)
             elif isinstance(command, TrajectoryRequest):
-                self.motion = [command, self.now, 1.0]
-                self.sequencer.trajectory_started(1.0, self.now)
+                if command.then is None:  # every motion takes 1 s
+                    self.motion = [command, self.now, 1.0]
+                    self.sequencer.trajectory_started(1.0, self.now)
+                else:  # the second starts command.lead before the first ends
+                    self.motion = [command, self.now, 2.0 - command.lead]
+                    self.sequencer.trajectory_started(2.0 - command.lead, self.now, 1.0)
             elif isinstance(command, CancelTrajectory):
                 self.motion = None
             elif isinstance(command, PrepareTrajectory):  # planned at once, 1 s like any motion
@@ -138,7 +144,17 @@ class World:
                                                                  self.targets.point_to)
             if request.purpose == 'insertion' or (at_mouth and self.mouth_lines_miss):
                 goal[0] -= self.descent_miss
-            self.theta = request.start + fraction * (goal - request.start)
+            if request.then is None:
+                self.theta = request.start + fraction * (goal - request.start)
+            else:
+                elapsed = self.now - started
+                lift = min(1.0, elapsed)
+                sweep = float(np.clip(elapsed - (1.0 - request.lead), 0.0, 1.0))
+                then_goal = request.then.goal.copy()
+                then_goal[0] -= self.coarse_miss * math.copysign(1.0, request.then.sweep)
+                self.theta = (request.start + lift * (goal - request.start)
+                              + sweep * (then_goal - request.then.start))
+                self.joined.append((self.now, self.sequencer.phase, lift, sweep))
             velocities = (self.theta - previous) / DT
             if fraction >= 1.0 and request.purpose == 'extraction' and self.lift_lag:
                 joint, lag, time_ = self.lift_lag
@@ -181,6 +197,81 @@ def test_a_step_runs_the_four_phases_in_order_and_swaps_the_base(to_node):
     assert outcome.insertion_error <= SUPERVISOR.insertion_alignment
     tip = KIN.forward(world.theta)[:3]
     np.testing.assert_allclose(world.frame.to_truss(tip), TRUSS.position(to_node), atol=1e-9)
+
+
+def _leading_world(lead=0.3, **options):
+    world = World(**options)
+    world.sequencer = StepSequencer(dataclasses.replace(SUPERVISOR, sweep_lead=lead), KIN, 'a')
+    return world
+
+
+def test_with_a_sweep_lead_the_sweep_streams_with_the_lift_and_the_step_is_that_much_shorter():
+    """The coarse motion starts ``sweep_lead`` before the lift ends, in one stream with it.
+
+    EXTRACTION lasts as long as the lift, COARSE (and its controller mode) begins at the
+    first tick after it, no second request is made for the coarse motion, and the step ends
+    ``sweep_lead`` sooner than with the motions one after the other.
+    """
+    lead = 0.3
+    step = possible_steps(TRUSS, START)[0]
+    world = _leading_world(lead)
+    outcome = world.run_step(step)
+    assert outcome.success, outcome.message
+    requests = [c for c in world.log if isinstance(c, TrajectoryRequest)]
+    joined = [c for c in requests if c.then is not None]
+    assert len(joined) == 1 and joined[0].purpose == 'extraction'
+    assert joined[0].then.purpose == 'coarse' and joined[0].lead == lead
+    assert joined[0].mode == 'coarse'  # commanded as the stream begins: Ka as the sweep does
+    assert 'coarse' not in [c.purpose for c in requests]
+    # the sweep moved while the phase was still EXTRACTION; COARSE from the lift's end
+    assert any(phase == Phase.EXTRACTION and sweep > 0 for _, phase, _, sweep in world.joined)
+    assert all(lift == 1.0 for _, phase, lift, _ in world.joined if phase == Phase.COARSE)
+    lift_end = min(t for t, _, lift, _ in world.joined if lift == 1.0)
+    coarse_start = min(t for t, phase, _, _ in world.joined if phase == Phase.COARSE)
+    assert lift_end <= coarse_start <= lift_end + DT + 1e-9
+    modes = [c.mode for c in world.log if isinstance(c, SetControlMode)]
+    assert modes[:2] == ['hold', 'fine']  # FINE as the tip enters the region: no other
+    order = [p for i, p in enumerate(world.phases) if i == 0 or world.phases[i - 1] != p]
+    assert order[:4] == [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]
+    after = World()
+    separate = after.run_step(step)
+    assert separate.success, separate.message
+    assert outcome.duration == pytest.approx(separate.duration - lead, abs=2 * DT + 1e-9)
+    assert outcome.insertion_error <= SUPERVISOR.insertion_alignment
+
+
+def test_without_the_sweeps_plan_back_the_lift_streams_alone_and_the_sweep_follows_it():
+    """The lift does not wait for a late plan: it streams alone, the sweep after it."""
+    world = _leading_world(0.3)
+    late = world.execute
+
+    def coarse_plan_not_back(commands):
+        late([c for c in commands if not (isinstance(c, PrepareTrajectory)
+                                          and c.request.purpose == 'coarse')])
+    world.execute = coarse_plan_not_back
+    outcome = world.run_step(possible_steps(TRUSS, START)[0])
+    assert outcome.success, outcome.message
+    requests = [c for c in world.log if isinstance(c, TrajectoryRequest)]
+    assert all(c.then is None for c in requests)
+    assert [c.purpose for c in requests][:2] == ['extraction', 'coarse']
+
+
+def test_a_sweep_lead_longer_than_the_whole_stream_still_ends_in_coarse():
+    """A joined stream that ends before a tick has seen the lift end goes on in COARSE."""
+    world = _leading_world(1.0)  # the World's lift takes 1 s: they start together
+    outcome = world.run_step(possible_steps(TRUSS, START)[0])
+    assert outcome.success, outcome.message
+
+
+@pytest.mark.parametrize('ticks', [30, 80])  # the lift only; the lift and the sweep
+def test_a_hold_while_the_sweep_streams_with_the_lift_is_resumed_to_the_step_end(ticks):
+    world = _leading_world(0.5)
+    step = _hold_during(world, Phase.EXTRACTION, ticks=ticks)
+    assert world.grippers[step.moving_gripper] == 'free'
+    assert [c for c in world.log if isinstance(c, CancelTrajectory)]
+    _resume(world)
+    _run_to_the_end(world)
+    assert world.grippers == {'a': 'attached', 'b': 'attached'}
 
 
 def _record_progress(world):
@@ -827,7 +918,7 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02, 0.0)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():

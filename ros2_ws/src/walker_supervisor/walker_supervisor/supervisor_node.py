@@ -47,6 +47,8 @@ from walker_core.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latc
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
+from walker_planner.conversions import chained_message
+from walker_planner.core.errors import PlanningError
 from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
@@ -842,10 +844,18 @@ class SupervisorNode(TeleopServer, Node):
         def send() -> None:
             if generation != self._trajectory_generation:
                 return  # cancelled while waiting
-            future = self._take_prepared(request) \
-                or self.plan_client.call_async(plan_request(request, self.kinematics))
+            future = self._plan(request)
             self._await_answer('plan_trajectory', future, send)
-            future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+            if request.then is None:
+                future.add_done_callback(lambda f: self._on_planned(f, request, generation))
+                return
+            then = self._plan(request.then)  # streamed with it: both plans, then one goal
+
+            def both_planned(_) -> None:
+                if future.done() and then.done():
+                    self._on_planned(future, request, generation, then)
+            future.add_done_callback(both_planned)
+            then.add_done_callback(both_planned)
 
         def unavailable() -> None:
             if generation == self._trajectory_generation:
@@ -853,6 +863,11 @@ class SupervisorNode(TeleopServer, Node):
                     False, 'the planner is not available', self._now()))
 
         self._when_ready(ready, send, unavailable)
+
+    def _plan(self, request: TrajectoryRequest):
+        """Return the planner's answer (future) to a motion: the one asked ahead, or a new one."""
+        return self._take_prepared(request) \
+            or self.plan_client.call_async(plan_request(request, self.kinematics))
 
     def _prepare_trajectory(self, request: TrajectoryRequest) -> None:
         """Ask the planner now for a motion the sequencer will request later (if it is up)."""
@@ -937,23 +952,39 @@ class SupervisorNode(TeleopServer, Node):
 
         self._when_ready(ready, send_again, unavailable)
 
-    def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
+    def _on_planned(self, future, request: TrajectoryRequest, generation: int,
+                    then=None) -> None:
+        """Stream a planned motion; with ``then`` (the answer for ``request.then``), both."""
         if not self._answered(future) or generation != self._trajectory_generation:
             return
-        response = future.result()
-        if response is None or not response.success:
-            reason = 'no response' if response is None else response.message
-            self.get_logger().error(f'planning the {request.purpose} motion failed: {reason}')
-            self._execute(self.sequencer.trajectory_done(
-                False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
-            self._release_clock()
-            return
-        if request.purpose in _BOUNDED and request.purpose not in self._bounded:
-            # the step's bound: its extraction, coarse motion and insertion at their limits,
-            # plus the two screw actions (fine corrections and retries are not in it)
-            self._bounded.add(request.purpose)
-            self._step_bound += response.time_optimal_bound
-        goal = FollowTrajectory.Goal(trajectory=response.trajectory)
+        answers = [(request, future.result())]
+        if then is not None:
+            answers.append((request.then, then.result()))
+        for motion, response in answers:
+            if response is None or not response.success:
+                reason = 'no response' if response is None else response.message
+                self._planning_failed(motion, reason)
+                return
+        for motion, response in answers:
+            if motion.purpose in _BOUNDED and motion.purpose not in self._bounded:
+                # the step's bound: its extraction, coarse motion and insertion at their
+                # limits, plus the two screw actions (fine corrections and retries are not in it)
+                self._bounded.add(motion.purpose)
+                self._step_bound += response.time_optimal_bound
+        response = answers[0][1]
+        trajectory, duration, first_duration = response.trajectory, response.duration, None
+        if then is not None:
+            following = answers[1][1]
+            lead = min(request.lead, response.duration, following.duration)
+            try:
+                trajectory = chained_message(response.trajectory, following.trajectory, lead)
+            except PlanningError as error:
+                self._planning_failed(request, f'it cannot stream with the {request.then.purpose} '
+                                      f'motion: {error}')
+                return
+            first_duration = response.duration
+            duration = response.duration + following.duration - lead
+        goal = FollowTrajectory.Goal(trajectory=trajectory)
         self._publish_mode(request.mode, request.base_gripper)  # clears a latched hold
 
         def send_goal() -> None:
@@ -962,12 +993,18 @@ class SupervisorNode(TeleopServer, Node):
             sent = self.follow_client.send_goal_async(goal)
             self._await_answer('follow_trajectory', sent, send_goal)
             sent.add_done_callback(lambda f: self._on_follow_accepted(
-                f, generation, response.duration, request.purpose))
+                f, generation, duration, request.purpose, first_duration))
 
         send_goal()
 
+    def _planning_failed(self, request: TrajectoryRequest, reason: str) -> None:
+        self.get_logger().error(f'planning the {request.purpose} motion failed: {reason}')
+        self._execute(self.sequencer.trajectory_done(
+            False, f'planning the {request.purpose} motion failed: {reason}', self._now()))
+        self._release_clock()
+
     def _on_follow_accepted(self, future, generation: int, duration: float,
-                            purpose: str) -> None:
+                            purpose: str, first_duration: float | None = None) -> None:
         handle = future.result()
         if not self._answered(future):
             if handle is not None and handle.accepted:  # a late answer to a request sent again
@@ -982,8 +1019,10 @@ class SupervisorNode(TeleopServer, Node):
                 False, 'the planner refused to stream the trajectory', self._now()))
             return
         self._follow_handle = handle
-        self.get_logger().info(f'{purpose} motion: {duration:.2f} s')
-        self.sequencer.trajectory_started(duration, self._now())
+        self.get_logger().info(f'{purpose} motion: {duration:.2f} s' + (
+            '' if first_duration is None else f', the coarse motion from {first_duration:.2f} s '
+            f'on streaming with it'))
+        self.sequencer.trajectory_started(duration, self._now(), first_duration)
         handle.get_result_async().add_done_callback(
             lambda f: self._on_follow_done(f, generation))
         self._release_clock()

@@ -152,6 +152,12 @@ class SupervisorParameters:
         'while the tip is still closing on it, once the motion there has ended (at or below '
         'insertion_alignment it may also start with the tip at rest); at most '
         "the gripper's insertion_position_tolerance", 'm', 1e-5, 0.05, read_only=False)
+    sweep_lead: float = parameter(
+        "how long before the lift ends the coarse motion's setpoints begin, streamed with the "
+        "lift's as one motion (they add): joint 1's reference filter holds the sweep back, "
+        'so it starts while the gripper rises (0: the coarse motion starts once the lift has '
+        "ended and the arm is there); at most the lift's duration", 's', 0.0, 1.0,
+        read_only=False)
 
     def __post_init__(self) -> None:
         if self.insertion_alignment >= self.coarse_to_fine_region:
@@ -201,6 +207,12 @@ class TrajectoryRequest:
     mode : str
         Controller mode for the motion ('coarse' or 'fine'), commanded again just before it
         streams: a controller that latched a hold (a stale input) tracks again.
+    then : TrajectoryRequest or None
+        A motion streamed with this one, as one trajectory: it starts ``lead`` [s] before
+        this one ends, and over the overlap the two motions add (the lift and the sweep,
+        ``sweep_lead``). Not part of :meth:`same_motion`: each is planned on its own.
+    lead : float
+        See ``then`` [s].
     """
 
     purpose: str
@@ -211,6 +223,8 @@ class TrajectoryRequest:
     sweep: float
     base_gripper: str
     mode: str = 'fine'
+    then: 'TrajectoryRequest | None' = None
+    lead: float = 0.0
 
     def same_motion(self, other: 'TrajectoryRequest') -> bool:
         """Return True if ``other`` asks for exactly this motion (a plan of one serves both)."""
@@ -314,6 +328,8 @@ class StepSequencer:
         self._settled_since: float | None = None
         # [m] tip_error() at this tick and the last (nan: none yet in this phase)
         self._tip_error_now = self._last_tip_error = math.nan
+        # [s] when the lift of a lift streamed with its sweep ends (None: no such stream)
+        self._lift_ends: float | None = None
         self._attempts = 0
         self._durations: dict[str, float] = {}
         self._fine_lines = 0
@@ -328,6 +344,7 @@ class StepSequencer:
         self._last_purpose = ''  # purpose of the last trajectory requested
         self._requested_at: float | None = None  # [s] first tick after the request
         self._planned_motions: dict[str, float] = {}  # [s] last planned duration, by purpose
+        self._planned_ahead: set[str] = set()  # motions planned ahead for this step, and back
         self._progress = 0.0  # of the phase entered at _progress_key
         self._progress_key: tuple | None = None
 
@@ -464,6 +481,7 @@ class StepSequencer:
         self._theta = targets.start.copy()
         self._step_started = now
         self._durations = {}
+        self._planned_ahead = set()
         self._attempts = 0
         self._fine_lines = 0
         self._insertion_error = math.nan
@@ -511,7 +529,14 @@ class StepSequencer:
     def _unscrewed(self, now: float) -> list:
         self.stage = 'lifting'
         self._remeasure = None  # too late: the chain is open
-        return [self._issue(self._extraction_request())]
+        request = self._extraction_request()
+        if self.parameters.sweep_lead > 0.0 and 'coarse' in self._planned_ahead:
+            # the sweep streams with the lift, overlapping, the controllers in COARSE mode
+            # from the start (acceleration feedback on joint 1 as its sweep begins); only
+            # with the coarse motion's plan already back, so the lift does not wait for it
+            request = dataclasses.replace(request, then=self._coarse_request(),
+                                          lead=self.parameters.sweep_lead, mode='coarse')
+        return [self._issue(request)]
 
     def _extraction_request(self) -> TrajectoryRequest:
         t = self._targets
@@ -525,6 +550,7 @@ class StepSequencer:
 
     def _prepare(self) -> list:
         """Plan the extraction and the coarse motion ahead: the targets are final."""
+        self._planned_ahead = set()
         return [PrepareTrajectory(self._extraction_request()),
                 PrepareTrajectory(self._coarse_request())]
 
@@ -556,16 +582,29 @@ class StepSequencer:
     def motion_planned(self, purpose: str, planned_duration: float) -> None:
         """Note how long a motion asked for ahead (:class:`PrepareTrajectory`) will take [s].
 
-        Only the phase progress uses it (:meth:`phase_progress`), before the motion streams.
+        Only the phase progress uses it (:meth:`phase_progress`), before the motion streams,
+        and the lift, which streams with the sweep (``sweep_lead``) only once the sweep's plan
+        is back.
         """
         self._planned_motions[purpose] = float(planned_duration)
+        self._planned_ahead.add(purpose)
 
-    def trajectory_started(self, planned_duration: float, now: float) -> None:
-        """Note that the requested trajectory is streaming and should take this long [s]."""
+    def trajectory_started(self, planned_duration: float, now: float,
+                           first_duration: float | None = None) -> None:
+        """Note that the requested trajectory is streaming and should take this long [s].
+
+        ``first_duration`` [s]: for a request with a motion streamed with it (``then``), when
+        the first motion ends, from now: the lift, after which the sweep goes on as COARSE.
+        """
         self._trajectory_running = True
         self._requested = self._requested_at = None
         self._deadline = now + planned_duration + self.parameters.phase_timeout
-        self._planned_motions[self._last_purpose] = planned_duration
+        if first_duration is None:
+            self._planned_motions[self._last_purpose] = planned_duration
+            return
+        self._lift_ends = now + first_duration
+        self._planned_motions[self._last_purpose] = first_duration
+        self._planned_motions['coarse'] = planned_duration - first_duration
 
     def trajectory_done(self, success: bool, message: str, now: float) -> list:
         """Take the end of the streamed trajectory (``success`` False: refused or aborted)."""
@@ -583,6 +622,11 @@ class StepSequencer:
                 return [self._way_back('recover_joint')]
             return self._abort(f'{self.stage or self.phase.name.lower()} trajectory failed: '
                                f'{message}', now)
+        if self.stage == 'lifting' and self._lift_ends is not None:
+            # the sweep streamed with the lift has ended before a tick saw the lift end
+            self._enter(Phase.COARSE, now, 'arriving')
+            self._deadline = now + self.parameters.phase_timeout
+            return []
         if self.stage == 'lifting':  # the next tick, with fresh joints, starts the coarse motion
             self.stage = 'lifted'
             self._deadline = now + self.parameters.phase_timeout
@@ -635,6 +679,11 @@ class StepSequencer:
             return self._follow_gripper(now, grippers.get(self._step.moving_gripper, ''))
         if self.stage == 'lifted':
             return self._start_coarse_when_there(now)
+        if self.stage == 'lifting' and self._lift_ends is not None and now >= self._lift_ends:
+            # the lift is over; the sweep streamed with it goes on, now as the coarse motion
+            # (the controllers have been in COARSE mode since the stream began)
+            self._enter(Phase.COARSE, now, 'moving')
+            return []
         if self.phase == Phase.COARSE and self.tip_error() < self.parameters.coarse_to_fine_region:
             return self._enter_fine(now, correction=False)
         if self.phase == Phase.COARSE and self.stage == 'arriving' \
@@ -812,6 +861,7 @@ class StepSequencer:
             self._durations[name] = self._durations.get(name, 0.0) + now - self._phase_started
         self.phase, self.stage, self._phase_started = phase, stage, now
         self._settled_since = None
+        self._lift_ends = None
         self._tip_error_now = math.nan  # errors to another target point are not compared
 
     def _start_coarse_when_there(self, now: float) -> list:
