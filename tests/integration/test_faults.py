@@ -284,11 +284,12 @@ def test_a_starved_planner_slows_the_simulation_and_leaves_the_motion_as_planned
     setpoints on and the stream jump when it came back; a sim-time walk on a busy machine once
     overshot the node by 42 mrad of joint 1 that way.
     """
-    import numpy as np
     from action_msgs.msg import GoalStatus
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from trajectory_msgs.msg import JointTrajectory
+    from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
     from walker_msgs.msg import ControllerState, StepPhase
+    from walker_planner.conversions import sampled_trajectory
 
     step = graph.one_step()
     joint_1 = f'{step.base_gripper}_yaw_joint'
@@ -330,16 +331,15 @@ def test_a_starved_planner_slows_the_simulation_and_leaves_the_motion_as_planned
                      'the step report')
     report = graph.step_reports[-1]
     assert report.success and report.insertion_attempts == 1 and report.insertion_error < 1e-3
-    # every setpoint joint 1 used in the sweep is the coarse plan's sample at its stamp
+    # every setpoint joint 1 used in the sweep is the coarse plan's sample at its stamp (the
+    # plan interpolated as the planner's stream does it; the lift streams with its start)
     sweep = max(streamed, key=lambda m: len(m.points))
     origin = sweep.header.stamp.sec + sweep.header.stamp.nanosec * 1e-9
-    times = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9
-                      for p in sweep.points])
-    column = list(sweep.joint_names).index(joint_1)
-    planned = np.array([p.positions[column] for p in sweep.points])
-    during = [(t, q) for t, q in setpoints if 0.0 < t - origin < times[-1]]
+    plan = sampled_trajectory(sweep)
+    column = list(PHYSICAL_JOINT_NAMES).index(joint_1)
+    during = [(t, q) for t, q in setpoints if 0.0 < t - origin < plan.duration]
     assert len(during) > 50, f'{len(during)} controller states of the sweep'
-    off = max(abs(q - np.interp(t - origin, times, planned)) for t, q in during)
+    off = max(abs(q - plan.sample(t - origin).position[column]) for t, q in during)
     assert off < 1e-6, f'joint 1 used setpoints {off:.3g} rad off its plan'
 
 

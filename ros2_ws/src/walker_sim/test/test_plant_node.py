@@ -347,16 +347,17 @@ def test_the_plant_runs_under_real_time_scheduling_on_the_wall_clock_only(ros_en
             assert 'SCHED_FIFO priority 50 refused' in plant.output, plant.output
 
 
-def test_with_wait_for_decisions_the_plant_steps_no_further_than_the_supervisor_released(
-        ros_env, probe):
-    """A stand-in supervisor releases the clock to 40 ms, then 60 ms, then falls silent."""
+PERIOD_NS = 2_000_000  # [ns] the control period
+
+
+def _stand_in_supervisor(probe):
+    """Answer every state with five efforts; return (states, /clock times, release)."""
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import JointState
 
     from walker_sim.messages import COMMAND_QOS, SENSOR_QOS
 
-    period = 2_000_000  # [ns]
     node = probe.node
     states, clocks = {}, []
     efforts = node.create_publisher(JointState, f'{NAMESPACE}/effort_commands', COMMAND_QOS)
@@ -377,6 +378,14 @@ def test_with_wait_for_decisions_the_plant_steps_no_further_than_the_supervisor_
     node.create_subscription(JointState, f'{NAMESPACE}/joint_states', on_state, SENSOR_QOS)
     node.create_subscription(Clock, '/clock', lambda m: clocks.append(stamp_ns(m.clock)),
                              QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    return states, clocks, release
+
+
+def test_with_wait_for_decisions_the_plant_steps_no_further_than_the_supervisor_released(
+        ros_env, probe):
+    """A stand-in supervisor releases the clock to 40 ms, then 60 ms, then falls silent."""
+    period = PERIOD_NS
+    states, clocks, release = _stand_in_supervisor(probe)
     with start_plant(ros_env, 'sim.clock_mode:=sim_time', 'sim.lockstep_timeout:=30.0',
                      'sim.wait_for_decisions:=true', 'sim.decision_timeout:=2.0') as plant:
         assert probe.spin_until(lambda: states, START_TIMEOUT), plant.output
@@ -397,3 +406,28 @@ def test_with_wait_for_decisions_the_plant_steps_no_further_than_the_supervisor_
         assert probe.spin_until(lambda: max(states) > 60 * period, 15.0), plant.output
         assert plant.wait_for_output('has not decided beyond', 5.0), plant.output
     assert held <= period  # held at the first release (t = 0; the first state answered)
+
+
+def test_turning_the_wait_for_decisions_off_lets_a_held_plant_step_on_at_once(ros_env, probe):
+    """Held at the supervisor's release, the plant steps on when the wait is turned off.
+
+    The decision timeout (30 s) is far beyond the test's waits: what moves it is the
+    parameter, set at run time as an operator would.
+    """
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+
+    states, _, release = _stand_in_supervisor(probe)
+    with start_plant(ros_env, 'sim.clock_mode:=sim_time', 'sim.lockstep_timeout:=30.0',
+                     'sim.wait_for_decisions:=true', 'sim.decision_timeout:=30.0') as plant:
+        assert probe.spin_until(lambda: states, START_TIMEOUT), plant.output
+        wait_for_endpoints(probe, f'{NAMESPACE}/supervisor/decided_until', publishers=False)
+        release(0)
+        probe.spin_for(1.0)
+        assert max(states) <= PERIOD_NS, 'stepped past the release'
+        client = probe.node.create_client(SetParameters, f'{NAMESPACE}/plant/set_parameters')
+        assert probe.spin_until(client.service_is_ready, 10.0)
+        off = Parameter('sim.wait_for_decisions', value=False).to_parameter_msg()
+        future = client.call_async(SetParameters.Request(parameters=[off]))
+        assert probe.spin_until(future.done, 10.0) and future.result().results[0].successful
+        assert probe.spin_until(lambda: max(states) > 100 * PERIOD_NS, 10.0), plant.output

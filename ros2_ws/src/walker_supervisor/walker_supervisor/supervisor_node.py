@@ -28,6 +28,7 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.task import Future
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as RosClock
 from sensor_msgs.msg import JointState
@@ -845,17 +846,10 @@ class SupervisorNode(TeleopServer, Node):
             if generation != self._trajectory_generation:
                 return  # cancelled while waiting
             future = self._plan(request)
+            if request.then is not None:  # streamed with it: both plans, then one goal
+                future = self._both(future, self._plan(request.then))
             self._await_answer('plan_trajectory', future, send)
-            if request.then is None:
-                future.add_done_callback(lambda f: self._on_planned(f, request, generation))
-                return
-            then = self._plan(request.then)  # streamed with it: both plans, then one goal
-
-            def both_planned(_) -> None:
-                if future.done() and then.done():
-                    self._on_planned(future, request, generation, then)
-            future.add_done_callback(both_planned)
-            then.add_done_callback(both_planned)
+            future.add_done_callback(lambda f: self._on_planned(f, request, generation))
 
         def unavailable() -> None:
             if generation == self._trajectory_generation:
@@ -863,6 +857,18 @@ class SupervisorNode(TeleopServer, Node):
                     False, 'the planner is not available', self._now()))
 
         self._when_ready(ready, send, unavailable)
+
+    @staticmethod
+    def _both(first, second) -> Future:
+        """Return a future done with both answers, ``(first, second)``, once both are in."""
+        both = Future()
+
+        def answered(_) -> None:
+            if first.done() and second.done() and not both.done():
+                both.set_result((first.result(), second.result()))
+        first.add_done_callback(answered)
+        second.add_done_callback(answered)
+        return both
 
     def _plan(self, request: TrajectoryRequest):
         """Return the planner's answer (future) to a motion: the one asked ahead, or a new one."""
@@ -952,14 +958,14 @@ class SupervisorNode(TeleopServer, Node):
 
         self._when_ready(ready, send_again, unavailable)
 
-    def _on_planned(self, future, request: TrajectoryRequest, generation: int,
-                    then=None) -> None:
-        """Stream a planned motion; with ``then`` (the answer for ``request.then``), both."""
+    def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
+        """Stream a planned motion; with ``request.then``, both (``future`` has both answers)."""
         if not self._answered(future) or generation != self._trajectory_generation:
             return
-        answers = [(request, future.result())]
-        if then is not None:
-            answers.append((request.then, then.result()))
+        if request.then is None:
+            answers = [(request, future.result())]
+        else:
+            answers = list(zip((request, request.then), future.result(), strict=True))
         for motion, response in answers:
             if response is None or not response.success:
                 reason = 'no response' if response is None else response.message
@@ -973,7 +979,7 @@ class SupervisorNode(TeleopServer, Node):
                 self._step_bound += response.time_optimal_bound
         response = answers[0][1]
         trajectory, duration, first_duration = response.trajectory, response.duration, None
-        if then is not None:
+        if request.then is not None:
             following = answers[1][1]
             lead = min(request.lead, response.duration, following.duration)
             try:
@@ -1020,8 +1026,8 @@ class SupervisorNode(TeleopServer, Node):
             return
         self._follow_handle = handle
         self.get_logger().info(f'{purpose} motion: {duration:.2f} s' + (
-            '' if first_duration is None else f', the coarse motion from {first_duration:.2f} s '
-            f'on streaming with it'))
+            '' if first_duration is None else f' (the first {first_duration:.2f} s, the coarse '
+            f'motion streaming with their end)'))
         self.sequencer.trajectory_started(duration, self._now(), first_duration)
         handle.get_result_async().add_done_callback(
             lambda f: self._on_follow_done(f, generation))
