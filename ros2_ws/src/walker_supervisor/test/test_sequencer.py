@@ -257,10 +257,17 @@ def test_without_the_sweeps_plan_back_the_lift_streams_alone_and_the_sweep_follo
 
 
 def test_a_sweep_lead_longer_than_the_whole_stream_still_ends_in_coarse():
-    """A joined stream that ends before a tick has seen the lift end goes on in COARSE."""
+    """A joined stream that ends before a tick has seen the lift end goes on in COARSE.
+
+    No second request for the coarse motion: it has streamed already.
+    """
     world = _leading_world(1.0)  # the World's lift takes 1 s: they start together
     outcome = world.run_step(possible_steps(TRUSS, START)[0])
     assert outcome.success, outcome.message
+    purposes = [c.purpose for c in world.log if isinstance(c, TrajectoryRequest)]
+    assert purposes[0] == 'extraction' and 'coarse' not in purposes
+    order = [p for i, p in enumerate(world.phases) if i == 0 or world.phases[i - 1] != p]
+    assert order[:4] == [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]
 
 
 @pytest.mark.parametrize('ticks', [30, 80])  # the lift only; the lift and the sweep
