@@ -115,3 +115,13 @@ def test_a_gate_waited_at_for_its_timeout_is_dropped_until_the_next_release():
     assert not gate.allows(62 * MS)
     gate.wait(200.0)
     assert not gate.expired(200.1)
+
+
+def test_an_opened_gate_lets_everything_through_and_counts_no_timeout():
+    gate = DecisionGate(timeout=0.25)
+    gate.release(20 * MS)
+    gate.wait(100.0)
+    gate.open()  # sim.wait_for_decisions turned off while the plant waited
+    assert gate.allows(10**12) and gate.timeouts == 0
+    gate.release(60 * MS)  # turned on again: the next release holds again
+    assert not gate.allows(62 * MS) and not gate.expired(100.3)

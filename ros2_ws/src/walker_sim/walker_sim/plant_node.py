@@ -227,7 +227,7 @@ class PlantNode(Node):
         self.lockstep.timeout = sim.lockstep_timeout
         self.gate.timeout = sim.decision_timeout
         if not sim.wait_for_decisions:
-            self.gate.until = None
+            self.gate.open()
             if self.sim_time and self._started:
                 self._try_advance()  # it may have been waiting at the gate just dropped
         if sim.jam_screw_ins != self.plant.fouled_screw_ins:

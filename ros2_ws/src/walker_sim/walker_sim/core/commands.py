@@ -216,6 +216,11 @@ class DecisionGate:
         """Return True when the plant has waited at the gate for ``timeout``."""
         return wall_now - self._waiting_since >= self.timeout
 
+    def open(self) -> None:
+        """Stop waiting (``sim.wait_for_decisions`` turned off); not a timeout."""
+        self.until = None
+        self._waiting_since = math.nan
+
     def drop(self) -> None:
         """Stop waiting for the supervisor until its next release; count it."""
         self.until = None
