@@ -228,3 +228,59 @@ def test_malformed_construction_is_refused():
         WalkerKinematics(0.7, 0.6)
     with pytest.raises(ValueError):
         WalkerKinematics(0.1, 0.6, lower=(0, 0, 0, 0, 0), upper=(0, 1, 1, 1, 1))
+
+
+def _one_by_one(poses, elbow, reach, references):
+    """:meth:`inverse` row by row (no limit check); NaN rows where it raises."""
+    rows = []
+    for i, pose in enumerate(poses):
+        reference = None if references is None else references[i]
+        try:
+            rows.append(FREE.inverse(pose, elbow, reach, reference, check_limits=False))
+        except KinematicsError:
+            rows.append(np.full(5, np.nan))
+    return np.array(rows)
+
+
+@settings(max_examples=60)
+@given(st.lists(st.one_of(poses, joint_vectors.map(FREE.forward)), min_size=1, max_size=40),
+       st.sampled_from(['up', 'down']),
+       st.sampled_from(['forward', 'backward']), st.booleans(),
+       st.integers(0, 2 ** 32 - 1))
+def test_the_vectorised_inverse_is_the_inverse_row_by_row(pose_list, elbow, reach,
+                                                          with_references, seed):
+    """Same angles, and NaN exactly where :meth:`inverse` refuses (out of reach, folded)."""
+    poses_ = np.array(pose_list)
+    references = None
+    if with_references:
+        references = np.random.default_rng(seed).uniform(-10.0, 10.0, poses_.shape)
+    many = FREE.inverse_many(poses_, elbow, reach, references)
+    single = _one_by_one(poses_, elbow, reach, references)
+    np.testing.assert_array_equal(np.isnan(many), np.isnan(single))
+    np.testing.assert_allclose(many, single, atol=1e-12, equal_nan=True)
+
+
+def test_the_vectorised_inverse_marks_what_the_inverse_refuses_and_refuses_bad_input():
+    out_of_reach, folded, on_axis = [3.0, 0.0, 0.0, 0.0, 0.0], [0.0] * 5, [0.0, 0.0, 0.6, 0, 0]
+    fine = KIN.forward([0.2, 0.4, 1.2, math.pi - 1.6, 0.1])
+    many = FREE.inverse_many(np.array([fine, out_of_reach, folded, on_axis]))
+    assert np.all(np.isfinite(many[0])) and np.all(np.isnan(many[1:]))
+    with_axis_reference = FREE.inverse_many(np.array([on_axis]), references=np.ones((1, 5)))
+    assert np.all(np.isfinite(with_axis_reference))
+    assert with_axis_reference[0, 0] == 1.0  # joint 1 from the reference, as inverse() does
+    for bad, words in [(np.zeros((3, 4)), 'shape'), (np.array([[np.nan] * 5]), 'finite')]:
+        with pytest.raises(KinematicsError, match=words):
+            FREE.inverse_many(bad)
+    with pytest.raises(KinematicsError, match='elbow'):
+        FREE.inverse_many(np.zeros((1, 5)), elbow='sideways')
+    with pytest.raises(KinematicsError, match='reference'):
+        FREE.inverse_many(np.zeros((2, 5)), references=np.zeros((1, 5)))
+
+
+def test_limits_per_row_agree_with_the_check():
+    rng = np.random.default_rng(7)
+    thetas = rng.uniform(-4.0, 4.0, (200, 5))
+    thetas[3] = np.nan
+    expected = [KIN.within_limits(t) if np.all(np.isfinite(t)) else False for t in thetas]
+    assert KIN.within_limits_many(thetas).tolist() == expected
+    assert 0 < sum(expected) < len(expected)

@@ -299,6 +299,86 @@ class WalkerKinematics:
             self.check_joint_limits(theta)
         return theta
 
+    def inverse_many(self, poses: np.ndarray, elbow: str = 'up', reach: str = 'forward',
+                     references: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`inverse` of many poses at once (paper eqs (2)-(7), corrected), unchecked.
+
+        The same solution, row by row, as :meth:`inverse` with ``check_limits=False``, in one
+        pass of array arithmetic: a path of a thousand samples costs about what ten single
+        solutions do. What :meth:`inverse` would raise for is a row of NaN instead; the joint
+        limits are not checked (:meth:`within_limits_many`).
+
+        Parameters
+        ----------
+        poses : array_like, shape (N, 5)
+            ``[X, Y, Z, alpha, beta]`` per row: tip position [m], angles [rad].
+        elbow, reach : str
+            The branch, as for :meth:`inverse`.
+        references : array_like, shape (N, 5), optional
+            Angles [rad] to stay near, per row, as ``reference`` for :meth:`inverse`.
+
+        Returns
+        -------
+        ndarray, shape (N, 5)
+            Joint angles [rad]; NaN rows where the pose is out of reach, the wrist is on J2,
+            or the tip is on the yaw axis without a reference.
+
+        Raises
+        ------
+        KinematicsError
+            Malformed input (shape, NaN or infinity, unknown branch name).
+        """
+        poses = np.asarray(poses, dtype=float)
+        if poses.ndim != 2 or poses.shape[1] != 5:
+            raise KinematicsError(f'tip poses must have shape (N, 5), got {poses.shape}')
+        if not np.all(np.isfinite(poses)):
+            raise KinematicsError('tip poses must be finite')
+        if elbow not in ELBOWS:
+            raise KinematicsError(f'elbow must be one of {ELBOWS}, got {elbow!r}')
+        if reach not in REACHES:
+            raise KinematicsError(f'reach must be one of {REACHES}, got {reach!r}')
+        ref = None
+        if references is not None:
+            ref = np.asarray(references, dtype=float)
+            if ref.shape != poses.shape or not np.all(np.isfinite(ref)):
+                raise KinematicsError(f'reference angles must be finite, shape {poses.shape}, '
+                                      f'got shape {ref.shape}')
+        x, y, z, alpha, beta = poses.T
+        horizontal = np.hypot(x, y)
+        on_axis = horizontal < _SINGULAR_DISTANCE
+        theta1 = np.arctan2(-x, y)  # eq (3)
+        if ref is not None:
+            theta1 = np.where(on_axis, ref[:, 0], theta1)
+        if reach == 'backward':
+            theta1 = theta1 + math.pi
+            horizontal = -horizontal
+        chord_h = horizontal - self.l1 * np.sin(alpha)  # eq (2)
+        chord_v = z - self.l1 * (1.0 - np.cos(alpha))
+        chord = np.hypot(chord_h, chord_v)
+        solvable = (chord <= self.max_reach * (1.0 + 1e-12)) & (chord >= _SINGULAR_DISTANCE)
+        if ref is None:
+            solvable &= ~on_axis
+        cos3 = (chord * chord - 2.0 * self.l2 ** 2) / (2.0 * self.l2 ** 2)  # eq (4)
+        theta3 = np.arccos(np.clip(cos3, -1.0, 1.0))
+        if elbow == 'down':
+            theta3 = -theta3
+        theta2 = np.arctan2(chord_h, chord_v) - 0.5 * theta3  # eq (5), corrected
+        theta4 = math.pi - alpha - theta2 - theta3  # eq (6)
+        raw = np.column_stack([theta1, theta2, theta3, theta4, beta])  # eq (7): th5 = beta
+        if ref is None:
+            theta = raw - _TWO_PI * np.round(raw / _TWO_PI)
+            theta[theta == -math.pi] = math.pi
+        else:
+            theta = raw + _TWO_PI * np.round((ref - raw) / _TWO_PI)
+        theta[~solvable] = np.nan
+        return theta
+
+    def within_limits_many(self, thetas: np.ndarray) -> np.ndarray:
+        """Per row of joint angles (N, 5) [rad]: True when all are within their limits."""
+        thetas = np.asarray(thetas, dtype=float)
+        return np.all((thetas >= np.asarray(self.lower))
+                      & (thetas <= np.asarray(self.upper)), axis=1)
+
     def inverse_all(self, pose: Sequence[float], reference: Sequence[float] | None = None
                     ) -> list[np.ndarray]:
         """Every distinct branch solution of :meth:`inverse` within the joint limits.

@@ -100,3 +100,17 @@ def test_a_half_turn_keeps_j1_continuous(kinematics):
                               joints).sample(np.linspace(0, 1, 101)).position
     assert np.max(np.abs(np.diff(q[:, 0]))) < 0.05
     assert q[0, 0] > math.pi > q[-1, 0]  # through pi, not wrapped to -pi
+
+
+@settings(max_examples=25, deadline=None)
+@given(points, points, st.floats(-0.5, 0.5))
+def test_the_path_is_mapped_at_once_as_it_is_sample_by_sample(kinematics, start, goal, offset):
+    """All samples through one array pass: the joints the sample-by-sample IK gives."""
+    if np.linalg.norm(np.subtract(goal, start)) < 1e-3:
+        return
+    segment, joint = mapped(kinematics, start, goal, yaw_offset=offset)
+    t = np.linspace(0.0, segment.duration, 301)
+    tip = segment.sample(t).position
+    one_by_one = joint._positions_one_by_one(t, tip, np.interp(t, joint._grid,
+                                                               joint._yaw_reference))
+    np.testing.assert_allclose(joint.sample(t).position, one_by_one, atol=1e-12)

@@ -108,6 +108,23 @@ class CartesianInJointSpace(Trajectory):
 
     def _positions(self, t: np.ndarray, tip: np.ndarray) -> np.ndarray:
         yaw_reference = np.interp(t, self._grid, self._yaw_reference)
+        yaw = yaw_reference + self.branch.yaw_offset
+        references = np.tile(self._start_joints, (len(t), 1))
+        references[:, 0], references[:, 4] = yaw_reference, yaw
+        poses = np.column_stack([tip, np.zeros(len(t)), yaw])
+        try:
+            joints = self.kinematics.inverse_many(poses, self.branch.elbow, self.branch.reach,
+                                                  references)
+        except KinematicsError:  # a non-finite sample: named below, with its time
+            return self._positions_one_by_one(t, tip, yaw_reference)
+        joints[:, 4] = joints[:, 0] + self.branch.yaw_offset
+        if np.all(self.kinematics.within_limits_many(joints)):  # NaN rows are not
+            return joints
+        return self._positions_one_by_one(t, tip, yaw_reference)
+
+    def _positions_one_by_one(self, t: np.ndarray, tip: np.ndarray,
+                              yaw_reference: np.ndarray) -> np.ndarray:
+        """Sample by sample: the first that leaves the workspace raises, with its time."""
         joints = np.empty((len(t), 5))
         reference = self._start_joints.copy()
         for i, (time, point) in enumerate(zip(t, tip, strict=True)):
