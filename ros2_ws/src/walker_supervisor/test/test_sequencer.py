@@ -38,8 +38,12 @@ class World:
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
                  gripper_never=False, lift_lag=None, jam_seen_first=False, stale_states=0.0,
-                 descent_miss=0.0, mouth_lines_miss=False):
+                 descent_miss=0.0, mouth_lines_miss=False, coarse_plan_delay=0.0):
         self.stance = stance
+        # [s] the coarse motion asked ahead is planned this late (inf: its plan is refused)
+        self.coarse_plan_delay = coarse_plan_delay
+        self.plans_due = []  # (time, purpose) of plans asked ahead and not answered yet
+        self.requested = []  # (time, request) of every trajectory request
         # (joint, lag [rad], time [s]): after the extraction line's stream ends, that joint is
         # still ``lag`` short of the line's end, and catches up only ``time`` later
         self.lift_lag = lift_lag
@@ -85,6 +89,7 @@ class World:
             if isinstance(command, GripperRequest):
                 self.gripper(command)
             elif isinstance(command, TrajectoryRequest):
+                self.requested.append((self.now, command))
                 if command.then is None:  # every motion takes 1 s
                     self.motion = [command, self.now, 1.0]
                     self.sequencer.trajectory_started(1.0, self.now)
@@ -94,7 +99,13 @@ class World:
             elif isinstance(command, CancelTrajectory):
                 self.motion = None
             elif isinstance(command, PrepareTrajectory):  # planned at once, 1 s like any motion
-                self.sequencer.motion_planned(command.request.purpose, 1.0)
+                purpose = command.request.purpose
+                if purpose == 'coarse' and self.coarse_plan_delay == math.inf:
+                    self.sequencer.motion_not_planned(purpose)
+                elif purpose == 'coarse' and self.coarse_plan_delay > 0.0:
+                    self.plans_due.append((self.now + self.coarse_plan_delay, purpose))
+                else:
+                    self.sequencer.motion_planned(purpose, 1.0)
 
     def gripper(self, request):
         assert not (request.action == 'unscrew'
@@ -132,6 +143,9 @@ class World:
         for change in [c for c in self.pending if c[0] <= self.now]:
             self.pending.remove(change)
             self.grippers[change[1]] = change[2]
+        for due in [p for p in self.plans_due if p[0] <= self.now + 1e-9]:
+            self.plans_due.remove(due)
+            self.sequencer.motion_planned(due[1], 1.0)
         velocities = np.zeros(5)
         if self.motion is not None and not self.stall:
             request, started, duration = self.motion
@@ -240,20 +254,57 @@ def test_with_a_sweep_lead_the_sweep_streams_with_the_lift_and_the_step_is_that_
     assert outcome.insertion_error <= SUPERVISOR.insertion_alignment
 
 
-def test_without_the_sweeps_plan_back_the_lift_streams_alone_and_the_sweep_follows_it():
-    """The lift does not wait for a late plan: it streams alone, the sweep after it."""
-    world = _leading_world(0.3)
-    late = world.execute
+def _lift_start(world):
+    """[s] When the lift was requested (it streams at once in the World)."""
+    return next(t for t, request in world.requested if request.purpose == 'extraction')
 
-    def coarse_plan_not_back(commands):
-        late([c for c in commands if not (isinstance(c, PrepareTrajectory)
-                                          and c.request.purpose == 'coarse')])
-    world.execute = coarse_plan_not_back
+
+def test_a_freed_gripper_waits_for_a_late_sweep_plan_and_streams_the_two_together():
+    """A plan back within ``sweep_lead`` of the gripper coming free is waited for.
+
+    The lift starts when the plan is in (``awaiting_plan`` until then, which holds the sim
+    clock in the node), joined with the sweep: the step is longer than with the plan in time
+    by that wait only.
+    """
+    lead, delay = 0.3, 0.15
+    step = possible_steps(TRUSS, START)[0]
+    on_time = _leading_world(lead, gripper_delay=0.1)
+    assert on_time.run_step(step).success
+    world = _leading_world(lead, gripper_delay=0.1, coarse_plan_delay=delay)
+    waiting = []
+    tick = world.sequencer.tick
+
+    def recording_tick(now, *args):
+        commands = tick(now, *args)
+        waiting.append((now, world.sequencer.awaiting_plan))
+        return commands
+    world.sequencer.tick = recording_tick
+    outcome = world.run_step(step)
+    assert outcome.success, outcome.message
+    requests = [c for c in world.log if isinstance(c, TrajectoryRequest)]
+    assert requests[0].then is not None and requests[0].then.purpose == 'coarse'
+    assert 'coarse' not in [c.purpose for c in requests]
+    # planned at 0.15 s, the gripper free at 0.1 s: the lift waited from then until the plan
+    assert _lift_start(world) == pytest.approx(delay, abs=DT + 1e-9)
+    assert _lift_start(on_time) == pytest.approx(0.1, abs=DT + 1e-9)
+    assert [t for t, w in waiting if w] and all(0.1 - 1e-9 <= t < delay + 1e-9
+                                                for t, w in waiting if w)
+    assert outcome.duration == pytest.approx(on_time.sequencer.outcome.duration + delay - 0.1,
+                                             abs=2 * DT + 1e-9)
+
+
+@pytest.mark.parametrize('delay', [0.5, math.inf])  # later than the lead; refused
+def test_without_the_sweeps_plan_in_time_the_lift_streams_alone_and_the_sweep_follows_it(delay):
+    """The lift waits for a late plan at most ``sweep_lead``; for a refused one, not at all."""
+    lead = 0.3
+    world = _leading_world(lead, gripper_delay=0.1, coarse_plan_delay=delay)
     outcome = world.run_step(possible_steps(TRUSS, START)[0])
     assert outcome.success, outcome.message
     requests = [c for c in world.log if isinstance(c, TrajectoryRequest)]
     assert all(c.then is None for c in requests)
     assert [c.purpose for c in requests][:2] == ['extraction', 'coarse']
+    waited = lead if delay < math.inf else 0.0
+    assert _lift_start(world) == pytest.approx(0.1 + waited, abs=DT + 1e-9)
 
 
 def test_a_sweep_lead_longer_than_the_whole_stream_still_ends_in_coarse():

@@ -622,9 +622,10 @@ class SupervisorNode(TeleopServer, Node):
     def _release_clock(self) -> None:
         """Sim time: let the plant run up to this node's next tick, or hold it here.
 
-        Held while a request to the planner or a gripper command is unanswered: the motion
-        it starts then begins at the same simulated time however long the answer takes. The
-        plant waits for it only with ``sim.wait_for_decisions``.
+        Held while a request to the planner or a gripper command is unanswered, or a freed
+        gripper waits for the sweep's plan: the motion it starts then begins at the same
+        simulated time however long the answer takes. The plant waits for it only with
+        ``sim.wait_for_decisions``.
         """
         if self._decided_pub is None:
             return
@@ -633,6 +634,7 @@ class SupervisorNode(TeleopServer, Node):
         # watchdog deals with a dead plant, and a plant started again must not crawl
         wall = time.monotonic()
         busy = self._awaited is not None or bool(self._waiting_requests) \
+            or self.sequencer.awaiting_plan \
             or any(wall - sent < _ANSWER_WAIT for sent in self._gripper_calls.values())
         ahead = self._tick_timer.time_until_next_call()
         until = now if busy or ahead is None else now + max(0, ahead)
@@ -877,15 +879,19 @@ class SupervisorNode(TeleopServer, Node):
 
     def _prepare_trajectory(self, request: TrajectoryRequest) -> None:
         """Ask the planner now for a motion the sequencer will request later (if it is up)."""
-        if self.plan_client.service_is_ready():
-            future = self.plan_client.call_async(plan_request(request, self.kinematics))
-            future.add_done_callback(lambda f: self._on_prepared(f, request))
-            self._prepared.append((request, future))
+        if not self.plan_client.service_is_ready():
+            self.sequencer.motion_not_planned(request.purpose)
+            return
+        future = self.plan_client.call_async(plan_request(request, self.kinematics))
+        future.add_done_callback(lambda f: self._on_prepared(f, request))
+        self._prepared.append((request, future))
 
     def _on_prepared(self, future, request: TrajectoryRequest) -> None:
         response = future.result()
         if response is not None and response.success:
             self.sequencer.motion_planned(request.purpose, response.duration)
+        else:
+            self.sequencer.motion_not_planned(request.purpose)
 
     def _take_prepared(self, request: TrajectoryRequest):
         """Return the planner's answer (future) to the same motion asked ahead, once; else None.

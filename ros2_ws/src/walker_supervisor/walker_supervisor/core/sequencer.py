@@ -15,7 +15,8 @@ Rules it enforces:
   frame is measured again once the relaxation is over, while the gripper is still unscrewing
   and the chain still closed; the extraction and coarse motions are then planned at once
   (:class:`PrepareTrajectory`), so that they stream the moment they are due; so is the descent,
-  on entering FINE;
+  on entering FINE; the sweep streams with the lift, from ``sweep_lead`` before its end, once
+  its plan is back: the freed gripper waits at most ``sweep_lead`` for it, then lifts alone;
 * coarse motion (controllers in COARSE mode: low gains, acceleration feedback) ends when the tip
   error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``:
   the controllers then switch to FINE mode (higher gains, integral action) while the coarse
@@ -155,7 +156,8 @@ class SupervisorParameters:
     sweep_lead: float = parameter(
         "how long before the lift ends the coarse motion's setpoints begin, streamed with the "
         "lift's as one motion (they add): joint 1's reference filter holds the sweep back, "
-        'so it starts while the gripper rises (0: the coarse motion starts once the lift has '
+        'so it starts while the gripper rises; a freed gripper waits up to this long for the '
+        "sweep's plan, then lifts alone (0: the coarse motion starts once the lift has "
         "ended and the arm is there); at most the lift's duration", 's', 0.0, 1.0,
         read_only=False)
 
@@ -345,6 +347,8 @@ class StepSequencer:
         self._requested_at: float | None = None  # [s] first tick after the request
         self._planned_motions: dict[str, float] = {}  # [s] last planned duration, by purpose
         self._planned_ahead: set[str] = set()  # motions planned ahead for this step, and back
+        self._asked_ahead: set[str] = set()  # motions asked ahead, whose plans may yet come
+        self._free_since: float | None = None  # [s] the moving gripper reported free, unlifted
         self._progress = 0.0  # of the phase entered at _progress_key
         self._progress_key: tuple | None = None
 
@@ -481,7 +485,7 @@ class StepSequencer:
         self._theta = targets.start.copy()
         self._step_started = now
         self._durations = {}
-        self._planned_ahead = set()
+        self._planned_ahead, self._asked_ahead = set(), set()
         self._attempts = 0
         self._fine_lines = 0
         self._insertion_error = math.nan
@@ -526,7 +530,29 @@ class StepSequencer:
                                f'{message}', now)
         return self._jammed(message, now)
 
+    @property
+    def awaiting_plan(self) -> bool:
+        """True while the freed gripper's lift waits for the sweep's plan (``sweep_lead``)."""
+        return self.stage == 'unscrewing' and self._free_since is not None
+
+    def _sweep_plan_due(self, now: float) -> bool:
+        """Return True while the lift should wait for the sweep's plan, asked ahead.
+
+        Streamed with the lift, the sweep saves ``sweep_lead``; so the lift waits for its plan
+        at most that long after the gripper is free (a plan asked late, after a relaxation,
+        on a loaded machine), and then streams alone.
+        """
+        if self.parameters.sweep_lead <= 0.0 or 'coarse' in self._planned_ahead \
+                or 'coarse' not in self._asked_ahead:
+            return False
+        if self._free_since is None:
+            self._free_since = now
+        return now - self._free_since < self.parameters.sweep_lead
+
     def _unscrewed(self, now: float) -> list:
+        if self._sweep_plan_due(now):
+            return []
+        self._free_since = None
         self.stage = 'lifting'
         self._remeasure = None  # too late: the chain is open
         request = self._extraction_request()
@@ -550,7 +576,7 @@ class StepSequencer:
 
     def _prepare(self) -> list:
         """Plan the extraction and the coarse motion ahead: the targets are final."""
-        self._planned_ahead = set()
+        self._planned_ahead, self._asked_ahead = set(), {'extraction', 'coarse'}
         return [PrepareTrajectory(self._extraction_request()),
                 PrepareTrajectory(self._coarse_request())]
 
@@ -588,6 +614,10 @@ class StepSequencer:
         """
         self._planned_motions[purpose] = float(planned_duration)
         self._planned_ahead.add(purpose)
+
+    def motion_not_planned(self, purpose: str) -> None:
+        """Note that a motion asked for ahead will not be planned (refused, or not asked)."""
+        self._asked_ahead.discard(purpose)
 
     def trajectory_started(self, planned_duration: float, now: float,
                            first_duration: float | None = None) -> None:
@@ -861,7 +891,7 @@ class StepSequencer:
             self._durations[name] = self._durations.get(name, 0.0) + now - self._phase_started
         self.phase, self.stage, self._phase_started = phase, stage, now
         self._settled_since = None
-        self._lift_ends = None
+        self._lift_ends = self._free_since = None
         self._tip_error_now = math.nan  # errors to another target point are not compared
 
     def _start_coarse_when_there(self, now: float) -> list:
