@@ -329,6 +329,14 @@ class FaultGraph:
         """Return the end of the named nodes' logs, for a failure message."""
         return log_tails(self.group, list(names))
 
+    def streams_refused_for_moved_joints(self) -> int:
+        """How often the supervisor's log says a stream was refused: the joints had moved away.
+
+        A resume plans from the measured joints; the planner refuses a stream that starts
+        farther from them than ``planner.stream.start_tolerance``.
+        """
+        return log_tails(self.group, ['supervisor'], 100_000).count('away from the measured')
+
     def wait_phase_in(self, phases, timeout: float, since: float) -> float:
         """Wait for a phase message in ``phases`` received after ``since``; return its time."""
         found = []

@@ -242,18 +242,55 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
     probe.publish_state(stance)
     probe.spin_until(lambda: probe.count() > count, timeout=0.5)
     assert probe.count() == count
-    # while they track (COARSE or FINE) they need a setpoint every period: the last position
-    # comes again, at rest, one period ahead of each state
+    # while they track (COARSE or FINE) they need a setpoint every period, one period ahead of
+    # each state, at rest: back to tracking after a hold, where the joints are (the probe's
+    # joints never followed the plan), not where the stream left its setpoints
     probe.command_mode('fine')
     settle(probe, stance)
+    _assert_holding(probe, stance, period)
+    probe.command_mode('hold')
+    settle(probe, stance)
+    probe.clear()
+
+
+def _assert_holding(probe, positions, period):
+    """Two ticks, each answered by the five setpoints ``positions`` [rad] at rest."""
     for _ in range(2):
-        probe.step(stance, period)
+        probe.step(positions, period)
         for j, name in enumerate(probe.names):
             hold = probe.setpoints[name][-1]
-            assert hold.position == pytest.approx(expected.samples.position[-1, j], abs=1e-12)
+            assert hold.position == pytest.approx(positions[j], abs=1e-12)
             assert hold.velocity == 0.0 and hold.acceleration == 0.0
             assert (hold.header.stamp.sec * 1_000_000_000 + hold.header.stamp.nanosec
                     == probe.now + period)
+
+
+def test_a_stream_ending_while_tracking_holds_its_last_setpoint_until_a_hold(graph, context,
+                                                                            stance):
+    """The controllers still tracking: the stream's end is held; after a hold, the joints.
+
+    A stream cut short while the controllers hold (a fault) leaves its last setpoint where the
+    arm never got to: going back to tracking must not pull the joints there.
+    """
+    probe, _ = graph
+    period = int(round(1e9 / context.robot.timing.control_rate))
+    goal = stance + np.array([0.03, 0.0, 0.0, 0.0, 0.03])
+    settle(probe, stance)
+    probe.command_mode('fine')
+    settle(probe, stance)
+    response = probe.call(trajectory_type='joint_min_jerk', base_gripper='a',
+                          start=stance.tolist(), goal=goal.tolist(), duration=0.5,
+                          execute=True)
+    assert response.success, response.message
+    for _ in range(int(0.5 * 1e9 / period) + 3):
+        probe.step(stance, period)
+    _assert_holding(probe, goal, period)  # tracking throughout: the end of the stream
+    probe.command_mode('hold')
+    moved = stance + np.array([-0.01, 0.0, 0.0, 0.0, 0.02])  # the arm drifted meanwhile
+    settle(probe, moved)
+    probe.command_mode('fine')
+    settle(probe, moved)
+    _assert_holding(probe, moved, period)
     probe.command_mode('hold')
     settle(probe, stance)
     probe.clear()

@@ -96,7 +96,9 @@ class PlannerNode(Node):
         self._planning = PlanningContext.from_parameters(self._robot, self._planner)
         self._period_ns = int(round(1e9 / self._robot.timing.control_rate))
         self._active: _ActiveStream | None = None
-        self._holding: np.ndarray | None = None  # last position streamed, held at rest
+        # [rad] held at rest while the controllers track with no stream: the last position
+        # streamed, or where the joints were when they went back to tracking
+        self._holding: np.ndarray | None = None
         self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
         self._reserved = False
         self._measured: tuple[int, np.ndarray] | None = None
@@ -216,8 +218,15 @@ class PlannerNode(Node):
                 self._stream_tick(stamp)
 
     def _on_control_mode(self, message: ControlMode) -> None:
+        tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
         with self._lock:
-            self._tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
+            if tracking and not self._tracking and self._active is None \
+                    and self._measured is not None:
+                # tracking again with no stream (a resume, a step's start): hold where the
+                # joints are, as the controllers do, not where the last stream left its
+                # setpoints; a stream cut short (a fault, a hold) may have left them far away
+                self._holding = np.array(self._measured[1])
+            self._tracking = tracking
 
     # ------------------------------------------------------------------ planning service
     def _on_plan(self, request, response):
@@ -396,7 +405,7 @@ class PlannerNode(Node):
 
         The controllers expect a setpoint every period while they track (COARSE or FINE), so the
         last position sent keeps being streamed, at rest, while they do, until the next stream
-        replaces it.
+        replaces it (or, after a HOLD, the measured position: :meth:`_on_control_mode`).
         """
         if hold is not None:
             self._publish(active, hold)
