@@ -51,6 +51,7 @@ from walker_core.truss import Truss, UnknownNodeError
 from walker_planner.conversions import chained_message
 from walker_planner.core.errors import PlanningError
 from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
+from walker_supervisor.core.decision_clock import DecisionClock
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
     tell_mode_again, tracking_expected)
@@ -193,8 +194,8 @@ class SupervisorNode(TeleopServer, Node):
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
         self._decided_pub = self.create_publisher(RosClock, '~/decided_until', COMMAND_QOS) \
             if self._sim_time else None
-        # [s] (wall) when each unanswered gripper command was sent, by its future
-        self._gripper_calls: dict[object, float] = {}
+        # gripper commands unanswered, which hold that time (for _ANSWER_WAIT at most)
+        self._decision_clock = DecisionClock(_ANSWER_WAIT)
         # Health: a steady-clock watchdog, which fires even when a dead plant stops /clock.
         timeout = self.settings.watchdog_timeout
         self._commanded_mode = self._commanded_base = ''  # the last mode command sent
@@ -622,22 +623,19 @@ class SupervisorNode(TeleopServer, Node):
     def _release_clock(self) -> None:
         """Sim time: let the plant run up to this node's next tick, or hold it here.
 
-        Held while a request to the planner or a gripper command is unanswered, or a freed
-        gripper waits for the sweep's plan: the motion it starts then begins at the same
-        simulated time however long the answer takes. The plant waits for it only with
+        Held while a request to the planner or a gripper command is unanswered (a gripper
+        command for ``_ANSWER_WAIT`` at most: :class:`DecisionClock`), or a freed gripper waits
+        for the sweep's plan: the motion it starts then begins at the same simulated time
+        however long the answer takes. The plant waits for it only with
         ``sim.wait_for_decisions``.
         """
         if self._decided_pub is None:
             return
-        now = self.get_clock().now().nanoseconds
-        # a gripper command unanswered for _ANSWER_WAIT (the plant gone) holds nothing: the
-        # watchdog deals with a dead plant, and a plant started again must not crawl
-        wall = time.monotonic()
         busy = self._awaited is not None or bool(self._waiting_requests) \
-            or self.sequencer.awaiting_plan \
-            or any(wall - sent < _ANSWER_WAIT for sent in self._gripper_calls.values())
-        ahead = self._tick_timer.time_until_next_call()
-        until = now if busy or ahead is None else now + max(0, ahead)
+            or self.sequencer.awaiting_plan
+        until = self._decision_clock.decided_until(
+            self.get_clock().now().nanoseconds, self._tick_timer.time_until_next_call(), busy,
+            time.monotonic())
         message = RosClock()
         message.clock.sec, message.clock.nanosec = divmod(until, 1_000_000_000)
         self._decided_pub.publish(message)
@@ -815,11 +813,11 @@ class SupervisorNode(TeleopServer, Node):
             command=GripperCommand.Request.SCREW_IN if request.action == 'screw_in'
             else GripperCommand.Request.UNSCREW)
         future = self.gripper_client.call_async(call)
-        self._gripper_calls[future] = time.monotonic()
+        self._decision_clock.command_sent(future, time.monotonic())
         future.add_done_callback(self._on_gripper_response)
 
     def _on_gripper_response(self, future) -> None:
-        self._gripper_calls.pop(future, None)
+        self._decision_clock.command_answered(future)
         try:
             self._take_gripper_response(future)
         finally:
