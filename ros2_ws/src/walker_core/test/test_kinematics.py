@@ -261,7 +261,11 @@ def test_the_vectorised_inverse_is_the_inverse_row_by_row(pose_list, elbow, reac
 
 
 def test_the_vectorised_inverse_marks_what_the_inverse_refuses_and_refuses_bad_input():
-    out_of_reach, folded, on_axis = [3.0, 0.0, 0.0, 0.0, 0.0], [0.0] * 5, [0.0, 0.0, 0.6, 0, 0]
+    out_of_reach, on_axis = [3.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.6, 0, 0]
+    tilt = 0.5  # the wrist on J2, off the yaw axis: the links folded onto each other
+    folded = [0.0, L1 * math.sin(tilt), L1 * (1.0 - math.cos(tilt)), tilt, 0.0]
+    with pytest.raises(SingularConfigurationError, match='folded'):
+        FREE.inverse(folded, check_limits=False)
     fine = KIN.forward([0.2, 0.4, 1.2, math.pi - 1.6, 0.1])
     many = FREE.inverse_many(np.array([fine, out_of_reach, folded, on_axis]))
     assert np.all(np.isfinite(many[0])) and np.all(np.isnan(many[1:]))
@@ -284,3 +288,5 @@ def test_limits_per_row_agree_with_the_check():
     expected = [KIN.within_limits(t) if np.all(np.isfinite(t)) else False for t in thetas]
     assert KIN.within_limits_many(thetas).tolist() == expected
     assert 0 < sum(expected) < len(expected)
+    with pytest.raises(KinematicsError, match='shape'):
+        KIN.within_limits_many(thetas[0])

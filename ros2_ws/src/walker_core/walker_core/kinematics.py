@@ -374,8 +374,27 @@ class WalkerKinematics:
         return theta
 
     def within_limits_many(self, thetas: np.ndarray) -> np.ndarray:
-        """Per row of joint angles (N, 5) [rad]: True when all are within their limits."""
+        """:meth:`within_limits` of many joint vectors at once.
+
+        Parameters
+        ----------
+        thetas : array_like, shape (N, 5)
+            Joint angles J1..J5 [rad] per row.
+
+        Returns
+        -------
+        ndarray of bool, shape (N,)
+            True where every angle of the row is within its limits; False for a row with NaN
+            (what :meth:`inverse_many` gives where there is no solution).
+
+        Raises
+        ------
+        KinematicsError
+            If ``thetas`` is not of shape (N, 5).
+        """
         thetas = np.asarray(thetas, dtype=float)
+        if thetas.ndim != 2 or thetas.shape[1] != 5:
+            raise KinematicsError(f'joint angles must have shape (N, 5), got {thetas.shape}')
         return np.all((thetas >= np.asarray(self.lower))
                       & (thetas <= np.asarray(self.upper)), axis=1)
 

@@ -113,4 +113,26 @@ def test_the_path_is_mapped_at_once_as_it_is_sample_by_sample(kinematics, start,
     tip = segment.sample(t).position
     one_by_one = joint._positions_one_by_one(t, tip, np.interp(t, joint._grid,
                                                                joint._yaw_reference))
+
+    def not_sample_by_sample(*_):
+        raise AssertionError('a path within the workspace fell back to sample by sample')
+    joint._positions_one_by_one = not_sample_by_sample
     np.testing.assert_allclose(joint.sample(t).position, one_by_one, atol=1e-12)
+
+
+@pytest.mark.parametrize('elbow, reach', [('down', 'forward'), ('up', 'backward'),
+                                          ('down', 'backward')])
+def test_the_other_branches_are_mapped_at_once_as_sample_by_sample(kinematics, elbow, reach):
+    free = WalkerKinematics(kinematics.l1, kinematics.l2)  # no limits: every branch
+    start, goal = np.array([0.1, 0.7, 0.05]), np.array([-0.2, 0.75, 0.1])
+    joints = free.inverse([*start, 0.0, 0.3], elbow=elbow, reach=reach, check_limits=False)
+    segment = CartesianSegment('test_line', start, goal, MinJerkProfile(1.0))
+    joint = CartesianInJointSpace(segment, free, branch_of(free, joints), joints)
+    assert joint.branch.elbow == elbow and joint.branch.reach == reach
+    t = np.linspace(0.0, 1.0, 101)
+    tip = segment.sample(t).position
+    one_by_one = joint._positions_one_by_one(t, tip, np.interp(t, joint._grid,
+                                                               joint._yaw_reference))
+    np.testing.assert_allclose(joint.sample(t).position, one_by_one, atol=1e-12)
+    np.testing.assert_allclose([free.forward(q)[:3] for q in joint.sample(t).position], tip,
+                               atol=1e-9)

@@ -54,6 +54,21 @@ def test_the_youngest_unanswered_command_is_the_one_that_holds():
     assert clock.decided_until(NOW, TICK, busy=False, wall=106.0) == NOW + TICK
 
 
+def test_a_plan_awaited_holds_the_clock_from_when_first_awaited_for_the_answer_wait_only():
+    """A plan that never comes must not freeze the simulation for good.
+
+    The sequencer's own bound on the wait runs on the simulated clock, which the hold freezes.
+    """
+    clock = DecisionClock(WAIT)
+    assert not clock.plan_awaited(False, wall=100.0)
+    assert clock.plan_awaited(True, wall=100.0)
+    assert clock.plan_awaited(True, wall=100.0 + WAIT - 1e-6)  # not restarted by each call
+    assert not clock.plan_awaited(True, wall=100.0 + WAIT)
+    assert not clock.plan_awaited(True, wall=200.0)  # still the same wait: given up on
+    assert not clock.plan_awaited(False, wall=201.0)  # over: the next wait holds again
+    assert clock.plan_awaited(True, wall=202.0)
+
+
 @pytest.mark.parametrize('wait', [0.0, -1.0, float('nan')])
 def test_a_wait_that_is_not_positive_is_refused(wait):
     with pytest.raises(ValueError, match='answer_wait'):

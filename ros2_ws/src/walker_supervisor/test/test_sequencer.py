@@ -293,6 +293,33 @@ def test_a_freed_gripper_waits_for_a_late_sweep_plan_and_streams_the_two_togethe
                                              abs=2 * DT + 1e-9)
 
 
+@pytest.mark.parametrize('answer', ['planned', 'not planned'])
+def test_the_wait_for_the_sweeps_plan_ends_with_its_answer_before_any_tick(answer):
+    """``awaiting_plan`` turns False as the answer comes, before any tick.
+
+    It holds the sim-time clock in the node: on a held clock no tick would come to end it.
+    """
+    world = _leading_world(0.3, gripper_delay=0.1, coarse_plan_delay=10.0)
+    step = possible_steps(TRUSS, START)[0]
+    world.targets = plan_step_targets(KIN, world.frame, step, TRUSS.position(step.from_node),
+                                      TRUSS.position(step.to_node), world.theta,
+                                      PARAMS.gripper.approach_height)
+    world.execute(world.sequencer.start(step, world.targets, world.now, dict(world.grippers)))
+    while not world.sequencer.awaiting_plan:
+        assert world.now < 1.0, 'the freed gripper never waited for the plan'
+        world.advance()
+    assert world.sequencer.stage == 'unscrewing'
+    if answer == 'planned':
+        world.sequencer.motion_planned('coarse', 1.0)
+    else:
+        world.sequencer.motion_not_planned('coarse')
+    assert not world.sequencer.awaiting_plan
+    world.advance()  # the next tick lifts
+    assert world.sequencer.stage == 'lifting'
+    lift = world.requested[-1][1]
+    assert lift.purpose == 'extraction' and (lift.then is not None) == (answer == 'planned')
+
+
 @pytest.mark.parametrize('delay', [0.5, math.inf])  # later than the lead; refused
 def test_without_the_sweeps_plan_in_time_the_lift_streams_alone_and_the_sweep_follows_it(delay):
     """The lift waits for a late plan at most ``sweep_lead``; for a refused one, not at all."""

@@ -178,6 +178,7 @@ class SupervisorNode(TeleopServer, Node):
         self._awaited: tuple[float, str, object, object] | None = None
         # motions planned ahead (PrepareTrajectory), each with its plan_trajectory answer
         self._prepared: list[tuple[TrajectoryRequest, object]] = []
+        self._prepared_batch = 0  # counts the clearings of _prepared: older answers are stale
         self.stop_client = self.create_client(Trigger, 'stop_trajectory')
         self.step_server = ActionServer(
             self, Step, 'step', execute_callback=self._execute_step,
@@ -631,11 +632,12 @@ class SupervisorNode(TeleopServer, Node):
         """
         if self._decided_pub is None:
             return
+        wall = time.monotonic()
+        clock = self._decision_clock
         busy = self._awaited is not None or bool(self._waiting_requests) \
-            or self.sequencer.awaiting_plan
-        until = self._decision_clock.decided_until(
-            self.get_clock().now().nanoseconds, self._tick_timer.time_until_next_call(), busy,
-            time.monotonic())
+            or clock.plan_awaited(self.sequencer.awaiting_plan, wall)
+        until = clock.decided_until(self.get_clock().now().nanoseconds,
+                                    self._tick_timer.time_until_next_call(), busy, wall)
         message = RosClock()
         message.clock.sec, message.clock.nanosec = divmod(until, 1_000_000_000)
         self._decided_pub.publish(message)
@@ -657,6 +659,7 @@ class SupervisorNode(TeleopServer, Node):
             return
         step = walk.next_step()
         self._prepared.clear()
+        self._prepared_batch += 1
         try:
             targets = self._measure_targets(step, self._theta_roles())
             commands = self.sequencer.start(step, targets, now, dict(self._grippers),
@@ -881,15 +884,29 @@ class SupervisorNode(TeleopServer, Node):
             self.sequencer.motion_not_planned(request.purpose)
             return
         future = self.plan_client.call_async(plan_request(request, self.kinematics))
-        future.add_done_callback(lambda f: self._on_prepared(f, request))
+        batch = self._prepared_batch
+        future.add_done_callback(lambda f: self._on_prepared(f, request, batch))
         self._prepared.append((request, future))
 
-    def _on_prepared(self, future, request: TrajectoryRequest) -> None:
-        response = future.result()
+    def _on_prepared(self, future, request: TrajectoryRequest, batch: int) -> None:
+        """Tell the sequencer a motion asked ahead is planned (or will not be).
+
+        A freed gripper waiting for it lifts now, not at the next tick (in sim time the clock
+        is held while it waits).
+        """
+        if batch != self._prepared_batch:
+            return  # asked for a step since ended or cancelled
+        try:
+            response = future.result()
+        except Exception:  # a failed call is a plan that will not come
+            response = None
+        waiting = self.sequencer.awaiting_plan
         if response is not None and response.success:
             self.sequencer.motion_planned(request.purpose, response.duration)
         else:
             self.sequencer.motion_not_planned(request.purpose)
+        if waiting:
+            self._tick()
 
     def _take_prepared(self, request: TrajectoryRequest):
         """Return the planner's answer (future) to the same motion asked ahead, once; else None.
@@ -1056,6 +1073,7 @@ class SupervisorNode(TeleopServer, Node):
         self._trajectory_generation += 1
         self._awaited = None
         self._prepared.clear()
+        self._prepared_batch += 1
         if self._follow_handle is not None:
             self._follow_handle.cancel_goal_async()
             self._follow_handle = None

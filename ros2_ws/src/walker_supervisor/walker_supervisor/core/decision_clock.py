@@ -34,6 +34,7 @@ class DecisionClock:
             raise ValueError(f'answer_wait must be > 0 s, got {answer_wait!r}')
         self.answer_wait = float(answer_wait)
         self._sent: dict[Hashable, float] = {}  # [s] wall time each unanswered command was sent
+        self._plan_awaited_since: float | None = None  # [s] wall
 
     def command_sent(self, command: Hashable, wall: float) -> None:
         """Note a gripper command sent at ``wall`` [s] (any monotonic clock), unanswered."""
@@ -51,6 +52,21 @@ class DecisionClock:
         self._sent = {command: sent for command, sent in self._sent.items()
                       if wall - sent < self.answer_wait}
         return len(self._sent)
+
+    def plan_awaited(self, awaited: bool, wall: float) -> bool:
+        """Return True while a plan the sequencer waits for holds the clock.
+
+        ``awaited`` says whether it waits now (a freed gripper waiting for the sweep's plan);
+        the hold lasts from the first such call for ``answer_wait`` of wall time at most: a
+        plan that never comes (the planner gone) must not freeze the simulation, on which the
+        sequencer's own bound on the wait is counted.
+        """
+        if not awaited:
+            self._plan_awaited_since = None
+            return False
+        if self._plan_awaited_since is None:
+            self._plan_awaited_since = float(wall)
+        return wall - self._plan_awaited_since < self.answer_wait
 
     def decided_until(self, now: int, next_tick_in: int | None, busy: bool,
                       wall: float) -> int:

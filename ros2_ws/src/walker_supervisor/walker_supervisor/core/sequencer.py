@@ -532,15 +532,23 @@ class StepSequencer:
 
     @property
     def awaiting_plan(self) -> bool:
-        """True while the freed gripper's lift waits for the sweep's plan (``sweep_lead``)."""
-        return self.stage == 'unscrewing' and self._free_since is not None
+        """True while the freed gripper's lift waits for the sweep's plan (``sweep_lead``).
+
+        False as soon as the plan is back (:meth:`motion_planned`) or will not come
+        (:meth:`motion_not_planned`): the lift then starts at the next tick. The node holds
+        the sim-time clock while this is True, so it must not stay True on a frozen clock.
+        """
+        return self.stage == 'unscrewing' and self._free_since is not None \
+            and 'coarse' in self._asked_ahead and 'coarse' not in self._planned_ahead
 
     def _sweep_plan_due(self, now: float) -> bool:
         """Return True while the lift should wait for the sweep's plan, asked ahead.
 
         Streamed with the lift, the sweep saves ``sweep_lead``; so the lift waits for its plan
         at most that long after the gripper is free (a plan asked late, after a relaxation,
-        on a loaded machine), and then streams alone.
+        on a loaded machine), and then streams alone. The wait is counted on the clock the
+        ticks come with (simulated time in sim time; the node bounds its clock hold on the
+        wall clock, :class:`~walker_supervisor.core.decision_clock.DecisionClock`).
         """
         if self.parameters.sweep_lead <= 0.0 or 'coarse' in self._planned_ahead \
                 or 'coarse' not in self._asked_ahead:
