@@ -28,8 +28,8 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.task import Future
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
 from rosgraph_msgs.msg import Clock as RosClock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -47,10 +47,10 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
+from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_core.truss import Truss, UnknownNodeError
 from walker_planner.conversions import chained_message
 from walker_planner.core.errors import PlanningError
-from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_supervisor.core.decision_clock import DecisionClock
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
