@@ -72,6 +72,12 @@ class NodeProcess:
     def __init__(self, args: list[str], env: dict[str, str], name: str = '') -> None:
         self.name = name or Path(args[0]).name
         self._log = tempfile.TemporaryFile(mode='w+')
+        # The child writes through the same open file (one offset) that ``output`` seeks to 0
+        # to read: without O_APPEND its writes landed where the read had left the offset and
+        # overwrote what it had printed (a start-up line lost, a wait_for_output that failed).
+        descriptor = self._log.fileno()
+        fcntl.fcntl(descriptor, fcntl.F_SETFL,
+                    fcntl.fcntl(descriptor, fcntl.F_GETFL) | os.O_APPEND)
         self.process = subprocess.Popen(args, env=env, stdout=self._log,
                                         stderr=subprocess.STDOUT, start_new_session=True,
                                         cwd=REPO_ROOT)
