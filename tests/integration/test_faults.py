@@ -210,6 +210,7 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
     assert graph.parameters('plant', 'set_parameters', injected).results[0].successful
     assert plant_jams() == attempts
     step = graph.one_step()
+    reports = len(graph.step_reports)
     started = time.monotonic()
     handle = graph.start_walk(step.to_node)
     held = graph.wait_phase(StepPhase.SAFE_HOLD, TIMEOUT, started)
@@ -217,6 +218,9 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
     assert 'fouled' in held.reason, held.reason
     wrapped = graph.result(handle)
     assert wrapped.status == GoalStatus.STATUS_ABORTED and not wrapped.result.success
+    # the report travels on its own topic: it may come after the phase and the result
+    graph.wait_until(lambda: len(graph.step_reports) > reports, FAULT_TIMEOUT,
+                     'the step report')
     report = graph.step_reports[-1]
     assert not report.success and report.insertion_attempts == attempts, report
     assert plant_jams() == 0, 'each jam counts the injected fault down'
