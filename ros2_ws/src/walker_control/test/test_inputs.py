@@ -6,7 +6,7 @@ import pytest
 
 from walker_control.core.config import load_controller_settings
 from walker_control.core.inputs import (
-    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StreamPacing,
+    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StreamPacing,
     carry_forward, validate_setpoint)
 
 DRIVE = load_controller_settings().drive(1)
@@ -152,26 +152,6 @@ def test_a_setpoint_too_old_for_the_state_is_stale_by_stamps():
     watchdog = InputWatchdog(state_timeout=0.2, setpoint_timeout=0.1)
     assert watchdog.setpoint_lag(10.05, 10.0) == ''
     assert 'older than the joint state' in watchdog.setpoint_lag(10.2, 10.0)
-
-
-def test_a_silent_stream_is_resubscribed_after_the_interval_then_every_interval():
-    resubscription = Resubscription(1.0)
-    assert not resubscription.due(5.0, None)  # never heard from: nothing to heal
-    assert not resubscription.due(10.9, 10.0)
-    assert resubscription.due(11.0, 10.0)
-    assert not resubscription.due(11.5, 10.0)  # just made anew
-    assert resubscription.due(12.0, 10.0)
-    assert resubscription.attempts == 2
-    # heard again, then silent again: the interval counts from the last message
-    assert not resubscription.due(12.9, 12.2)
-    assert resubscription.due(13.2, 12.2)
-    assert resubscription.attempts == 3
-
-
-@pytest.mark.parametrize('after', [0.0, -1.0, math.nan, math.inf])
-def test_a_resubscription_interval_must_be_positive_and_finite(after):
-    with pytest.raises(ValueError, match='positive and finite'):
-        Resubscription(after)
 
 
 def test_the_watchdog_reports_when_each_stream_was_last_heard():

@@ -18,10 +18,11 @@ from rclpy.node import Node
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 
 from walker_core.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
+from walker_core.resubscription import Resubscription
 
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
-    InputWatchdog, Resubscription, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
+    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
     StreamPacing, carry_forward, validate_setpoint)
 from walker_control.core.joint_controller import (
     ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,

@@ -1,0 +1,57 @@
+"""When a subscription silent for long is made anew.
+
+A ROS-free rule shared by every node that watches its inputs on a steady clock: the joint
+controllers (their state and setpoint streams) and the supervisor (the plant's and the
+controllers' reports).
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ['Resubscription']
+
+
+class Resubscription:
+    """When to make anew the subscription of a stream that has been silent for long.
+
+    A subscription can stop receiving while its publisher lives on: seen with Fast DDS's
+    shared-memory transport after a process of the graph was killed and started again, or
+    frozen and resumed (one controller then missed one topic until it was restarted). Waiting
+    does not heal that; a new subscription is matched anew, and costs nothing when the
+    publisher is really gone. The first attempt comes ``after`` seconds into a silence, later
+    ones every ``after`` seconds while it lasts.
+
+    Parameters
+    ----------
+    after : float
+        [s] on the steady clock, > 0.
+    """
+
+    def __init__(self, after: float) -> None:
+        if not (math.isfinite(after) and after > 0.0):
+            raise ValueError(f'resubscription interval must be positive and finite, got {after!r}')
+        self.after = float(after)
+        self._last_attempt: float | None = None
+        self.attempts = 0
+
+    def due(self, now: float, last_heard: float | None) -> bool:
+        """Return True, and count an attempt, when the subscription should be made anew.
+
+        Parameters
+        ----------
+        now : float
+            [s] steady time now.
+        last_heard : float or None
+            [s] steady time of the stream's last message; None when it has not been heard
+            from (nothing to heal: it may not have started).
+        """
+        if last_heard is None or now - last_heard < self.after:
+            return False
+        since = last_heard if self._last_attempt is None else max(last_heard,
+                                                                   self._last_attempt)
+        if now - since < self.after:
+            return False
+        self._last_attempt = now
+        self.attempts += 1
+        return True
