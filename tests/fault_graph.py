@@ -335,7 +335,11 @@ class FaultGraph:
         A resume plans from the measured joints; the planner refuses a stream that starts
         farther from them than ``planner.stream.start_tolerance``.
         """
-        return log_tails(self.group, ['supervisor'], 100_000).count('away from the measured')
+        return self.count_in_log('supervisor', 'away from the measured')
+
+    def count_in_log(self, name: str, text: str) -> int:
+        """How often ``text`` appears in the log of the node ``name`` so far."""
+        return log_tails(self.group, [name], 100_000).count(text)
 
     def wait_phase_in(self, phases, timeout: float, since: float) -> float:
         """Wait for a phase message in ``phases`` received after ``since``; return its time."""

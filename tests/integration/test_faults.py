@@ -372,6 +372,11 @@ def test_a_frozen_plant_is_reported_and_the_walker_resumes_when_it_is_back(graph
             FAULT_TIMEOUT, 'the diagnostics name the silent plant')
         answer = graph.client.call_trigger('resume', timeout=30.0)
         assert not answer.success and 'plant' in answer.message
+        # silent for long, the plant's streams are subscribed anew (a frozen and resumed
+        # publisher has been seen unheard by the old subscription): the new one must hear it
+        renewed = 'plant joint states: silent for'
+        graph.wait_until(lambda: graph.count_in_log('supervisor', renewed) > 0,
+                         FAULT_TIMEOUT, 'the supervisor subscribes anew to the silent plant')
     finally:
         os.killpg(plant, signal.SIGCONT)
     graph.resume_and_complete(step)

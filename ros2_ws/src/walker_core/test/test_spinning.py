@@ -112,3 +112,41 @@ def test_a_node_interrupted_in_a_callback_stops_in_order_without_an_error(ros_en
         code, output = interrupted(signum)
         assert code == 0 and 'stopped' in output, output
         assert 'Exception' not in output and 'FATAL' not in output, output
+
+
+def test_a_sampled_subscription_made_anew_keeps_its_topic_and_receives_again(rclpy_context):
+    import time
+
+    from std_msgs.msg import Int32
+
+    from walker_core.qos import COMMAND_QOS
+
+    context = rclpy_context
+    publisher_node = Node('sample_source', namespace='/walker', context=context,
+                          start_parameter_services=False, enable_rosout=False)
+    sampler = spinning.TopicSampler('sampler_probe', '/walker', context)
+    try:
+        publisher = publisher_node.create_publisher(Int32, 'counts', COMMAND_QOS)
+
+        def received(subscription, value):
+            deadline = time.monotonic() + 10.0
+            taken = []
+            while time.monotonic() < deadline:
+                publisher.publish(Int32(data=value))
+                taken += [m.data for m in sampler.take(subscription)]
+                if value in taken:
+                    return taken
+                time.sleep(0.05)
+            raise AssertionError(f'{value} never sampled on {subscription.topic_name}')
+
+        old = sampler.subscribe(Int32, 'counts', COMMAND_QOS)
+        received(old, 1)
+        new = sampler.renew(old)
+        assert new is not old and new.topic_name == '/walker/counts'
+        assert new.qos_profile.reliability == COMMAND_QOS.reliability
+        assert set(received(new, 2)) == {2}
+        with pytest.raises(KeyError):  # the old handle is gone
+            sampler.take(old)
+    finally:
+        sampler.destroy()
+        publisher_node.destroy_node()

@@ -179,12 +179,26 @@ class TopicSampler:
         self.node = Node(name, namespace=namespace, context=context, use_global_arguments=False,
                          start_parameter_services=False, enable_rosout=False)
         self._types: dict[object, type] = {}
+        self._qos: dict[object, object] = {}
 
     def subscribe(self, message_type: type, topic: str, qos) -> object:
         """Create a sampled subscription; return the handle :meth:`take` expects."""
         subscription = self.node.create_subscription(message_type, topic, lambda _: None, qos)
         self._types[subscription] = message_type
+        self._qos[subscription] = qos
         return subscription
+
+    def renew(self, subscription) -> object:
+        """Destroy ``subscription`` and make it anew; return the new handle.
+
+        Messages not yet taken are lost. Use it for a stream silent for long while its
+        publisher may live on (see :class:`walker_core.resubscription.Resubscription`).
+        """
+        message_type = self._types.pop(subscription)
+        qos = self._qos.pop(subscription)
+        topic = subscription.topic_name
+        self.node.destroy_subscription(subscription)
+        return self.subscribe(message_type, topic, qos)
 
     def take(self, subscription) -> list:
         """Every message received on ``subscription`` since the last call, oldest first."""

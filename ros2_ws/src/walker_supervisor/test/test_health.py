@@ -83,6 +83,16 @@ def test_the_sources_not_heard_from_yet_are_listed_until_each_is_heard():
     assert monitor.unheard() == []
 
 
+def test_when_each_source_was_last_heard_is_kept_and_unknown_names_are_refused():
+    monitor = HealthMonitor({'plant': 1.0, 'controller': 1.0})
+    assert monitor.last_heard('plant') is None
+    monitor.seen('plant', 2.0)
+    monitor.seen('plant', 2.5, 'trouble')
+    assert monitor.last_heard('plant') == 2.5 and monitor.last_heard('controller') is None
+    with pytest.raises(KeyError, match='planner'):
+        monitor.last_heard('planner')
+
+
 def test_the_mode_publisher_is_renewed_after_repetitions_in_vain_and_not_before():
     repetition = ModeRepetition(renew_after=3)
     assert not repetition.repeat() and not repetition.repeat()

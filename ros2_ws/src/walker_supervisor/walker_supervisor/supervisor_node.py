@@ -46,6 +46,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
 from walker_core.realtime import log_realtime_request
+from walker_core.resubscription import Resubscription
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_core.truss import Truss, UnknownNodeError
@@ -107,6 +108,10 @@ _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be 
 #: client (its requests or its answers lost in discovery), while a new one was answered at once.
 _ANSWER_WAIT = 4.0
 _WATCHDOG_PERIOD = 0.1  # [s] steady clock
+# A source silent for this many watchdog timeouts has its subscription made anew, and again as
+# often while the silence lasts (see Resubscription): the walker is in safe hold after one
+# timeout; a second tells a dead or restarted publisher from a stall of a loaded machine.
+_RESUBSCRIBE_AFTER_TIMEOUTS = 2.0
 _DIAGNOSTICS_PERIOD = 1.0  # [s] steady clock
 _CONTROLLER_STATES = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
                                 durability=DurabilityPolicy.VOLATILE,
@@ -167,8 +172,7 @@ class SupervisorNode(TeleopServer, Node):
                                      self.context)
         self._joint_states = self._sampler.subscribe(JointState, 'joint_states', SENSOR_QOS)
         self._tip_poses = self._sampler.subscribe(PoseStamped, 'tip_pose', _POSES)
-        self.create_subscription(GripperStates, 'gripper_states', self._on_gripper_states,
-                                 LATCHED_QOS)
+        self._gripper_states = self._subscribe_gripper_states()
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, LATCHED_QOS)
         self._state_file = step_state_path(self.get_namespace())
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
@@ -212,6 +216,8 @@ class SupervisorNode(TeleopServer, Node):
                                      **{f'controller {j}': timeout
                                         for j in PHYSICAL_JOINT_NAMES}},
                                     trouble_grace=timeout)
+        self._resubscriptions = {name: Resubscription(_RESUBSCRIBE_AFTER_TIMEOUTS * timeout)
+                                 for name in self.health.names}
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.create_timer(_WATCHDOG_PERIOD, self._watch, clock=self._steady)
@@ -267,6 +273,10 @@ class SupervisorNode(TeleopServer, Node):
 
     def _steady_now(self) -> float:
         return self._steady.now().nanoseconds * 1e-9
+
+    def _subscribe_gripper_states(self):
+        return self.create_subscription(GripperStates, 'gripper_states',
+                                        self._on_gripper_states, LATCHED_QOS)
 
     def _on_gripper_states(self, msg: GripperStates) -> None:
         self.health.seen('plant gripper states', self._steady_now())
@@ -543,6 +553,7 @@ class SupervisorNode(TeleopServer, Node):
         """
         self._release_clock()
         self._sample_measurements()
+        self._resubscribe_silent_sources()
         faults = [fault for fault in self.health.faults(self._steady_now(),
                                                         include_trouble=self.sequencer.busy)
                   if not fault.endswith(': not heard from yet')]
@@ -565,6 +576,31 @@ class SupervisorNode(TeleopServer, Node):
                 self.get_logger().error(f'in safe hold: {reason}')
                 self._execute(self.sequencer.hold(reason, self._now()))
                 self._publish_phase()
+
+    def _resubscribe_silent_sources(self) -> None:
+        """Make anew the subscription of a source silent for long (see Resubscription).
+
+        A controller process restarted after a crash, or a graph frozen and resumed, can leave
+        a subscription that no longer receives while its publisher lives on; the walker would
+        then stay in safe hold with the whole graph healthy.
+        """
+        now = self._steady_now()
+        for name, resubscription in self._resubscriptions.items():
+            last_heard = self.health.last_heard(name)
+            if not resubscription.due(now, last_heard):
+                continue
+            if name == 'plant joint states':
+                self._joint_states = self._sampler.renew(self._joint_states)
+            elif name == 'plant gripper states':
+                self.destroy_subscription(self._gripper_states)
+                self._gripper_states = self._subscribe_gripper_states()
+            else:
+                joint = name.removeprefix('controller ')
+                self._controller_states[joint] = self._sampler.renew(
+                    self._controller_states[joint])
+            self.get_logger().warning(
+                f'{name}: silent for {now - last_heard:.1f} s, subscription made anew '
+                '(a restarted or resumed publisher is matched again)')
 
     def _publish_diagnostics(self) -> None:
         message = DiagnosticArray()

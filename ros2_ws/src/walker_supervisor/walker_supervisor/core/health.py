@@ -78,6 +78,12 @@ class HealthMonitor:
         else:
             self._trouble_since.setdefault(name, now)
 
+    def last_heard(self, name: str) -> float | None:
+        """Steady time [s] ``name`` was last heard from; None if never."""
+        if name not in self._timeouts:
+            raise KeyError(f'unknown source {name!r}')
+        return self._last_seen.get(name)
+
     def unheard(self) -> list[str]:
         """Return the sources not heard from yet."""
         return [name for name in self._timeouts if name not in self._last_seen]
