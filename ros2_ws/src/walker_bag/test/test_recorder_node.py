@@ -191,6 +191,11 @@ def test_the_bag_closed_by_sigint_is_complete_for_the_mcap_ros2_decoder(recorded
     assert len(decoded) == metadata.message_count
     # Log time is the receive time, publish time the publisher's: never after reception.
     assert all(m.publish_time <= m.log_time for _, _, m, _ in decoded)
+    # taken in batches from every topic at once, written in log-time order all the same
+    with open(bag / metadata.relative_file_paths[0], 'rb') as stream:
+        in_file_order = [m.log_time for _, _, m in make_reader(stream).iter_messages(
+            log_time_order=False)]
+    assert in_file_order == sorted(in_file_order)
     sequences = [m.sequence for _, c, m, _ in decoded if c.topic in RELIABLE_TOPICS]
     assert sorted(sequences) == sorted(list(range(1, BURST + 1)) * len(RELIABLE_TOPICS))
 

@@ -38,6 +38,8 @@ def test_the_bag_is_named_after_the_time_unless_a_name_is_given():
     ('recorder.max_chunk_size', 10, 'below the minimum'),
     ('recorder.max_chunk_size', 1.5, 'expected an integer'),
     ('recorder.queue_depth', 0, 'below the minimum'),
+    ('recorder.take_period', 0.0, 'below the minimum'),
+    ('recorder.take_period', 2.0, 'above the maximum'),
     ('recorder.topics', [], 'empty'),
     ('recorder.topics', ['joint states'], 'not a valid topic name'),
     ('recorder.topics', ['~/private'], 'not a valid topic name'),

@@ -6,12 +6,15 @@ to those selected by ``recorder.topics`` (default: every topic of its namespace 
 as soon as they have a publisher, with a QoS that matches every publisher's offer (transient
 local when all publishers are latched, so messages published before the recorder started are
 recorded too; best effort when any publisher is). The subscriptions are raw: the CDR bytes are
-written exactly as received, with the publishers' offered QoS and type hash in the bag.
+written exactly as received, with the publishers' offered QoS and type hash in the bag. No
+executor spins them: every ``recorder.take_period`` the node takes what each has received, all
+topics at once, sorts it by log time and hands it to the writer (an executor turn per message
+cost more CPU than a real-time walk leaves the recorder; see TopicSampler).
 
 Timestamps: the log time is the receive time, in sim time when ``use_sim_time`` is true (the
-node's ROS clock, as ``ros2 bag record --use-sim-time`` stamps; it reads 0 until the first
-``/clock`` message arrives) and otherwise the middleware's receive timestamp; the publish time
-is the publisher's source timestamp [ns].
+node's ROS clock when the message is taken, at most ``recorder.take_period`` of wall time
+after it arrived; it reads 0 until the first ``/clock`` message arrives) and otherwise the
+middleware's receive timestamp; the publish time is the publisher's source timestamp [ns].
 
 Nothing received is lost on the way out: SIGINT (Ctrl-C) and SIGTERM stop the spinning, the
 messages already received are taken and written, and the bag is closed (summary, footer,
@@ -22,7 +25,6 @@ even a SIGKILL loses at most that much. All bag logic is in :mod:`walker_bag.cor
 from __future__ import annotations
 
 import datetime
-import functools
 import importlib
 import sys
 import time
@@ -40,7 +42,7 @@ from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from walker_core.node_parameters import declare_section
 from walker_core.parameter_schema import ParameterError
-from walker_core.spinning import init_node_process
+from walker_core.spinning import TopicSampler, init_node_process
 
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_writer import BagWriter
@@ -102,6 +104,9 @@ class RecorderNode(Node):
             max_chunk_size=self._settings.max_chunk_size,
             custom_data={'clock': 'sim_time' if self._use_sim_time else 'system_time'})
         self._subscriptions_by_topic: dict[str, Any] = {}
+        # the subscriptions live on a node no executor spins: taken every take_period
+        self._sampler = TopicSampler(f'{self.get_name()}_reader', self.get_namespace(),
+                                     self.context)
         self._skipped: set[str] = set()
         self._received = 0
         try:
@@ -110,12 +115,15 @@ class RecorderNode(Node):
                 self._settings.discovery_period, self._discover, clock=steady)
             self._flush_timer = self.create_timer(
                 self._settings.flush_period, self._writer.flush, clock=steady)
+            self._take_timer = self.create_timer(
+                self._settings.take_period, self.take_received, clock=steady)
             self.get_logger().info(
                 f'recording {self._selection!r} to {self._writer.path} '
                 f'({"sim" if self._use_sim_time else "system"} time)')
             self._discover()
         except BaseException:
             self._writer.close()
+            self._sampler.destroy()
             raise
 
     @property
@@ -169,28 +177,45 @@ class RecorderNode(Node):
                          reliability=ReliabilityPolicy[reliability.upper()],
                          durability=DurabilityPolicy[durability.upper()])
         self._writer.add_topic(TopicMetadata(topic, type_name, offers, type_hash), definition)
-        self._subscriptions_by_topic[topic] = self.create_subscription(
-            message_class, topic, functools.partial(self._on_message, topic), qos, raw=True)
+        self._subscriptions_by_topic[topic] = self._sampler.subscribe(message_class, topic,
+                                                                      qos, raw=True)
         self.get_logger().info(f'recording {topic} [{type_name}] ({reliability}, {durability}, '
                                f'{len(offers)} publisher(s))')
 
-    def _on_message(self, topic: str, data: bytes, info: dict[str, Any]) -> None:
-        received = info.get('received_timestamp') or 0
-        if self._use_sim_time or received <= 0:
-            received = self.get_clock().now().nanoseconds
-        self._writer.write(topic, data, received, info.get('source_timestamp') or received,
-                           info.get('publication_sequence_number') or 0)
-        self._received += 1
+    def take_received(self) -> int:
+        """Take every message received on every topic, write them in log-time order.
+
+        Returns how many were taken.
+        """
+        now = self.get_clock().now().nanoseconds
+        batch = []
+        for topic, subscription in self._subscriptions_by_topic.items():
+            for data, info in self._sampler.take_with_info(subscription):
+                received = info.get('received_timestamp') or 0
+                if self._use_sim_time or received <= 0:
+                    received = now
+                batch.append((received, info.get('source_timestamp') or received, topic, data,
+                              info.get('publication_sequence_number') or 0))
+        batch.sort(key=lambda message: message[:2])
+        for received, published, topic, data, sequence in batch:
+            self._writer.write(topic, data, received, published, sequence)
+        self._received += len(batch)
+        return len(batch)
 
     def drain(self, executor: SingleThreadedExecutor, limit: float = DRAIN_LIMIT) -> None:
         """Take and write the messages already received, for at most ``limit`` seconds."""
         self._discovery_timer.cancel()
+        self._take_timer.cancel()
         deadline = time.monotonic() + limit
         idle_steps = 0
         while idle_steps < 2 and time.monotonic() < deadline:
-            before = self._received
-            executor.spin_once(timeout_sec=_DRAIN_STEP)
-            idle_steps = idle_steps + 1 if self._received == before else 0
+            executor.spin_once(timeout_sec=_DRAIN_STEP)  # the sim clock, if any, moves on
+            idle_steps = 0 if self.take_received() else idle_steps + 1
+
+    def destroy_node(self) -> None:
+        """Destroy the node and the one its subscriptions live on."""
+        self._sampler.destroy()
+        super().destroy_node()
 
     def close_bag(self) -> None:
         """Close the bag (idempotent) and log what it holds."""

@@ -160,8 +160,9 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
 class TopicSampler:
     """Subscriptions read on demand, for high-rate topics a node needs only now and then.
 
-    A subscription that an executor spins costs a Python callback per message; the supervisor
-    needs the 500 Hz joint states only at its own decision rate. The sampler's subscriptions
+    A subscription that an executor spins costs a Python callback per message, and a turn of
+    the executor around it; the supervisor needs the 500 Hz joint states only at its own
+    decision rate, and the recorder takes every message in batches. The sampler's subscriptions
     live on a helper node that no executor spins: DDS keeps the newest messages (up to the QoS
     depth) and :meth:`take` hands them over when asked.
 
@@ -178,15 +179,36 @@ class TopicSampler:
     def __init__(self, name: str, namespace: str, context=None) -> None:
         self.node = Node(name, namespace=namespace, context=context, use_global_arguments=False,
                          start_parameter_services=False, enable_rosout=False)
-        self._types: dict[object, type] = {}
-        self._qos: dict[object, object] = {}
+        # per subscription: (message type, QoS, raw)
+        self._made: dict[object, tuple[type, object, bool]] = {}
 
-    def subscribe(self, message_type: type, topic: str, qos) -> object:
-        """Create a sampled subscription; return the handle :meth:`take` expects."""
-        subscription = self.node.create_subscription(message_type, topic, lambda _: None, qos)
-        self._types[subscription] = message_type
-        self._qos[subscription] = qos
+    def subscribe(self, message_type: type, topic: str, qos, raw: bool = False) -> object:
+        """Create a sampled subscription; return the handle :meth:`take` expects.
+
+        With ``raw``, messages are taken as their serialized (CDR) bytes.
+        """
+        subscription = self.node.create_subscription(message_type, topic, lambda _: None, qos,
+                                                     raw=raw)
+        self._made[subscription] = (message_type, qos, raw)
         return subscription
+
+    def take(self, subscription) -> list:
+        """Every message received on ``subscription`` since the last call, oldest first."""
+        return [message for message, _ in self.take_with_info(subscription)]
+
+    def take_with_info(self, subscription) -> list[tuple[object, dict]]:
+        """Like :meth:`take`, each message with the middleware's information on it.
+
+        The information is rclpy's ``MessageInfo`` dict: ``source_timestamp`` and
+        ``received_timestamp`` [ns, system clock], ``publication_sequence_number``, ...
+        """
+        message_type, _, raw = self._made[subscription]
+        taken = []
+        while True:
+            message_and_info = subscription.handle.take_message(message_type, raw)
+            if message_and_info is None:
+                return taken
+            taken.append(message_and_info)
 
     def renew(self, subscription) -> object:
         """Destroy ``subscription`` and make it anew; return the new handle.
@@ -194,21 +216,10 @@ class TopicSampler:
         Messages not yet taken are lost. Use it for a stream silent for long while its
         publisher may live on (see :class:`walker_core.resubscription.Resubscription`).
         """
-        message_type = self._types.pop(subscription)
-        qos = self._qos.pop(subscription)
+        message_type, qos, raw = self._made.pop(subscription)
         topic = subscription.topic_name
         self.node.destroy_subscription(subscription)
-        return self.subscribe(message_type, topic, qos)
-
-    def take(self, subscription) -> list:
-        """Every message received on ``subscription`` since the last call, oldest first."""
-        message_type = self._types[subscription]
-        messages = []
-        while True:
-            taken = subscription.handle.take_message(message_type, False)
-            if taken is None:
-                return messages
-            messages.append(taken[0])
+        return self.subscribe(message_type, topic, qos, raw)
 
     def destroy(self) -> None:
         """Destroy the helper node and its subscriptions."""

@@ -49,6 +49,10 @@ class RecorderParameters:
         1024, 64 * 1024 * 1024)
     queue_depth: int = parameter(
         'messages each subscription holds while the recorder is busy', '', 1, 100000)
+    take_period: float = parameter(
+        'period at which received messages are taken from the middleware, all topics at '
+        'once, and handed to the bag (steady clock); in sim time their log time is the '
+        'simulation clock when taken', 's', 0.001, 1.0)
 
     def __post_init__(self) -> None:
         if not self.directory:
