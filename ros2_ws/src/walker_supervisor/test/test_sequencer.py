@@ -27,7 +27,7 @@ SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignmen
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,
                                   mouth_settle_time=0.1, descent_region=0.002,
-                                  sweep_lead=0.0)
+                                  descent_arrival_time=0.02, sweep_lead=0.0)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -604,6 +604,37 @@ def test_a_tip_swinging_through_or_at_rest_off_the_point_is_not_lowered():
     assert [c.purpose for c in requests] == ['fine']  # a correction line, not the descent
 
 
+def test_a_tip_swinging_through_between_two_ticks_close_together_is_not_lowered():
+    """Ticks late and then bunched up (a real-time supervisor): the speed, not the tick, counts.
+
+    2 ms apart the tip comes 1 mm closer with 1.5 mm to go, which the change of its error
+    between the ticks took for closing slowly; its joints say it moves at 0.45 m/s, through
+    the point. It is not lowered; coming in at the same place slowly, it is.
+    """
+    world = World(coarse_miss=0.004)
+    sequencer = _settling_above_the_hole(world)
+    far, near = _joint1_short_by(world, [2.5e-3, 1.5e-3])
+    swinging = np.array([0.5, 0.0, 0.0, 0.0, 0.0])  # [rad/s] joint 1, towards the point
+    for k, theta in enumerate((far, near)):
+        commands = sequencer.tick(world.now + k * 0.002, theta, swinging, dict(world.grippers))
+        assert not any(isinstance(c, TrajectoryRequest) for c in commands), k
+    assert sequencer.phase == Phase.FINE
+    coming_in = np.array([0.02, 0.0, 0.0, 0.0, 0.0])  # [rad/s] about 18 mm/s of tip
+    commands = sequencer.tick(world.now + 0.004, near, coming_in, dict(world.grippers))
+    assert [c.purpose for c in commands if isinstance(c, TrajectoryRequest)] == ['insertion']
+
+
+def test_a_tip_moving_away_inside_the_descent_region_is_not_lowered():
+    world = World(coarse_miss=0.004)
+    sequencer = _settling_above_the_hole(world)
+    (near,) = _joint1_short_by(world, [1.5e-3])
+    leaving = np.array([-0.02, 0.0, 0.0, 0.0, 0.0])  # [rad/s] joint 1, away from the point
+    for k in range(3):
+        commands = sequencer.tick(world.now + k * DT, near, leaving, dict(world.grippers))
+        assert not any(isinstance(c, TrajectoryRequest) for c in commands), k
+    assert sequencer.phase == Phase.FINE
+
+
 def test_parameters_refuse_a_descent_region_outside_alignment_and_region():
     with pytest.raises(ParameterError, match='descent_region'):
         dataclasses.replace(SUPERVISOR, descent_region=0.5 * SUPERVISOR.insertion_alignment)
@@ -1003,7 +1034,8 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02, 0.0)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02, 0.02,
+                             0.0)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():

@@ -153,6 +153,11 @@ class SupervisorParameters:
         'while the tip is still closing on it, once the motion there has ended (at or below '
         'insertion_alignment it may also start with the tip at rest); at most '
         "the gripper's insertion_position_tolerance", 'm', 1e-5, 0.05, read_only=False)
+    descent_arrival_time: float = parameter(
+        'a tip within descent_region descends while it closes on the point above the hole '
+        'only if, at the speed its joints give it now, it would not get there within this '
+        'time: faster, it is swinging through the point (a stall of a real-time loop), not '
+        "coming in behind joint 1's filter", 's', 0.001, 1.0, read_only=False)
     sweep_lead: float = parameter(
         "how long before the lift ends the coarse motion's setpoints begin, streamed with the "
         "lift's as one motion (they add): joint 1's reference filter holds the sweep back, "
@@ -329,7 +334,7 @@ class StepSequencer:
         self._screw_time = screw_time
         self._settled_since: float | None = None
         # [m] tip_error() at this tick and the last (nan: none yet in this phase)
-        self._tip_error_now = self._last_tip_error = math.nan
+        self._tip_error_now = math.nan
         # [s] when the lift of a lift streamed with its sweep ends (None: no such stream)
         self._lift_ends: float | None = None
         self._attempts = 0
@@ -696,7 +701,7 @@ class StepSequencer:
         self._grippers = dict(grippers)
         if not self.busy:
             return []
-        self._last_tip_error, self._tip_error_now = self._tip_error_now, self.tip_error()
+        self._tip_error_now = self.tip_error()
         if grippers.get(self._step.base_gripper) != 'attached':
             return self._abort(f'the base gripper {self._step.base_gripper} reports '
                                f'{grippers.get(self._step.base_gripper, "nothing")}', now)
@@ -756,18 +761,34 @@ class StepSequencer:
     def _may_descend(self, velocities: np.ndarray) -> bool:
         """Return True if the tip is over the hole closely enough to start the descent.
 
-        Either it is within ``descent_region`` of the point above the hole and closing on it,
-        by less since the last tick than it still has to go (joint 1 coming in behind its
-        filter: it arrives on the axis during the descent, 0.3 s; a tip swinging through the
-        point is not closing so), or within ``insertion_alignment`` with every joint slower
-        than ``settle_velocity`` (at rest there, or nearly).
+        Either it is within ``descent_region`` of the point above the hole and closing on it
+        slowly enough not to get there within ``descent_arrival_time`` (joint 1 coming in
+        behind its filter: it arrives on the axis during the descent, 0.3 s; a tip swinging
+        through the point is not closing so), or within ``insertion_alignment`` with every
+        joint slower than ``settle_velocity`` (at rest there, or nearly).
+
+        The tip's velocity is the measured joint velocities through the Jacobian of eq (1),
+        not the change of its error between two ticks: a real-time supervisor's ticks come
+        late and then bunched up, and 2 ms apart a tip swinging through at half a metre a
+        second looked as if it were closing slowly (one went down 33 mm beside the hole).
         """
         error = self._tip_error_now
-        closing = 0.0 < self._last_tip_error - error < error
-        if error <= self.parameters.descent_region and closing:
+        if error <= self.parameters.descent_region and self._closing_slowly(velocities, error):
             return True
         return error <= self.parameters.insertion_alignment \
             and bool(np.all(np.abs(velocities) < self.parameters.settle_velocity))
+
+    def _closing_slowly(self, velocities: np.ndarray, error: float) -> bool:
+        """Return True if the tip closes on the point above the hole, and slowly.
+
+        Slowly: slower than ``error / descent_arrival_time`` [m/s]; ``error`` [m] is the tip's
+        distance from the point, ``velocities`` [rad/s] the joints' in role order.
+        """
+        tip = self.kinematics.forward(self._theta)[:3]
+        tip_velocity = self.kinematics.jacobian(self._theta)[:3] @ np.asarray(velocities, float)
+        towards = float(np.dot(tip_velocity, self._targets.point_above_to - tip))
+        speed = float(np.linalg.norm(tip_velocity))
+        return towards > 0.0 and speed * self.parameters.descent_arrival_time < error
 
     def _follow_gripper(self, now: float, state: str) -> list:
         """Move on once the moving gripper reports free (unscrewed) or attached (screwed)."""
@@ -900,7 +921,7 @@ class StepSequencer:
         self.phase, self.stage, self._phase_started = phase, stage, now
         self._settled_since = None
         self._lift_ends = self._free_since = None
-        self._tip_error_now = math.nan  # errors to another target point are not compared
+        self._tip_error_now = math.nan  # measured against the new phase's point next tick
 
     def _start_coarse_when_there(self, now: float) -> list:
         """Enter COARSE once every joint is within ``coarse_start_tolerance`` of its start.
