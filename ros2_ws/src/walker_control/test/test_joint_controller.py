@@ -288,6 +288,31 @@ def test_mode_switch_is_bumpless(joint, first, second):
     assert bump > 10.0 * jump
 
 
+@pytest.mark.parametrize('spike', [0.0, 12.0])  # [rad/s^2] measured in the last coarse sample
+def test_the_acceleration_feedback_is_not_carried_into_fine_as_an_offset(spike):
+    """Joint 1 ends a coarse motion ringing: its last acceleration feedback is one sample's.
+
+    Carried over as a decaying offset, one 12 rad/s^2 sample (the flexible link ringing after
+    a real-time stall) held about 8 N*m for the bumpless time constant and drove the joint
+    tens of milliradians off in FINE. The offset at the switch is the same with and without
+    the spike, and the joint stays where it was.
+    """
+    joint = 'a_yaw_joint'
+    controller = JointController(SETTINGS, joint, 'a')
+    plant = RigidJoint(joint, 'a')
+    controller.command(Mode.COARSE)
+    hold = Setpoint(position=plant.position)
+    run(controller, plant, int(1.0 / T), hold)
+    ringing = Measurement(plant.position, plant.velocity, spike, tuple(plant.q))
+    before = controller.update(ringing, hold, T)
+    assert abs(before.acceleration_feedback) > 5.0 or spike == 0.0  # Ka on in coarse, joint 1
+    plant.step(before.effort)
+    controller.command(Mode.FINE)
+    after, outputs = run(controller, plant, int(1.0 / T), hold)
+    assert abs(outputs[0].transfer) < 0.05  # no offset to carry: holding still
+    assert abs(plant.position - hold.position) < 1e-3  # [rad]
+
+
 def test_role_swap_while_holding_is_bumpless_and_changes_the_filter():
     joint = 'a_yaw_joint'
     settings = replace_in_section(SETTINGS, {'control.relaxation.duration': 0.0})
