@@ -232,6 +232,52 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
     graph.resume_and_complete(step)
 
 
+def test_a_descent_that_leaves_the_hole_axis_is_stopped_lifted_back_then_held(graph):
+    """A descent whose tip leaves the hole's axis is stopped and lifted back, never lowered.
+
+    Every ordinary descent swings 2.2-3 mm off the axis; with the tolerance set just above
+    the descent region (2.1 mm) each one counts as leaving it: each is stopped, the gripper
+    lifted back to the approach height and brought over the hole again, and after the bounded
+    attempts the step ends in safe hold with the base attached and the moving gripper never
+    screwed in. With the tolerance back, resume completes the step.
+    """
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    from rclpy.parameter import Parameter
+    from walker_msgs.msg import GripperState, StepPhase
+
+    name = 'supervisor.descent_axis_tolerance'
+    shipped = graph.parameters('supervisor', 'get_parameters', GetParameters.Request(
+        names=[name])).values[0].double_value
+    attempts = graph.parameters('supervisor', 'get_parameters', GetParameters.Request(
+        names=['supervisor.max_insertion_attempts'])).values[0].integer_value
+
+    def set_tolerance(value: float) -> None:
+        request = SetParameters.Request(parameters=[Parameter(name, value=value)
+                                                    .to_parameter_msg()])
+        assert graph.parameters('supervisor', 'set_parameters', request).results[0].successful
+
+    set_tolerance(0.0021)
+    try:
+        step = graph.one_step()
+        lifts_before = graph.count_in_log('supervisor', 'lifted back to come over the hole')
+        first_state = len(graph.gripper_states)
+        started = time.monotonic()
+        graph.start_walk(step.to_node)
+        held = graph.wait_phase(StepPhase.SAFE_HOLD, TIMEOUT, started)
+        assert "left the hole's axis" in held.reason, held.reason
+        assert f'{attempts} insertion attempts' in held.reason, held.reason
+        lifts = graph.count_in_log('supervisor', 'lifted back to come over the hole')
+        assert lifts - lifts_before == attempts - 1, graph.log_tails('supervisor')
+        assert graph.attached_nodes() == {step.base_gripper: step.base_node}
+        moving = [g.state for message in graph.gripper_states[first_state:]
+                  for g in message.grippers if g.name == step.moving_gripper]
+        freed = moving.index(GripperState.FREE)  # unscrewed from its old node
+        assert not {GripperState.SCREWING, GripperState.ATTACHED} & set(moving[freed:])
+    finally:
+        set_tolerance(shipped)
+    graph.resume_and_complete(step)
+
+
 # ---------------------------------------------------------------------- a lossy link
 def test_a_lossy_late_setpoint_link_still_walks_and_a_cut_one_holds_then_resumes(graph):
     """Dropped and late setpoints cost accuracy, not safety; a cut stream holds the walker.

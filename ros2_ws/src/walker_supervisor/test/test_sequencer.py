@@ -27,7 +27,8 @@ SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignmen
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,
                                   mouth_settle_time=0.1, descent_region=0.002,
-                                  descent_arrival_time=0.02, sweep_lead=0.0)
+                                  descent_axis_tolerance=0.005, descent_arrival_time=0.02,
+                                  sweep_lead=0.0)
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 
@@ -38,7 +39,8 @@ class World:
     def __init__(self, stance=START, jams=0, refuse_unscrew=False,
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
                  gripper_never=False, lift_lag=None, jam_seen_first=False, stale_states=0.0,
-                 descent_miss=0.0, mouth_lines_miss=False, coarse_plan_delay=0.0):
+                 descent_miss=0.0, mouth_lines_miss=False, coarse_plan_delay=0.0,
+                 descent_runaway=(0.0, 0)):
         self.stance = stance
         # [s] the coarse motion asked ahead is planned this late (inf: its plan is refused)
         self.coarse_plan_delay = coarse_plan_delay
@@ -64,6 +66,8 @@ class World:
         self.coarse_miss = coarse_miss  # [rad] J1 stops this short of the coarse goal
         self.descent_miss = descent_miss  # [rad] J1 stops this short of the descent's end
         self.mouth_lines_miss = mouth_lines_miss  # lines at the mouth stop as short
+        # ([rad], n): in the first n descents J1 runs this far off as the gripper goes down
+        self.runaway, self.runaway_descents = descent_runaway
         self.gripper_delay = gripper_delay  # [s] screwing/unscrewing time the plant takes
         self.gripper_never = gripper_never  # the plant accepts but never completes
         self.pending = []  # (time, gripper, state) changes the plant will report
@@ -97,6 +101,8 @@ class World:
                     self.motion = [command, self.now, 2.0 - command.lead]
                     self.sequencer.trajectory_started(2.0 - command.lead, self.now, 1.0)
             elif isinstance(command, CancelTrajectory):
+                if self.motion is not None and self.motion[0].purpose == 'insertion':
+                    self.runaway_descents -= self.runaway_descents > 0
                 self.motion = None
             elif isinstance(command, PrepareTrajectory):  # planned at once, 1 s like any motion
                 purpose = command.request.purpose
@@ -158,6 +164,9 @@ class World:
                                                                  self.targets.point_to)
             if request.purpose == 'insertion' or (at_mouth and self.mouth_lines_miss):
                 goal[0] -= self.descent_miss
+            runaway = request.purpose == 'insertion' and self.runaway_descents > 0
+            if runaway:
+                goal[0] -= self.runaway
             if request.then is None:
                 self.theta = request.start + fraction * (goal - request.start)
             else:
@@ -177,6 +186,7 @@ class World:
                 self.lift_lag = None
             if fraction >= 1.0:
                 self.motion = None
+                self.runaway_descents -= runaway
                 self.execute(self.sequencer.trajectory_done(True, '', self.now))
         if self.lagging is not None and self.motion is None:
             joint, end, caught_up = self.lagging
@@ -635,6 +645,56 @@ def test_a_tip_moving_away_inside_the_descent_region_is_not_lowered():
     assert sequencer.phase == Phase.FINE
 
 
+def _purposes(world):
+    return [c.purpose if isinstance(c, TrajectoryRequest) else
+            c.action if isinstance(c, GripperRequest) else 'cancel'
+            for c in world.log if isinstance(c, (TrajectoryRequest, GripperRequest,
+                                                 CancelTrajectory))]
+
+
+def test_a_descent_that_leaves_the_axis_is_stopped_lifted_back_and_inserted_again():
+    """Joint 1 running 18 mm off as the gripper goes down: stopped before the mouth."""
+    world = World(descent_runaway=(0.02, 1))
+    offsets = []
+    original_tick = world.sequencer.tick
+
+    def tick(*args):
+        commands = original_tick(*args)
+        if world.sequencer.stage == 'descending':
+            offsets.append(world.sequencer.mouth_offset())
+        return commands
+    world.sequencer.tick = tick
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    purposes = _purposes(world)
+    assert purposes[purposes.index('insertion'):] == [
+        'insertion', 'cancel', 'retry_lift', 'fine', 'insertion', 'screw_in']
+    assert outcome.insertion_attempts == 2  # lifted straight up 5 mm off: a line over the hole
+    # stopped within a tick of crossing the tolerance, far from the 18 mm it was heading for
+    assert max(offsets) < SUPERVISOR.descent_axis_tolerance + 0.002
+    lift = next(c for c in world.log
+                if isinstance(c, TrajectoryRequest) and c.purpose == 'retry_lift')
+    np.testing.assert_allclose(lift.goal_point[2], world.targets.point_above_to[2])
+    assert any(isinstance(c, Notice) and "left the hole's axis" in c.message
+               for c in world.log)
+
+
+def test_descents_that_keep_leaving_the_axis_end_in_safe_hold_attached():
+    world = World(descent_runaway=(0.02, 99))
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert not outcome.success
+    assert "left the hole's axis" in outcome.message
+    assert outcome.insertion_attempts == SUPERVISOR.max_insertion_attempts
+    assert world.sequencer.phase == Phase.SAFE_HOLD
+    assert 'screw_in' not in _purposes(world)
+    assert world.grippers[world.sequencer.base_gripper] == 'attached'
+
+
+def test_parameters_refuse_an_axis_tolerance_within_the_descent_region():
+    with pytest.raises(ParameterError, match='descent_axis_tolerance'):
+        dataclasses.replace(SUPERVISOR, descent_axis_tolerance=SUPERVISOR.descent_region)
+
+
 def test_parameters_refuse_a_descent_region_outside_alignment_and_region():
     with pytest.raises(ParameterError, match='descent_region'):
         dataclasses.replace(SUPERVISOR, descent_region=0.5 * SUPERVISOR.insertion_alignment)
@@ -1034,8 +1094,8 @@ def test_walking_a_route_there_and_back_keeps_every_joint_inside_its_limits():
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02, 0.02,
-                             0.0)
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 0.02, 0.3, 0.1, 0.02, 0.03,
+                             0.02, 0.0)
 
 
 def test_nothing_moves_until_the_gripper_reports_free_and_the_step_ends_when_attached():

@@ -30,12 +30,16 @@ Rules it enforces:
   (``settle_time``) anywhere else gets a constant-velocity fine line (paper section 5) from
   where it settled, up to ``MAX_FINE_LINES`` times before insertion is tried anyway (the
   screw-in itself is the final check);
-* insertion descends along the hole axis to its mouth; the descent moves the joints, which
+* insertion descends along the hole axis to its mouth (a descent whose tip leaves the axis by
+  more than ``descent_axis_tolerance`` is stopped and the gripper lifted straight back to the
+  approach height, to come over the hole again: an insertion attempt, as a jam is); the
+  descent moves the joints, which
   stop in their friction again, so once they have been still for ``mouth_settle_time`` (the
   vertical descent hardly moves joint 1; after a line at the mouth, which does, for
   ``settle_time``) the tip is checked again, now
   across the hole's axis: more than ``insertion_alignment`` off it, a fine line at the mouth
-  takes it there (up to ``MAX_FINE_LINES`` times), and only then is the gripper screwed in; a
+  takes it there (up to ``MAX_FINE_LINES`` times; more than ``descent_axis_tolerance`` off, the
+  gripper is lifted back instead), and only then is the gripper screwed in; a
   jammed screw-in is retried up to
   ``max_insertion_attempts`` times (each lift goes straight up from where the gripper jammed),
   then the step is aborted to SAFE_HOLD; a step ends when the gripper reports attached, with
@@ -153,6 +157,11 @@ class SupervisorParameters:
         'while the tip is still closing on it, once the motion there has ended (at or below '
         'insertion_alignment it may also start with the tip at rest); at most '
         "the gripper's insertion_position_tolerance", 'm', 1e-5, 0.05, read_only=False)
+    descent_axis_tolerance: float = parameter(
+        "largest distance of the tip (forward kinematics) from the hole's axis during the "
+        'descent; farther, the descent is stopped and the gripper lifted straight back to the '
+        "approach height, to come over the hole again (an insertion attempt, as a jam is); "
+        'more than descent_region', 'm', 1e-4, 0.05, read_only=False)
     descent_arrival_time: float = parameter(
         'a tip within descent_region descends while it closes on the point above the hole '
         'only if, at the speed its joints give it now, it would not get there within this '
@@ -171,6 +180,11 @@ class SupervisorParameters:
             raise ParameterError(
                 f'supervisor.insertion_alignment ({self.insertion_alignment} m) must be smaller '
                 f'than supervisor.coarse_to_fine_region ({self.coarse_to_fine_region} m)')
+        if not self.descent_axis_tolerance > self.descent_region:
+            raise ParameterError(
+                f'supervisor.descent_axis_tolerance ({self.descent_axis_tolerance} m) must be '
+                f'larger than supervisor.descent_region ({self.descent_region} m): the descent '
+                f'may start that far off the axis')
         if not self.insertion_alignment <= self.descent_region < self.coarse_to_fine_region:
             raise ParameterError(
                 f'supervisor.descent_region ({self.descent_region} m) must be at least '
@@ -606,6 +620,29 @@ class StepSequencer:
                     ] + self._prepare()
         return self._prepare()
 
+    def _left_the_axis(self, now: float) -> list:
+        """Stop a descent whose tip has left the hole's axis; lift it straight back up.
+
+        Lowered farther, the gripper would meet the node's face beside the hole. Like a jam it
+        counts as an insertion attempt: the gripper rises from where it is to the approach
+        height, FINE brings it over the hole again, and a new descent starts.
+        """
+        offset = self.mouth_offset()
+        self._attempts += 1
+        reason = (f"the descent left the hole's axis ({offset * 1e3:.1f} mm off, tolerance "
+                  f'{self.parameters.descent_axis_tolerance * 1e3:.1f} mm)')
+        if self._attempts >= self.parameters.max_insertion_attempts:
+            return self._abort(f'{reason}; {self._attempts} insertion attempts', now)
+        up = self._straight_up(self._targets.point_above_to)
+        if up is None:
+            return self._abort(f'{reason}, and no straight lift from here', now)
+        stop = [CancelTrajectory()] if self._trajectory_running else []
+        self.stage = 'retry_lift'
+        self._trajectory_running = False
+        tip = self.kinematics.forward(self._theta)[:3]
+        return stop + [Notice(f'{reason}: lifted back to come over the hole again'),
+                       self._trajectory('retry_lift', self._theta, up[0], tip, up[1])]
+
     def _jammed(self, message: str, now: float) -> list:
         self._attempts += 1
         if self._attempts >= self.parameters.max_insertion_attempts:
@@ -715,6 +752,9 @@ class StepSequencer:
                 return self._abort(f'the {self._requested} trajectory did not start within '
                                    f'{self.parameters.phase_timeout:g} s of its request (no '
                                    f'answer from the planner)', now)
+        if self.stage == 'descending' and self._trajectory_running \
+                and self.mouth_offset() > self.parameters.descent_axis_tolerance:
+            return self._left_the_axis(now)
         if self.stage == 'unscrewing':
             state = grippers.get(self._step.moving_gripper, '')
             return self._measure_stance_again(state, now) + self._follow_gripper(now, state)
@@ -745,6 +785,8 @@ class StepSequencer:
                     return self._enter_insertion(now)
                 return self._enter_fine(now, correction=True)  # settled, not aligned: a line
             if self.phase == Phase.INSERTION:
+                if self.mouth_offset() > self.parameters.descent_axis_tolerance:
+                    return self._left_the_axis(now)  # too far to slide at the mouth's height
                 if self.mouth_offset() > self.parameters.insertion_alignment \
                         and self._mouth_lines < MAX_FINE_LINES:
                     return self._align_at_mouth()
