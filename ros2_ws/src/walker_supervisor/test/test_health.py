@@ -119,3 +119,18 @@ def test_a_mode_repetition_count_below_one_is_refused():
 def test_a_report_shows_a_fall_back_only_once_the_mode_command_has_had_time_to_arrive(
         busy, mode, after, expected):
     assert tracking_expected(busy, mode, 100.0 + after, 100.0) == expected
+
+
+def test_new_timeouts_apply_to_every_source_and_keep_what_was_heard():
+    monitor = HealthMonitor({'plant': 1.0, 'controller': 1.0}, trouble_grace=1.0)
+    monitor.seen('plant', 10.0)
+    monitor.seen('controller', 10.0, 'holding')
+    assert monitor.faults(12.0, include_trouble=False)  # silent for 2 s, timeout 1 s
+    monitor.set_timeouts(3.0, trouble_grace=5.0)
+    assert monitor.faults(12.0, include_trouble=True) == []  # 2 s < 3 s; trouble 2 s < 5 s
+    assert monitor.last_heard('plant') == 10.0
+    with pytest.raises(ValueError, match='timeout'):
+        monitor.set_timeouts(0.0, trouble_grace=1.0)
+    with pytest.raises(ValueError, match='trouble_grace'):
+        monitor.set_timeouts(1.0, trouble_grace=-1.0)
+    assert monitor.faults(12.0, include_trouble=True) == []  # nothing changed

@@ -254,6 +254,11 @@ class SupervisorNode(TeleopServer, Node):
         self.settings = settings
         self.sequencer.parameters = settings
         self.vibration.window = _vibration_window(settings)
+        # the watchdog and the resubscriptions follow a new watchdog_timeout at once
+        timeout = settings.watchdog_timeout
+        self.health.set_timeouts(timeout, trouble_grace=timeout)
+        for resubscription in self._resubscriptions.values():
+            resubscription.after = _RESUBSCRIBE_AFTER_TIMEOUTS * timeout
 
     # ------------------------------------------------------------------ measurements
     def _now(self) -> float:

@@ -59,6 +59,18 @@ class HealthMonitor:
         self._trouble: dict[str, str] = {}
         self._trouble_since: dict[str, float] = {}
 
+    def set_timeouts(self, timeout: float, trouble_grace: float) -> None:
+        """Give every source the timeout ``timeout`` [s] and the trouble grace [s] anew.
+
+        What has been heard is kept. Raises ValueError, changing nothing, on a bad value.
+        """
+        if not timeout > 0:
+            raise ValueError(f'timeout must be positive, got {timeout}')
+        if not trouble_grace >= 0:
+            raise ValueError(f'trouble_grace must be zero or positive, got {trouble_grace}')
+        self._timeouts = dict.fromkeys(self._timeouts, float(timeout))
+        self._grace = float(trouble_grace)
+
     @property
     def names(self) -> list[str]:
         """The monitored sources."""
