@@ -42,10 +42,10 @@ from walker_report.core.errors import ReportError
 from walker_report.core.report import make_report
 from walker_report.progress import ProgressLine
 from walker_report.walk_report import written_text
+from walker_teleop.core.progress import walk_progress
 
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 
-PHASE_NAMES = ('idle', 'extraction', 'coarse', 'fine', 'insertion', 'safe hold')
 SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
 
 
@@ -432,16 +432,11 @@ def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) ->
 def walk_feedback_text(feedback, elapsed: float) -> str:
     """One progress line from a ``WalkTo`` feedback, ``elapsed`` [s] after the goal was sent.
 
-    During a step: the step, its nodes, the phase and the tip error. Between steps (no step
-    under way, as after the last one): how many steps are done, and the phase.
+    The line ``walkerctl walk-to`` shows (:func:`walker_teleop.core.progress.walk_progress`).
     """
-    phase = PHASE_NAMES[feedback.phase] if feedback.phase < len(PHASE_NAMES) else '?'
-    if not feedback.from_node:
-        return (f'{feedback.step_index} of {feedback.step_count} steps done: {phase} '
-                f'({elapsed:.0f} s)')
-    return (f'step {feedback.step_index + 1}/{feedback.step_count} '
-            f'{feedback.from_node} -> {feedback.to_node}: {phase}, '
-            f'tip error {feedback.tip_position_error * 1e3:.1f} mm ({elapsed:.0f} s)')
+    return walk_progress(feedback.step_index, feedback.step_count, feedback.phase,
+                         feedback.from_node, feedback.to_node, feedback.tip_position_error,
+                         elapsed)
 
 
 def _walk(client: GraphClient, target: str, args, progress: _Progress, should_stop, out: Path,

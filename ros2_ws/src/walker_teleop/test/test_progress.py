@@ -25,6 +25,11 @@ def test_the_lines_say_the_step_the_phase_and_the_tip_error_in_mm():
         'step to n1_2: insertion, tip error 0.5 mm (3 s)'
 
 
+def test_between_steps_the_line_counts_the_steps_done_instead_of_a_step_past_the_last():
+    # after the last step the feedback has no step under way: index = count, no nodes
+    assert walk_progress(5, 5, 0, '', '', 0.0, 23.2) == '5 of 5 steps done: idle (23 s)'
+
+
 def test_quiet_prints_nothing():
     stream = _Terminal()
     line = ProgressLine(quiet=True, stream=stream)

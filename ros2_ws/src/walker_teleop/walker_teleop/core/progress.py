@@ -18,10 +18,17 @@ __all__ = ['ProgressLine', 'walk_progress', 'step_progress']
 
 def walk_progress(step_index: int, step_count: int, phase: int, from_node: str, to_node: str,
                   tip_error: float, elapsed: float) -> str:
-    """One line of ``walk_to`` feedback (``walker_msgs/action/WalkTo`` fields, SI units)."""
-    return (f'step {step_index + 1}/{step_count} {from_node or "?"} -> {to_node or "?"}: '
-            f'{name_of(phase, PHASE_NAMES).lower()}, tip error {tip_error * 1e3:.1f} mm '
-            f'({elapsed:.0f} s)')
+    """One line of ``walk_to`` feedback (``walker_msgs/action/WalkTo`` fields, SI units).
+
+    During a step: the step, its nodes, the phase and the tip error. Between steps (no step
+    under way, ``from_node`` empty, as after the last one): how many steps are done, and the
+    phase.
+    """
+    phase_name = name_of(phase, PHASE_NAMES).lower()
+    if not from_node:
+        return f'{step_index} of {step_count} steps done: {phase_name} ({elapsed:.0f} s)'
+    return (f'step {step_index + 1}/{step_count} {from_node} -> {to_node or "?"}: '
+            f'{phase_name}, tip error {tip_error * 1e3:.1f} mm ({elapsed:.0f} s)')
 
 
 def step_progress(target: str, phase: int, tip_error: float, elapsed: float) -> str:
