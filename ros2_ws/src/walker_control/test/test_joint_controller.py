@@ -288,14 +288,17 @@ def test_mode_switch_is_bumpless(joint, first, second):
     assert bump > 10.0 * jump
 
 
-@pytest.mark.parametrize('spike', [0.0, 12.0])  # [rad/s^2] measured in the last coarse sample
+# [rad/s^2] measured in the last coarse sample; 30 drives the command past the torque limit
+@pytest.mark.parametrize('spike', [0.0, 12.0, 30.0])
 def test_the_acceleration_feedback_is_not_carried_into_fine_as_an_offset(spike):
     """Joint 1 ends a coarse motion ringing: its last acceleration feedback is one sample's.
 
     Carried over as a decaying offset, one 12 rad/s^2 sample (the flexible link ringing after
     a real-time stall) held about 8 N*m for the bumpless time constant and drove the joint
     tens of milliradians off in FINE. The offset at the switch is the same with and without
-    the spike, and the joint stays where it was.
+    the spike, and the joint stays where it was; also when the spike's feedback clamped the
+    filter's input at the torque limit (the feedback is taken out before the clamp, not from
+    the clamped input).
     """
     joint = 'a_yaw_joint'
     controller = JointController(SETTINGS, joint, 'a')

@@ -193,7 +193,7 @@ class JointController:
         self._key: tuple[int, Mode] | None = None
         self._design: object = None
         self._hold_position = 0.0
-        self._last_input = 0.0
+        self._last_command = 0.0  # [N*m] the filter's input before its clamp
         self._last_acceleration_feedback = 0.0
         self._last_friction = 0.0
         self._transfer = 0.0
@@ -368,7 +368,8 @@ class JointController:
         if redesign:
             self._bumpless_transfer(role, transition, cached.ki > 0.0,
                                     feedforward + accel_term + self._pid.gains.p * error
-                                    + self._pid.gains.d * error_rate, friction, accel_term)
+                                    + self._pid.gains.d * error_rate, friction, accel_term,
+                                    limit)
             self._key, self._design = (role, mode), (design, friction_design)
         self._design_used = cached
 
@@ -401,7 +402,7 @@ class JointController:
         decay = math.exp(-dt / settings.control.bumpless_time_constant)
         self._transfer *= decay
         self._friction_transfer *= decay
-        self._last_input = filter_input
+        self._last_command = command
         self._last_acceleration_feedback = accel_term
         self._last_friction = friction_total
         self._last_output = output
@@ -491,17 +492,20 @@ class JointController:
 
     def _bumpless_transfer(self, role: int, transition: bool, integral_on: bool,
                            raw_without_integral: float, friction: float,
-                           acceleration_feedback: float) -> None:
+                           acceleration_feedback: float, limit: float) -> None:
         """Match the new command to the old one (see the module notes).
 
         The acceleration feedback is not carried over: it answers the acceleration measured
         now, in the mode that has it, and is left out of both sides. Carried as an offset it
         held one sample's reaction for ``bumpless_time_constant``: a 8 N*m answer to a ringing
         joint 1 at the end of a real-time coarse motion pushed the joint 30 mrad off in FINE.
+        The old input without it is the old command without it, clamped at ``limit`` [N*m]
+        as the filter's input is (not the clamped input less the feedback, which is off by
+        what the clamp cut when the feedback drove the command past the limit).
         """
         new_filter = self._new_filter(role)
         if new_filter.same_design(self._filter):
-            target = self._last_input - self._last_acceleration_feedback
+            target = _clamp(self._last_command - self._last_acceleration_feedback, limit)
             raw_without_integral -= acceleration_feedback
         else:
             target = self._filter.output
@@ -540,7 +544,8 @@ class JointController:
         self._shaper = None
         self._pid.reset(0.0)
         self._transfer = self._friction_transfer = 0.0
-        self._last_input = self._last_friction = self._last_acceleration_feedback = 0.0
+        self._last_command = self._last_friction = 0.0
+        self._last_acceleration_feedback = 0.0
         self._saturation = 0.0
         self._key, self._design = (self.role, Mode.OFF), None
         self._design_used = None
