@@ -126,8 +126,7 @@ class GraphRun:
                     dict(plant.remaps).get('/clock'), self.parameters,
                     grouped_controllers=self.grouped)
                 group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', namespace,
-                                     str(params_file)),
-                            [sys.executable, str(PROBE), 'composed', *command[1:]])
+                                     str(params_file)), self._probed(command))
                 continue
             if self.loop:
                 command = composed_command(
@@ -136,8 +135,7 @@ class GraphRun:
                     dict(plant.remaps).get('/clock'), self.parameters,
                     grouped_controllers=True, only=LOOP_NODES)
                 group.start(NodeSpec('walker_bringup', 'composed_graph', 'loop', namespace,
-                                     str(params_file)),
-                            [sys.executable, str(PROBE), 'composed', *command[1:]])
+                                     str(params_file)), self._probed(command))
                 for spec in nodes:
                     if spec.name not in LOOP_NODES:
                         group.start(spec)
@@ -154,6 +152,10 @@ class GraphRun:
             client.wait_until_ready([n.full_name for n in nodes],
                                     max(1.0, deadline - time.monotonic()),
                                     should_stop=self.died)
+
+    def _probed(self, command: list[str]) -> list[str]:
+        """A composed graph's command, run through :mod:`loop_probe` when the run probes."""
+        return [sys.executable, str(PROBE), 'composed', *command[1:]] if self.probe else command
 
     def died(self) -> bool:
         """Say whether a process of the run has exited (reported on stderr once)."""
