@@ -154,7 +154,7 @@ class GraphRun:
                                     should_stop=self.died)
 
     def _probed(self, command: list[str]) -> list[str]:
-        """A composed graph's command, run through :mod:`loop_probe` when the run probes."""
+        """Return a composed graph's command, through :mod:`loop_probe` when the run probes."""
         return [sys.executable, str(PROBE), 'composed', *command[1:]] if self.probe else command
 
     def died(self) -> bool:
