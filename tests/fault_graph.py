@@ -34,10 +34,13 @@ class FaultGraph:
     """The running graph, a client, and everything seen on the topics the checks need.
 
     With ``grouped``, the five joint controllers run as one node (``controllers``, one
-    process; ``run_all.py --grouped-controllers``) and there is no lossy link.
+    process; ``run_all.py --grouped-controllers``) and there is no lossy link. ``parameters``
+    are given to every node (``walker_graph``'s overrides), e.g.
+    ``(('sim.wait_for_decisions', 'true'),)``.
     """
 
-    def __init__(self, tmp: Path, domain: int, grouped: bool = False) -> None:
+    def __init__(self, tmp: Path, domain: int, grouped: bool = False,
+                 parameters: tuple[tuple[str, str], ...] = ()) -> None:
         from walker_bringup.graph import walker_graph
         from walker_bringup.processes import ProcessGroup
         from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
@@ -51,7 +54,7 @@ class FaultGraph:
         env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
         self.specs = {spec.name: spec for spec in walker_graph(
             default_parameter_file(), sim_time=True, record=True, bag_path=self.bag,
-            grouped_controllers=grouped)}
+            grouped_controllers=grouped, parameters=parameters)}
         # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
         # planner's interpreter, and with it its setpoint stream, for up to a second there): a
         # healthy node is never taken for a dead one, and a dead one is still named within

@@ -553,9 +553,15 @@ class SupervisorNode(TeleopServer, Node):
     def _watch(self) -> None:
         """Steady-clock watchdog: a source that falls silent stops the walker in safe hold.
 
-        It also releases the sim-time clock again (:meth:`_release_clock`): an answer that
-        came by a path that did not (a refusal) holds the plant for one watch period at most.
+        It also keeps the wall-clock deadlines of the requests in flight (a server not yet
+        discovered, a planner request unanswered): in sim time a request holds the clock, and
+        so the ticks, until it is answered or given up on, which the ticks alone never did (a
+        request waiting for its server froze the simulation for good). And it releases the
+        sim-time clock again (:meth:`_release_clock`): an answer that came by a path that did
+        not (a refusal) holds the plant for one watch period at most.
         """
+        self._send_waiting_requests()
+        self._ask_again_if_unanswered()
         self._release_clock()
         self._sample_measurements()
         self._resubscribe_silent_sources()
