@@ -54,8 +54,8 @@ from walker_planner.conversions import chained_message
 from walker_planner.core.errors import PlanningError
 from walker_supervisor.core.decision_clock import DecisionClock
 from walker_supervisor.core.health import (
-    HealthMonitor, Level, ModeRepetition, controller_trouble, reason_naming_silent_sources,
-    tell_mode_again, tracking_expected)
+    HealthMonitor, Level, ModeRepetition, SourceStatus, controller_trouble,
+    reason_naming_silent_sources, tell_mode_again, tracking_expected)
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -618,7 +618,7 @@ class SupervisorNode(TeleopServer, Node):
         message.header.stamp = self.get_clock().now().to_msg()
         overall = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: walker',
                                    hardware_id=self.get_namespace())
-        statuses = self.health.status(self._steady_now())
+        statuses = self.health.status(self._steady_now()) + self._server_statuses()
         if self.sequencer.phase == Phase.SAFE_HOLD:
             level = Level.ERROR
             overall.message = f'safe hold: {self.sequencer.reason}'
@@ -632,6 +632,21 @@ class SupervisorNode(TeleopServer, Node):
                            for s in statuses]
         message.status = [overall]
         self._diagnostics.publish(message)
+
+    def _server_statuses(self) -> list[SourceStatus]:
+        """Whether this node's clients have discovered their servers (planner, plant).
+
+        A step's first requests wait for their servers: on a loaded machine discovery has
+        taken seconds, and in sim time a request waiting for its server holds the clock. A
+        server not discovered yet is reported as not heard from, so ``run_all.py`` counts the
+        graph ready only once every one is.
+        """
+        servers = (('planner plan_trajectory service', self.plan_client.service_is_ready),
+                   ('planner follow_trajectory action', self.follow_client.server_is_ready),
+                   ('plant gripper_command service', self.gripper_client.service_is_ready))
+        return [SourceStatus(name, Level.OK, 'discovered') if ready()
+                else SourceStatus(name, Level.WARN, 'not heard from yet')
+                for name, ready in servers]
 
     def destroy_node(self) -> None:
         """Destroy the node with its action servers and clients, and its sampler."""
