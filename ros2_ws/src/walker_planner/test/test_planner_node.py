@@ -440,6 +440,38 @@ def test_goals_that_cannot_be_streamed_are_aborted_with_the_reason(graph, stance
         assert words in result.result().result.message
 
 
+def test_joint_states_silent_while_the_clock_runs_are_subscribed_anew_and_followed(
+        graph, context, stance):
+    """A subscription that stopped receiving while the plant runs on heals itself.
+
+    Seen in sim-time walks with the loop in one process: the stream heard no joint state again
+    while the plant's clock ran on, and the motion it streamed stood still for good.
+    """
+    probe, planner = graph
+    period = int(round(1e9 / context.robot.timing.control_rate))
+    settle(probe, stance)
+    before = planner.output.count('subscription made anew')
+    deadline = time.monotonic() + WAIT
+    while planner.output.count('subscription made anew') == before \
+            and time.monotonic() < deadline:  # the clock runs on, no joint state comes
+        probe.now += period
+        probe.publish_clock()
+        probe.spin_until(lambda: False, timeout=0.02)
+    assert planner.output.count('subscription made anew') == before + 1, planner.output
+    assert 'no joint_states for' in planner.output
+    assert probe.spin_until(lambda: [
+        info.node_name for info in probe.node.get_subscriptions_info_by_topic(
+            '/walker/joint_states')] == ['planner_stream'])
+    # the new subscription is heard: tracking with no stream, each state is answered
+    probe.command_mode('fine')
+    settle(probe, stance)
+    _assert_holding(probe, stance, period)
+    probe.command_mode('hold')
+    settle(probe, stance)
+    probe.clear()
+    assert planner.output.count('subscription made anew') == before + 1, planner.output
+
+
 def test_invalid_parameter_updates_are_refused(graph):
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters

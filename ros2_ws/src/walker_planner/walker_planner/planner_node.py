@@ -21,6 +21,7 @@ stamped from them, in real time and in sim time alike, as the controllers are.
 from __future__ import annotations
 
 import threading
+import time
 
 import numpy as np
 import rclpy
@@ -41,6 +42,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_core.realtime import log_realtime_request, request_thread_priority
+from walker_core.resubscription import Resubscription
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
@@ -55,6 +57,15 @@ _RESULT_TIMEOUT = 30  # [s] how long a finished follow_trajectory goal keeps its
 
 #: [s] how often the main thread completes ended streams and sends action feedback
 _RELAY_PERIOD = 0.02
+
+#: [s] steady time: joint states silent this long while the plant's clock runs on get their
+#: subscription made anew (:class:`~walker_core.resubscription.Resubscription`), and every
+#: this long again while the silence lasts
+_RESUBSCRIBE_AFTER = 1.0
+
+#: control periods the ROS clock must have run past the newest joint state (or, none heard
+#: yet in sim time, past zero) for a silence to be the subscription's, not a stopped plant's
+_CLOCK_AHEAD_PERIODS = 10
 
 
 class _ActiveStream:
@@ -117,8 +128,12 @@ class PlannerNode(Node):
             for name in PHYSICAL_JOINT_NAMES}
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
-        self._stream_node.create_subscription(JointState, 'joint_states', self._on_joint_state,
-                                              SENSOR_QOS)
+        self._state_subscription = self._subscribe_states()
+        self._started_wall = time.monotonic()  # [s] steady
+        self._last_state_wall: float | None = None  # [s] steady time of the newest joint state
+        self._state_resubscription = Resubscription(_RESUBSCRIBE_AFTER)
+        self._stream_node.create_timer(_RESUBSCRIBE_AFTER / 4, self._resubscribe_if_silent,
+                                       clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._stream_node.create_subscription(ControlMode, 'control_mode',
                                               self._on_control_mode, LATCHED_QOS)
         self.create_timer(_RELAY_PERIOD, self._relay,
@@ -199,7 +214,38 @@ class PlannerNode(Node):
         self._planning = PlanningContext.from_parameters(self._robot, section)
 
     # ------------------------------------------------------------------ subscriptions
+    def _subscribe_states(self):
+        return self._stream_node.create_subscription(JointState, 'joint_states',
+                                                     self._on_joint_state, SENSOR_QOS)
+
+    def _resubscribe_if_silent(self) -> None:
+        """Make the joint states' subscription anew when it stopped receiving (stream thread).
+
+        Seen in sim-time walks with the loop in one process: the stream, starved while the
+        planner planned, heard no joint state again (or none at all after a slow start) while
+        the plant's clock ran on, and the motion it streamed stood still. A silence while the
+        clock stands still too is a plant stopped or held, not the subscription's: left alone.
+        In real time the clock always runs, and a plant gone costs a new subscription a second.
+        """
+        now = time.monotonic()
+        newest = self._measured[0] if self._measured is not None else None
+        if newest is None and not self.get_parameter('use_sim_time').value:
+            return  # real time, nothing heard yet: the plant may not have started
+        ahead = self.get_clock().now().nanoseconds - (newest or 0)
+        if ahead < _CLOCK_AHEAD_PERIODS * self._period_ns:
+            return
+        last_heard = self._last_state_wall if self._last_state_wall is not None \
+            else self._started_wall
+        if not self._state_resubscription.due(now, last_heard):
+            return
+        self._stream_node.destroy_subscription(self._state_subscription)
+        self._state_subscription = self._subscribe_states()
+        self.get_logger().warning(
+            f'no joint_states for {now - last_heard:.1f} s while the clock ran '
+            f'{ahead * 1e-9:.3f} s past the newest: subscription made anew')
+
     def _on_joint_state(self, message: JointState) -> None:
+        self._last_state_wall = time.monotonic()
         names = tuple(message.name)
         if names != self._state_names:  # the plant's order, looked up once
             try:
