@@ -245,11 +245,16 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
     # while they track (COARSE or FINE) they need a setpoint every period, one period ahead of
     # each state, at rest: back to tracking after a hold, where the joints are (the probe's
     # joints never followed the plan), not where the stream left its setpoints
+    _assert_held_while_tracking(probe, stance, period)
+
+
+def _assert_held_while_tracking(probe, positions, period):
+    """Switch to FINE: each state is answered with ``positions`` at rest; then HOLD again."""
     probe.command_mode('fine')
-    settle(probe, stance)
-    _assert_holding(probe, stance, period)
+    settle(probe, positions)
+    _assert_holding(probe, positions, period)
     probe.command_mode('hold')
-    settle(probe, stance)
+    settle(probe, positions)
     probe.clear()
 
 
@@ -463,12 +468,7 @@ def test_joint_states_silent_while_the_clock_runs_are_subscribed_anew_and_follow
         info.node_name for info in probe.node.get_subscriptions_info_by_topic(
             '/walker/joint_states')] == ['planner_stream'])
     # the new subscription is heard: tracking with no stream, each state is answered
-    probe.command_mode('fine')
-    settle(probe, stance)
-    _assert_holding(probe, stance, period)
-    probe.command_mode('hold')
-    settle(probe, stance)
-    probe.clear()
+    _assert_held_while_tracking(probe, stance, period)
     assert planner.output.count('subscription made anew') == before + 1, planner.output
 
 
