@@ -67,6 +67,9 @@ _RESUBSCRIBE_AFTER = 1.0
 #: yet in sim time, past zero) for a silence to be the subscription's, not a stopped plant's
 _CLOCK_AHEAD_PERIODS = 10
 
+#: [s] wall time start_streaming waits for the stream's executor to run its first timer
+_STREAM_START_WAIT = 5.0
+
 
 class _ActiveStream:
     """A running stream and how it ends.
@@ -132,6 +135,7 @@ class PlannerNode(Node):
         self._started_wall = time.monotonic()  # [s] steady
         self._last_state_wall: float | None = None  # [s] steady time of the newest joint state
         self._state_resubscription = Resubscription(_RESUBSCRIBE_AFTER)
+        self._stream_spinning = threading.Event()  # the stream thread has run a timer
         self._stream_node.create_timer(_RESUBSCRIBE_AFTER / 4, self._resubscribe_if_silent,
                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._stream_node.create_subscription(ControlMode, 'control_mode',
@@ -152,11 +156,18 @@ class PlannerNode(Node):
             f'{self._robot.timing.control_rate:g} Hz')
 
     def start_streaming(self) -> None:
-        """Spin the stream node in its own thread (until the context shuts down)."""
+        """Spin the stream node in its own thread (until the context shuts down).
+
+        Returns once that thread has run the node's first timer: its executor runs the timers
+        in a thread of its own, started when the node is added, which the real-time scheduling
+        asked for next (:meth:`request_realtime_scheduling`) must find (started after it, it
+        was seen left at the default scheduler).
+        """
         self._stream_thread = threading.Thread(
             target=spin_nodes, args=(self._stream_node,), kwargs={'context': self.context},
             name='setpoint-stream', daemon=True)
         self._stream_thread.start()
+        self._stream_spinning.wait(_STREAM_START_WAIT)
 
     def request_realtime_scheduling(self) -> bool:
         """Ask for ``SCHED_FIFO`` on the wall clock: the process below the loop, the stream in it.
@@ -227,6 +238,7 @@ class PlannerNode(Node):
         clock stands still too is a plant stopped or held, not the subscription's: left alone.
         In real time the clock always runs, and a plant gone costs a new subscription a second.
         """
+        self._stream_spinning.set()
         now = time.monotonic()
         newest = self._measured[0] if self._measured is not None else None
         if newest is None and not self.get_parameter('use_sim_time').value:
