@@ -1,10 +1,10 @@
-"""When a silent stream's subscription is made anew."""
+"""When a silent stream's subscription is made anew, and when a silence is the subscription's."""
 
 import math
 
 import pytest
 
-from walker_core.resubscription import Resubscription
+from walker_core.resubscription import Resubscription, clock_ran_past
 
 
 def test_a_silent_stream_is_resubscribed_after_the_interval_then_every_interval():
@@ -25,3 +25,18 @@ def test_a_silent_stream_is_resubscribed_after_the_interval_then_every_interval(
 def test_a_resubscription_interval_must_be_positive_and_finite(after):
     with pytest.raises(ValueError, match='positive and finite'):
         Resubscription(after)
+
+
+def test_a_silence_is_the_subscriptions_only_while_the_clock_runs_past_the_newest_message():
+    margin = 20_000_000  # [ns]
+    newest = 5_000_000_000
+    assert clock_ran_past(newest + margin, newest, margin, sim_time=True)
+    assert clock_ran_past(newest + margin, newest, margin, sim_time=False)
+    # the clock standing still with the stream (held, or a plant stopped): the publisher's
+    assert not clock_ran_past(newest + margin - 1, newest, margin, sim_time=True)
+    assert not clock_ran_past(newest, newest, margin, sim_time=False)
+    # nothing heard: in sim time the clock starts with the publisher, so a clock past the
+    # margin means it runs unheard; on the wall clock it may not have started
+    assert clock_ran_past(margin, None, margin, sim_time=True)
+    assert not clock_ran_past(margin - 1, None, margin, sim_time=True)
+    assert not clock_ran_past(newest, None, margin, sim_time=False)

@@ -1,15 +1,16 @@
 """When a subscription silent for long is made anew.
 
 A ROS-free rule shared by every node that watches its inputs on a steady clock: the joint
-controllers (their state and setpoint streams) and the supervisor (the plant's and the
-controllers' reports).
+controllers (their state and setpoint streams), the supervisor (the plant's and the
+controllers' reports) and the planner (the joint states its stream is paced by, which
+:func:`clock_ran_past` tells from a plant that stopped).
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ['Resubscription']
+__all__ = ['Resubscription', 'clock_ran_past']
 
 
 class Resubscription:
@@ -55,3 +56,28 @@ class Resubscription:
         self._last_attempt = now
         self.attempts += 1
         return True
+
+
+def clock_ran_past(clock_now: int, newest: int | None, margin: int, sim_time: bool) -> bool:
+    """Say whether the clock has run ``margin`` past a stream's newest message.
+
+    A stream stamped from the clock that falls silent while that clock runs on was not
+    stopped at its source: its subscription stopped receiving. A silence with the clock
+    standing still too (a simulated clock held, a plant stopped) is its publisher's.
+
+    Parameters
+    ----------
+    clock_now : int
+        [ns] the ROS clock now (simulated time in sim time).
+    newest : int or None
+        [ns] the stamp of the newest message; None when none has been heard.
+    margin : int
+        [ns] how far past it the clock must have run.
+    sim_time : bool
+        The clock is simulated: it starts at 0 with the publisher, so a clock past ``margin``
+        with nothing heard means the publisher runs unheard. On the wall clock nothing heard
+        says nothing (the publisher may not have started): False.
+    """
+    if newest is None and not sim_time:
+        return False
+    return clock_now - (newest or 0) >= margin

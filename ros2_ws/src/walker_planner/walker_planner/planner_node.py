@@ -42,7 +42,7 @@ from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_core.realtime import log_realtime_request, request_thread_priority
-from walker_core.resubscription import Resubscription
+from walker_core.resubscription import Resubscription, clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
@@ -241,11 +241,11 @@ class PlannerNode(Node):
         self._stream_spinning.set()
         now = time.monotonic()
         newest = self._measured[0] if self._measured is not None else None
-        if newest is None and not self.get_parameter('use_sim_time').value:
-            return  # real time, nothing heard yet: the plant may not have started
-        ahead = self.get_clock().now().nanoseconds - (newest or 0)
-        if ahead < _CLOCK_AHEAD_PERIODS * self._period_ns:
+        clock = self.get_clock().now().nanoseconds
+        if not clock_ran_past(clock, newest, _CLOCK_AHEAD_PERIODS * self._period_ns,
+                              self.get_parameter('use_sim_time').value):
             return
+        ahead = clock - (newest or 0)
         last_heard = self._last_state_wall if self._last_state_wall is not None \
             else self._started_wall
         if not self._state_resubscription.due(now, last_heard):
