@@ -220,3 +220,75 @@ def test_refuses_to_start_on_unknown_or_repeated_joints(ros_env, names, wrong):
     with start_grouped(ros_env, '-p', f'joint_names:={names}') as node:
         assert node.process.wait(timeout=WAIT) == 2
         assert wrong in node.output and 'refusing to start' in node.output, node.output
+
+
+def test_states_handed_over_by_call_take_their_setpoints_without_the_executor(rclpy_context):
+    """The loop by call: the node answers a state with the setpoints received for it.
+
+    With the node in this process and the plant handing it states by call
+    (``answer_plant_directly``), the setpoints are taken from the middleware as each state is
+    handed over: once the mode is in, nothing spins the node, and still every joint follows
+    the setpoints the stand-in planner sent ahead.
+    """
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import JointState
+    from walker_msgs.msg import JointAccelerations
+
+    from ros_test_support import set_stamp, spin_executor_until
+    from walker_control.core.modes import Mode
+    from walker_control.joint_controllers_node import JointControllersNode
+    from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+
+    names = list(PHYSICAL_JOINT_NAMES)
+    node = JointControllersNode(context=rclpy_context, cli_args=[
+        '--ros-args', '-r', '__ns:=/bycall', '-p', 'use_sim_time:=true', *OPTIONS])
+    answers = []
+    node.answer_plant_directly(answers.append)
+    plant = StandIn(rclpy_context, ['/bycall'])
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+
+    def hand_over(stamp_ns):
+        node.take_accelerations(set_stamp(JointAccelerations(name=names,
+                                                             acceleration=[0.0] * 5), stamp_ns))
+        node.take_state(set_stamp(JointState(name=names, position=list(STANCE),
+                                             velocity=[0.0] * 5, effort=[0.0] * 5), stamp_ns))
+        assert answers and _ns(answers[-1].header.stamp) == stamp_ns
+
+    def latest_states():
+        return {s.joint_name: s for s in plant.states['/bycall']}
+
+    try:
+        plant.command(int(Mode.FINE))
+        for _ in range(int(WAIT / 0.05)):  # the mode goes in through the executor
+            plant.stamp_ns += PERIOD_NS
+            hand_over(plant.stamp_ns)
+            spin_executor_until(executor, lambda: False, 0.05)
+            plant.spin_until(lambda: False, timeout=0.02)
+            states = latest_states()
+            if len(states) == 5 and all(s.mode == int(Mode.FINE) for s in states.values()):
+                break
+        else:
+            raise AssertionError(f'the mode did not reach every joint: {latest_states()}')
+        executor.remove_node(node)  # from here on, nothing spins the controllers' node
+        ahead = plant.stamp_ns + 10 * PERIOD_NS
+        goal = [position + 0.01 for position in STANCE]
+        for joint, position in zip(names, goal, strict=True):
+            plant.setpoint(joint, ahead, position)
+        # states after the setpoints' stamp: they apply, and no state waits for a stream
+        for _ in range(int(WAIT / 0.01)):  # until the middleware has delivered them
+            plant.stamp_ns = max(plant.stamp_ns, ahead) + PERIOD_NS
+            hand_over(plant.stamp_ns)
+            plant.spin_until(lambda: False, timeout=0.01)
+            states = latest_states()
+            if all(_ns(states[j].header.stamp) == plant.stamp_ns
+                   and states[j].position_setpoint == pytest.approx(goal[k], abs=1e-12)
+                   for k, j in enumerate(names)):
+                break
+        else:
+            raise AssertionError(f'the setpoints were never taken: {latest_states()}')
+        assert all(s.mode == int(Mode.FINE) and not s.stale for s in states.values())
+    finally:
+        executor.shutdown()
+        plant.close()
+        node.destroy_node()

@@ -103,6 +103,22 @@ class JointChannel:
             COMMAND_QOS)
         return self._setpoint_sub
 
+    def take_setpoints(self) -> None:
+        """Take the setpoints already received that no callback has had yet.
+
+        For a caller that needs them now, between two turns of its executor (the plant
+        handing a state over by call, :meth:`ControllerNode.take_state`): each taken here
+        costs a take from the middleware, not a turn of the executor and a callback; the
+        executor then finds nothing left to take for them.
+        """
+        subscription = self._setpoint_sub
+        while True:
+            with subscription.handle:
+                taken = subscription.handle.take_message(JointCommand, False)
+            if taken is None:
+                return
+            self.on_setpoint(taken[0])
+
     def setpoint_resubscription_due(self, now: float) -> bool:
         """Say whether the setpoint stream has been silent long enough to subscribe anew."""
         return self._setpoint_resubscription.due(now, self.watchdog.last_setpoint)

@@ -186,7 +186,14 @@ class ControllerNode(Node):
             self._acceleration_sub = None
 
     def take_state(self, msg: JointState) -> None:
-        """Answer a joint state handed over by the plant (see :meth:`answer_plant_directly`)."""
+        """Answer a joint state handed over by the plant (see :meth:`answer_plant_directly`).
+
+        The setpoints received for it are taken first, directly: the plant hands states
+        over between two turns of the process's executor, which would otherwise spend a
+        turn on each of the five setpoint messages of every period before they count.
+        """
+        for channel in self._channels:
+            channel.take_setpoints()
         self._on_joint_state(msg)
 
     def take_accelerations(self, msg: JointAccelerations) -> None:
