@@ -128,12 +128,13 @@ class Probe:
 
 
 @pytest.fixture(scope='module')
-def graph():
+def graph(planner_parameters):
     with isolated_domain() as domain:
         env = ros_environment(domain)
         args = [str(NODE), '--ros-args', '-r', '__ns:=/walker', '-p', 'use_sim_time:=true']
         with NodeProcess(args, env, 'planner') as planner:
             probe = Probe(domain)
+            probe.lookahead = planner_parameters.stream.lookahead
             try:
                 assert planner.wait_for_output('planner ready', WAIT), planner.output
                 assert probe.planner.wait_for_service(timeout_sec=WAIT), planner.output
@@ -205,10 +206,16 @@ def test_invalid_requests_are_refused_with_a_message(graph, fields, words):
     assert len(response.trajectory.points) == 0
 
 
-def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context, stance):
+def test_execute_streams_the_plan_on_five_topics_each_setpoint_sent_ahead_of_its_state(
+        graph, context, stance):
+    """Each setpoint once, stamped with the time it applies, before the state it applies to.
+
+    The stream keeps ``planner.stream.lookahead`` periods ahead of the newest joint state.
+    """
     from walker_planner.core.planning import PlanRequest, plan
 
     probe, _ = graph
+    lookahead = probe.lookahead
     goal = stance + np.array([0.02, 0.0, 0.0, 0.0, 0.02])
     settle(probe, stance)
     probe.clear()
@@ -220,8 +227,9 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
                                 duration=0.4), context)
     period = int(round(1e9 / context.robot.timing.control_rate))
     origin = probe.now + period  # the clock when the stream began, plus one period
-    assert probe.spin_until(lambda: probe.count() >= 1)
+    assert probe.spin_until(lambda: probe.count() >= lookahead)
     while probe.count() < len(expected.times):
+        assert _newest_stamp(probe) == probe.now + lookahead * period
         probe.step(stance, period)
     for j, name in enumerate(probe.names):
         messages = probe.setpoints[name]
@@ -235,13 +243,15 @@ def test_execute_streams_the_plan_on_five_topics_one_period_ahead(graph, context
                                    expected.samples.velocity[:, j], atol=1e-12)
         np.testing.assert_allclose([m.acceleration for m in messages],
                                    expected.samples.acceleration[:, j], atol=1e-9)
-    # the stream has ended: with the controllers holding on their own, a tick brings nothing
+    # the final setpoint is out: the stream ends at the state one period before it applies;
+    # until then, and after (the controllers holding on their own), a tick brings nothing
     count = probe.count()
-    probe.now += period
-    probe.publish_clock()
-    probe.publish_state(stance)
-    probe.spin_until(lambda: probe.count() > count, timeout=0.5)
-    assert probe.count() == count
+    for _ in range(lookahead):
+        probe.now += period
+        probe.publish_clock()
+        probe.publish_state(stance)
+        probe.spin_until(lambda: probe.count() > count, timeout=0.5)
+        assert probe.count() == count
     # while they track (COARSE or FINE) they need a setpoint every period, one period ahead of
     # each state, at rest: back to tracking after a hold, where the joints are (the probe's
     # joints never followed the plan), not where the stream left its setpoints
@@ -259,15 +269,47 @@ def _assert_held_while_tracking(probe, positions, period):
 
 
 def _assert_holding(probe, positions, period):
-    """Two ticks, each answered by the five setpoints ``positions`` [rad] at rest."""
+    """Two ticks, each answered by the five setpoints ``positions`` [rad] at rest.
+
+    Every period up to ``planner.stream.lookahead`` after the tick has its hold, the one after
+    the tick included.
+    """
     for _ in range(2):
         probe.step(positions, period)
+        ahead = probe.now + probe.lookahead * period  # a tick may bring several at once
+        probe.spin_until(lambda ahead=ahead: min(_stamp(probe.setpoints[name][-1])
+                                                 for name in probe.names) >= ahead)
+        assert _newest_stamp(probe) == ahead
         for j, name in enumerate(probe.names):
-            hold = probe.setpoints[name][-1]
-            assert hold.position == pytest.approx(positions[j], abs=1e-12)
-            assert hold.velocity == 0.0 and hold.acceleration == 0.0
-            assert (hold.header.stamp.sec * 1_000_000_000 + hold.header.stamp.nanosec
-                    == probe.now + period)
+            # the newest message for each time (a later one for the same time replaces it)
+            held = {_stamp(m): m for m in probe.setpoints[name] if _stamp(m) > probe.now}
+            assert sorted(held) == list(range(probe.now + period, ahead + 1, period))
+            for stamp, hold in held.items():
+                assert hold.position == pytest.approx(positions[j], abs=1e-12), \
+                    (name, (stamp - probe.now) // period, hold.position - positions[j],
+                     [((_stamp(m) - probe.now) // period, m.position - positions[j])
+                      for m in probe.setpoints[name][-12:]])
+                assert hold.velocity == 0.0 and hold.acceleration == 0.0
+
+
+def _advance(probe, positions, period):
+    """Advance the clock one period with a joint state; take what comes for a moment."""
+    count = probe.count()
+    probe.now += period
+    probe.publish_clock()
+    probe.publish_state(positions)
+    probe.spin_until(lambda: probe.count() > count, timeout=0.2)
+
+
+def _stamp(message) -> int:
+    return message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+
+
+def _newest_stamp(probe) -> int:
+    """Stamp [ns] of the newest setpoint received, the same for the five joints."""
+    newest = {_stamp(probe.setpoints[name][-1]) for name in probe.names}
+    assert len(newest) == 1, newest
+    return newest.pop()
 
 
 def test_a_stream_ending_while_tracking_holds_its_last_setpoint_until_a_hold(graph, context,
@@ -283,12 +325,17 @@ def test_a_stream_ending_while_tracking_holds_its_last_setpoint_until_a_hold(gra
     settle(probe, stance)
     probe.command_mode('fine')
     settle(probe, stance)
+    started = probe.now  # the newest state's stamp: the stream's start
     response = probe.call(trajectory_type='joint_min_jerk', base_gripper='a',
                           start=stance.tolist(), goal=goal.tolist(), duration=0.5,
                           execute=True)
     assert response.success, response.message
-    for _ in range(int(0.5 * 1e9 / period) + 3):
-        probe.step(stance, period)
+    end = response.trajectory.points[-1].time_from_start
+    final = started + period + end.sec * 1_000_000_000 + end.nanosec  # the final setpoint's
+    while not all(_stamp(probe.setpoints[name][-1]) >= final for name in probe.names):
+        _advance(probe, stance, period)
+    for _ in range(probe.lookahead - 1):  # the stream ends at the state before the final's
+        _advance(probe, stance, period)
     _assert_holding(probe, goal, period)  # tracking throughout: the end of the stream
     probe.command_mode('hold')
     moved = stance + np.array([-0.01, 0.0, 0.0, 0.0, 0.02])  # the arm drifted meanwhile
@@ -315,7 +362,7 @@ def test_follow_trajectory_streams_with_feedback_and_cancel_holds(graph, context
     assert probe.spin_until(sent.done)
     handle = sent.result()
     assert handle.accepted
-    assert probe.spin_until(lambda: probe.count() >= 1)
+    assert probe.spin_until(lambda: probe.count() >= probe.lookahead)  # sent at once
     # a second goal while this one streams is refused, and so is executing a plan
     second = probe.follow.send_goal_async(probe.Goal(trajectory=planned.trajectory))
     assert probe.spin_until(second.done)
@@ -399,7 +446,7 @@ def test_stop_trajectory_ends_a_stream_started_by_the_service(graph, context, st
                          start=stance.tolist(), goal=(stance + 0.05).tolist(), duration=1.0,
                          execute=True)
     assert started.success, started.message
-    assert probe.spin_until(lambda: probe.count() >= 1)
+    assert probe.spin_until(lambda: probe.count() >= probe.lookahead)  # sent at once
     for _ in range(3):
         probe.step(stance, period)
     count = probe.count()

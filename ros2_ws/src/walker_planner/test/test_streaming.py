@@ -151,3 +151,40 @@ def test_the_tracking_error_compares_a_state_with_the_setpoint_for_its_stamp():
     stream = SetpointStream(trajectory, start=0, period=2 * MS)
     # trajectory time 0.5 s applies at 0.5 s + one period
     assert stream.tracking_error(502 * MS, np.full(5, 0.45)) == pytest.approx(0.05)
+
+
+def test_the_setpoints_due_reach_the_lookahead_once_each_and_end_with_the_final():
+    trajectory = SampledTrajectory.from_points(NAMES, [0.0, 0.02], [[0.0] * 5, [1.0] * 5])
+    period = 2 * MS
+    stream = SetpointStream(trajectory, start=0, period=period)
+    first = stream.due(0, None, lookahead=4)  # the stream's start: four at once
+    assert [s.stamp for s in first] == [period, 2 * period, 3 * period, 4 * period]
+    for setpoint in first:  # each the same as sent just in time, one period ahead
+        just_in_time = stream.setpoint(setpoint.stamp - period)
+        assert setpoint.time_from_start == just_in_time.time_from_start
+        np.testing.assert_array_equal(setpoint.position, just_in_time.position)
+    sent = first[-1]
+    assert [s.stamp for s in stream.due(period, sent, 4)] == [5 * period]
+    assert stream.due(period, stream.due(period, sent, 4)[-1], 4) == []  # nothing twice
+    # a planner that missed states sends what is still ahead of the newest, not the past
+    late = stream.due(8 * period, stream.setpoint_at(5 * period), 4)
+    assert [s.stamp for s in late] == [9 * period, 10 * period, 11 * period]
+    assert late[-1].final and not late[-2].final  # the end (0.02 s after origin) stops it
+    assert stream.due(9 * period, late[-1], 4) == []
+    with pytest.raises(ValueError, match='lookahead'):
+        stream.due(0, None, 0)
+
+
+def test_a_hold_after_setpoints_sent_ahead_stops_where_they_end():
+    trajectory = SampledTrajectory.from_points(NAMES, [0.0, 1.0], [[0.0] * 5, [1.0] * 5],
+                                               [[0.0] * 5, [0.0] * 5])
+    period = 2 * MS
+    stream = SetpointStream(trajectory, start=0, period=period)
+    sent = stream.due(100 * period, stream.setpoint_at(100 * period), 4)[-1]
+    hold = stream.hold(100 * period, sent)
+    assert hold.stamp == sent.stamp + period  # after the last sent: no jump back
+    np.testing.assert_array_equal(hold.position, sent.position)
+    np.testing.assert_array_equal(hold.velocity, 0.0)
+    assert hold.final
+    # sent just in time (a lookahead of one), the hold applies at the next state
+    assert stream.hold(100 * period, stream.setpoint(99 * period)).stamp == 101 * period

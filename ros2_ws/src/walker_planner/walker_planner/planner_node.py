@@ -113,6 +113,7 @@ class PlannerNode(Node):
         # [rad] held at rest while the controllers track with no stream: the last position
         # streamed, or where the joints were when they went back to tracking
         self._holding: np.ndarray | None = None
+        self._hold_sent: int | None = None  # [ns] stamp of the newest hold setpoint sent
         self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
         self._reserved = False
         self._measured: tuple[int, np.ndarray] | None = None
@@ -213,7 +214,7 @@ class PlannerNode(Node):
                                      / self._planner.stream.feedback_rate))
                 if active.ticks // every > active.fed_back // every:  # a multiple was passed
                     active.fed_back = active.ticks
-                    feedback = self._feedback(active, active.last)
+                    feedback = self._feedback(active)
         if feedback is not None:
             active.goal_handle.publish_feedback(feedback)
         for stream in ended:
@@ -284,6 +285,7 @@ class PlannerNode(Node):
                 # joints are, as the controllers do, not where the last stream left its
                 # setpoints; a stream cut short (a fault, a hold) may have left them far away
                 self._holding = np.array(self._measured[1])
+                self._hold_sent = None  # from the next state on, over any sent before
             self._tracking = tracking
 
     # ------------------------------------------------------------------ planning service
@@ -404,15 +406,18 @@ class PlannerNode(Node):
         self._active = _ActiveStream(stream, goal_handle)
         message.header.stamp = to_time(stream.origin)
         self._plan_publisher.publish(message)
-        self._publish(self._active, stream.setpoint(now))
+        self._send_due(self._active, now)
         return ''
 
     def _stream_tick(self, now: int) -> None:
-        """Send the setpoints of the period after the state stamped ``now`` [ns].
+        """Send the setpoints due at the state stamped ``now`` [ns].
 
         The stream runs on the plant's state stream (one state per control period, in real
-        time and in sim time alike), so a setpoint is always stamped one period after the
-        state it follows and is in place before the state it applies to.
+        time and in sim time alike): every setpoint not sent yet up to
+        ``planner.stream.lookahead`` periods after ``now``, each stamped with the time it
+        applies, so that it is in place before the state it applies to. The stream ends (its
+        goal succeeds) at the state one period before its final setpoint, as it would with
+        each setpoint sent just in time.
         """
         active = self._active
         if active is None:
@@ -425,10 +430,13 @@ class PlannerNode(Node):
         if active.cancelled:
             self._finish(active, active.stream.hold(now, active.last))
             return
-        setpoint = active.stream.setpoint(now)
-        self._publish(active, setpoint)
-        if setpoint.final:
+        self._send_due(active, now)
+        if active.last.final and now + self._period_ns >= active.last.stamp:
             self._finish(active, None)
+
+    def _send_due(self, active: _ActiveStream, now: int) -> None:
+        for setpoint in active.stream.due(now, active.last, self._planner.stream.lookahead):
+            self._publish(active, setpoint)
 
     def _publish(self, active: _ActiveStream, setpoint) -> None:
         self._send(setpoint.stamp, setpoint.position.tolist(), setpoint.velocity.tolist(),
@@ -451,12 +459,15 @@ class PlannerNode(Node):
             command.acceleration = accelerations[j]
             self._setpoint_publishers[name].publish(command)
 
-    def _feedback(self, active: _ActiveStream, setpoint) -> FollowTrajectory.Feedback:
-        duration = active.stream.trajectory.duration
+    def _feedback(self, active: _ActiveStream) -> FollowTrajectory.Feedback:
+        """Where the stream is (lock held): at the setpoint of the state after the newest."""
+        stream = active.stream
+        duration = stream.trajectory.duration
+        elapsed = min(duration, max(0.0, stream.trajectory_time(
+            self._measured[0] + self._period_ns))) if self._measured else 0.0
         return FollowTrajectory.Feedback(
-            time_from_start=setpoint.time_from_start,
-            fraction=min(1.0, setpoint.time_from_start / duration) if duration else 1.0,
-            max_position_error=self._tracking_error(active.stream))
+            time_from_start=elapsed, fraction=min(1.0, elapsed / duration) if duration else 1.0,
+            max_position_error=self._tracking_error(stream))
 
     def _finish(self, active: _ActiveStream, hold) -> None:
         """End the stream (lock held) and wake the waiter.
@@ -468,13 +479,20 @@ class PlannerNode(Node):
         if hold is not None:
             self._publish(active, hold)
         self._holding = None if active.last is None else np.array(active.last.position)
+        self._hold_sent = None if active.last is None else active.last.stamp
         self._active = None
         active.ended = True
         self._ended.append(active)
 
     def _publish_hold(self, position: np.ndarray, now: int) -> None:
+        """Send the hold's setpoints not sent yet, up to the lookahead after ``now`` [ns]."""
         zeros = [0.0] * len(PHYSICAL_JOINT_NAMES)
-        self._send(now + self._period_ns, position.tolist(), zeros, zeros)
+        period = self._period_ns
+        first = now + period if self._hold_sent is None \
+            else max(now + period, self._hold_sent + period)
+        for stamp in range(first, now + self._planner.stream.lookahead * period + 1, period):
+            self._send(stamp, position.tolist(), zeros, zeros)
+            self._hold_sent = stamp
 
     def _tracking_error(self, stream: SetpointStream) -> float:
         """Largest joint error [rad] of the newest state against the stream; -1 without one."""

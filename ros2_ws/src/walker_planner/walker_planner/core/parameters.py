@@ -98,6 +98,14 @@ class StreamParameters:
         'may begin', 'rad', 0.0001, 1.0)
     feedback_rate: float = _writable(
         'rate of follow_trajectory feedback messages', 'Hz', 0.1, 1000.0)
+    lookahead: int = _writable(
+        'control periods ahead of the newest joint state up to which the stream has sent its '
+        'setpoints (each stamped with the time it applies): 1 sends each one period before '
+        'it applies; more lets the controllers answer the next states without waiting for '
+        "the planner's process (sim time) and rides out its late wake-ups (real time); a "
+        'cancel stops the motion where the setpoints already sent end; at most the '
+        "setpoint topics' depth (10), since a stream's start sends this many at once", '', 1,
+        10)
 
 
 @dataclasses.dataclass(frozen=True)

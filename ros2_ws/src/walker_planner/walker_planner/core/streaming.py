@@ -6,10 +6,18 @@ like ros2_control's joint_trajectory_controller: quintic Hermite when the points
 positions, velocities and accelerations, cubic with positions and velocities, linear with
 positions only; at the points themselves the setpoints are the points exactly.
 
-Timing: a setpoint computed at clock time ``now`` applies one control period later; it is
-stamped ``now + period`` and carries the trajectory's state at that time, measured from the
-trajectory's start ``start + period`` (``start`` is the clock time the stream began). All
-clock times are integer nanoseconds, as on the wire, so nothing drifts.
+Timing: the stream runs on the plant's states. The trajectory's time 0 applies at
+``start + period`` (``start`` is the stamp of the state the stream began on), and a setpoint
+stamped ``t`` carries the trajectory's state at ``t``; the controllers use, for each state,
+the newest setpoint stamped at or before it. At the state stamped ``now`` the stream sends
+every setpoint not sent yet up to ``now + lookahead * period`` (:meth:`SetpointStream.due`):
+with a lookahead of one period each is sent just in time, one period before it applies; with
+more, the controllers hold the setpoints of the next few states before those states exist, so
+in sim time, where the plant steps as soon as the controllers answer, the loop need not wait
+for the planner's process every period (a pipeline, not a round trip), and in real time a late
+planner is a late setpoint less often. The motion is the same either way: every setpoint is
+stamped with the time it applies. All clock times are integer nanoseconds, as on the wire, so
+nothing drifts.
 """
 
 from __future__ import annotations
@@ -270,8 +278,12 @@ class SetpointStream:
         return (int(stamp) - self.origin) / _NANOSECONDS
 
     def setpoint(self, now: int) -> Setpoint:
-        """Setpoint to publish at clock time ``now`` [ns]."""
-        stamp = int(now) + self.period
+        """Setpoint that applies one period after clock time ``now`` [ns]."""
+        return self.setpoint_at(int(now) + self.period)
+
+    def setpoint_at(self, stamp: int) -> Setpoint:
+        """Setpoint that applies at clock time ``stamp`` [ns] (the end's, after the end)."""
+        stamp = int(stamp)
         elapsed = max(self.trajectory_time(stamp), 0.0)
         final = elapsed >= self.trajectory.duration
         elapsed = min(elapsed, self.trajectory.duration)
@@ -279,11 +291,45 @@ class SetpointStream:
         return Setpoint(stamp, elapsed, sample.position, sample.velocity, sample.acceleration,
                         final)
 
-    def hold(self, now: int, last: Setpoint) -> Setpoint:
-        """Setpoint that stops at the last position sent, at rest (after a cancel)."""
+    def due(self, now: int, sent: Setpoint | None, lookahead: int) -> list[Setpoint]:
+        """Setpoints to send at the state stamped ``now`` [ns], in stamp order.
+
+        Those not sent yet (after ``sent``, the last one sent; None: none yet), from one
+        period after ``now`` (earlier ones would apply to states already answered) up to
+        ``now + lookahead * period``, ending with the final one.
+
+        Raises
+        ------
+        ValueError
+            If ``lookahead`` is not a whole number of periods >= 1.
+        """
+        if isinstance(lookahead, bool) or not isinstance(lookahead, int) or lookahead < 1:
+            raise ValueError(f'lookahead must be a whole number of periods >= 1, got '
+                             f'{lookahead!r}')
+        if sent is not None and sent.final:
+            return []
+        first = int(now) + self.period
+        if sent is not None:
+            first = max(first, sent.stamp + self.period)
+        due = []
+        for stamp in range(first, int(now) + lookahead * self.period + 1, self.period):
+            due.append(self.setpoint_at(stamp))
+            if due[-1].final:
+                break
+        return due
+
+    def hold(self, now: int, last: Setpoint | None) -> Setpoint:
+        """Setpoint that stops at the last position sent, at rest (after a cancel).
+
+        It applies one period after ``now`` [ns], or after ``last`` when that was sent further
+        ahead: the setpoints already sent are followed first (at most the lookahead), so the
+        stop is where they end, not a jump back.
+        """
+        if last is None:
+            last = self.setpoint_at(self.origin)
         zeros = np.zeros(5)
-        return Setpoint(int(now) + self.period, last.time_from_start, last.position, zeros,
-                        zeros, True)
+        stamp = max(int(now), last.stamp) + self.period
+        return Setpoint(stamp, last.time_from_start, last.position, zeros, zeros, True)
 
     def tracking_error(self, stamp: int, measured: np.ndarray) -> float:
         """Largest ``|desired - measured|`` [rad] of a state stamped ``stamp`` [ns]."""
