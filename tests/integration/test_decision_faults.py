@@ -38,11 +38,12 @@ def test_a_step_started_with_the_planner_gone_holds_and_the_simulation_runs_on(g
     A request waiting for its server to be discovered held the simulated clock, and the
     supervisor checked the wait's deadline only on its ticks, which run on that clock: the
     whole graph stood still for good (the plant silent, the walker in safe hold and no resume
-    possible). Now the request is given up on within its wall-clock deadline, the walker holds
+    possible). Now such a request does not hold the clock, it is given up on within its
+    wall-clock deadline, the walker holds
     with its base screwed in, the simulation runs on, and once the planner is back a resume
-    completes the step. (The hold's reason is the plant's joint states silent for the
-    watchdog's timeout: the clock held for the request stops them first; README, Known
-    limits.)
+    completes the step. The silence of the plant's joint states while the supervisor holds the
+    clock for its own request is no fault: taken for one, it made every resume fail while the
+    restarted planner was still being discovered.
     """
     from action_msgs.msg import GoalStatus
     from sensor_msgs.msg import JointState

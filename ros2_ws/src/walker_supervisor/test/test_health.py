@@ -134,3 +134,22 @@ def test_new_timeouts_apply_to_every_source_and_keep_what_was_heard():
     with pytest.raises(ValueError, match='trouble_grace'):
         monitor.set_timeouts(1.0, trouble_grace=-1.0)
     assert monitor.faults(12.0, include_trouble=True) == []  # nothing changed
+
+
+def test_an_excused_silence_is_no_fault_and_leaves_a_whole_timeout_after_it():
+    monitor = HealthMonitor({'plant': 0.5, 'controller': 0.5, 'heartbeat': 0.5, 'late': 0.5})
+    monitor.seen('plant', 1.0)
+    monitor.seen('controller', 1.0, 'holding: its inputs are stale')
+    monitor.seen('heartbeat', 1.0)
+    for now in (1.4, 1.8, 2.2):  # the clock held: the plant and the controller excused
+        monitor.excuse(['plant', 'controller', 'late'], now)
+    faults = monitor.faults(2.2, include_trouble=False)
+    assert [f.split(':')[0] for f in faults] == ['heartbeat', 'late']  # not excused; never heard
+    assert monitor.last_heard('plant') == 2.2
+    trouble = monitor.faults(2.6, include_trouble=True)[0]
+    assert trouble == 'controller: holding: its inputs are stale'  # the report is kept
+    assert 'plant' in [f.split(':')[0] for f in monitor.faults(2.8, include_trouble=False)]
+    monitor.excuse(['plant'], 1.0)  # an excuse never moves a source's last word back
+    assert monitor.last_heard('plant') == 2.2
+    with pytest.raises(KeyError):
+        monitor.excuse(['nobody'], 3.0)

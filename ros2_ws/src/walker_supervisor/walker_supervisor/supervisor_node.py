@@ -197,6 +197,7 @@ class SupervisorNode(TeleopServer, Node):
         # Sim time: how far the plant may run before this node has decided again (the plant
         # waits for it with sim.wait_for_decisions); gripper commands still unanswered
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
+        self._held_at: int | None = None  # [ns] ROS time this node began holding the clock
         self._decided_pub = self.create_publisher(RosClock, '~/decided_until', COMMAND_QOS) \
             if self._sim_time else None
         # gripper commands unanswered, which hold that time (for _ANSWER_WAIT at most)
@@ -564,6 +565,12 @@ class SupervisorNode(TeleopServer, Node):
         self._ask_again_if_unanswered()
         self._release_clock()
         self._sample_measurements()
+        if self._holding_the_clock():
+            # the plant waits for this node's request, and nothing its states drive speaks:
+            # no fault, and no subscription to renew (the gripper heartbeat, on the steady
+            # clock, still tells a dead plant; the hold itself is bounded by its deadlines)
+            self.health.excuse([name for name in self.health.names
+                                if name != 'plant gripper states'], self._steady_now())
         self._resubscribe_silent_sources()
         faults = [fault for fault in self.health.faults(self._steady_now(),
                                                         include_trouble=self.sequencer.busy)
@@ -690,19 +697,35 @@ class SupervisorNode(TeleopServer, Node):
         command for ``_ANSWER_WAIT`` at most: :class:`DecisionClock`), or a freed gripper waits
         for the sweep's plan: the motion it starts then begins at the same simulated time
         however long the answer takes. The plant waits for it only with
-        ``sim.wait_for_decisions``.
+        ``sim.wait_for_decisions``. A request still waiting for its server to be discovered
+        (a planner restarted: seconds on a loaded machine) does not hold it: a clock held that
+        long starved the controllers of states, and they held on stale inputs.
         """
         if self._decided_pub is None:
             return
         wall = time.monotonic()
         clock = self._decision_clock
-        busy = self._awaited is not None or bool(self._waiting_requests) \
+        busy = self._awaited is not None \
             or clock.plan_awaited(self.sequencer.awaiting_plan, wall)
-        until = clock.decided_until(self.get_clock().now().nanoseconds,
-                                    self._tick_timer.time_until_next_call(), busy, wall)
+        now = self.get_clock().now().nanoseconds
+        until = clock.decided_until(now, self._tick_timer.time_until_next_call(), busy, wall)
+        if until > now:
+            self._held_at = None
+        elif self._held_at is None:
+            self._held_at = now
         message = RosClock()
         message.clock.sec, message.clock.nanosec = divmod(until, 1_000_000_000)
         self._decided_pub.publish(message)
+
+    def _holding_the_clock(self) -> bool:
+        """Sim time: True while this node holds the clock and it has stood still since.
+
+        The plant steps no further than the time released (with ``sim.wait_for_decisions``),
+        so its joint states and the controllers' answers stop: their silence is this node's
+        doing. A clock that runs on (the plant does not wait) is not held.
+        """
+        return self._held_at is not None \
+            and self.get_clock().now().nanoseconds == self._held_at
 
     def _advance_walk(self, walk: Walk, now: float) -> None:
         """Between steps: record the step that ended, then start the next or end the walk."""

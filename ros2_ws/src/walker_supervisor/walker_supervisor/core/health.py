@@ -90,6 +90,21 @@ class HealthMonitor:
         else:
             self._trouble_since.setdefault(name, now)
 
+    def excuse(self, names, now: float) -> None:
+        """Count sources as heard at steady time ``now`` [s] without a word from them.
+
+        For a silence known to have a cause other than the source's death (in sim time, the
+        supervisor holding the clock: the plant steps no further, and nothing driven by its
+        states speaks), so that it is no fault, and the source has a whole timeout to be heard
+        again once the cause is gone. What a source reported as trouble is kept; a source never
+        heard from stays unheard.
+        """
+        for name in names:
+            if name not in self._timeouts:
+                raise KeyError(f'unknown source {name!r}')
+            if name in self._last_seen:
+                self._last_seen[name] = max(self._last_seen[name], now)
+
     def last_heard(self, name: str) -> float | None:
         """Steady time [s] ``name`` was last heard from; None if never."""
         if name not in self._timeouts:
