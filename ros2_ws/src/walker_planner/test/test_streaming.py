@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.core.errors import InvalidRequestError, LimitError
 from walker_planner.core.planning import PlanRequest, plan
-from walker_planner.core.streaming import SampledTrajectory, SetpointStream, check_start
+from walker_planner.core.streaming import (
+    SampledTrajectory, SetpointStream, check_start, stamps_due)
 
 NAMES = list(PHYSICAL_JOINT_NAMES)
 MS = 1_000_000
@@ -188,3 +189,15 @@ def test_a_hold_after_setpoints_sent_ahead_stops_where_they_end():
     assert hold.final
     # sent just in time (a lookahead of one), the hold applies at the next state
     assert stream.hold(100 * period, stream.setpoint(99 * period)).stamp == 101 * period
+
+
+def test_the_stamps_due_start_after_the_last_sent_and_one_period_after_the_state():
+    period = 2 * MS
+    assert list(stamps_due(10 * period, None, period, 3)) == [11 * period, 12 * period,
+                                                             13 * period]
+    assert list(stamps_due(11 * period, 13 * period, period, 3)) == [14 * period]
+    assert list(stamps_due(11 * period, 14 * period, period, 3)) == []  # nothing twice
+    assert list(stamps_due(20 * period, 14 * period, period, 1)) == [21 * period]  # missed
+    for bad in (0, 1.5, True):
+        with pytest.raises(ValueError, match='lookahead'):
+            stamps_due(0, None, period, bad)

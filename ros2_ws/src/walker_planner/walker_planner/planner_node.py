@@ -49,7 +49,8 @@ from walker_planner.conversions import sampled_trajectory, to_time, trajectory_m
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.planning import PlanningContext, PlanRequest, plan
-from walker_planner.core.streaming import SampledTrajectory, SetpointStream, check_start
+from walker_planner.core.streaming import (
+    SampledTrajectory, SetpointStream, check_start, stamps_due)
 
 __all__ = ['PlannerNode', 'main']
 
@@ -487,10 +488,8 @@ class PlannerNode(Node):
     def _publish_hold(self, position: np.ndarray, now: int) -> None:
         """Send the hold's setpoints not sent yet, up to the lookahead after ``now`` [ns]."""
         zeros = [0.0] * len(PHYSICAL_JOINT_NAMES)
-        period = self._period_ns
-        first = now + period if self._hold_sent is None \
-            else max(now + period, self._hold_sent + period)
-        for stamp in range(first, now + self._planner.stream.lookahead * period + 1, period):
+        for stamp in stamps_due(now, self._hold_sent, self._period_ns,
+                                self._planner.stream.lookahead):
             self._send(stamp, position.tolist(), zeros, zeros)
             self._hold_sent = stamp
 

@@ -34,7 +34,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.core.errors import InvalidRequestError, LimitError
 from walker_planner.core.trajectory import Samples, as_times
 
-__all__ = ['SampledTrajectory', 'Setpoint', 'SetpointStream', 'check_start']
+__all__ = ['SampledTrajectory', 'Setpoint', 'SetpointStream', 'check_start', 'stamps_due']
 
 _NANOSECONDS = 1_000_000_000
 
@@ -303,16 +303,11 @@ class SetpointStream:
         ValueError
             If ``lookahead`` is not a whole number of periods >= 1.
         """
-        if isinstance(lookahead, bool) or not isinstance(lookahead, int) or lookahead < 1:
-            raise ValueError(f'lookahead must be a whole number of periods >= 1, got '
-                             f'{lookahead!r}')
+        stamps = stamps_due(now, None if sent is None else sent.stamp, self.period, lookahead)
         if sent is not None and sent.final:
             return []
-        first = int(now) + self.period
-        if sent is not None:
-            first = max(first, sent.stamp + self.period)
         due = []
-        for stamp in range(first, int(now) + lookahead * self.period + 1, self.period):
+        for stamp in stamps:
             due.append(self.setpoint_at(stamp))
             if due[-1].final:
                 break
@@ -335,6 +330,27 @@ class SetpointStream:
         """Largest ``|desired - measured|`` [rad] of a state stamped ``stamp`` [ns]."""
         desired = self.trajectory.sample(max(self.trajectory_time(stamp), 0.0)).position
         return float(np.max(np.abs(desired - np.asarray(measured, dtype=float))))
+
+
+def stamps_due(now: int, sent: int | None, period: int, lookahead: int) -> range:
+    """Stamps [ns] of the setpoints to send at the state stamped ``now`` [ns].
+
+    Every period after ``sent`` (the stamp of the last one sent; None: none yet), from one
+    period after ``now`` (earlier ones would apply to states already answered) up to
+    ``now + lookahead * period``: a stream's setpoints and the holds after it alike.
+
+    Raises
+    ------
+    ValueError
+        If ``lookahead`` is not a whole number of periods >= 1.
+    """
+    if isinstance(lookahead, bool) or not isinstance(lookahead, int) or lookahead < 1:
+        raise ValueError(f'lookahead must be a whole number of periods >= 1, got '
+                         f'{lookahead!r}')
+    first = int(now) + period
+    if sent is not None:
+        first = max(first, int(sent) + period)
+    return range(first, int(now) + lookahead * period + 1, period)
 
 
 def check_start(trajectory: SampledTrajectory, measured: np.ndarray | None, tolerance: float
