@@ -72,6 +72,7 @@ class StandInPlant:
                                       self.states.append, COMMAND_QOS)
         self.stamp_ns = 1_000_000_000
         self.position = list(STANCE)
+        self.clock_pub = None
 
     def close(self):
         self.executor.shutdown()
@@ -121,6 +122,18 @@ class StandInPlant:
             if state.header.stamp.sec * 1_000_000_000 + state.header.stamp.nanosec == stamp_ns:
                 return state
         return None
+
+    def publish_clock(self, stamp_ns):
+        """Publish the simulated clock at ``stamp_ns`` on ``/clock``, as the plant does."""
+        from rosgraph_msgs.msg import Clock
+
+        if self.clock_pub is None:
+            from rclpy.qos import qos_profile_system_default
+            self.clock_pub = self.node.create_publisher(Clock, '/clock',
+                                                        qos_profile_system_default)
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = divmod(stamp_ns, 1_000_000_000)
+        self.clock_pub.publish(msg)
 
     def command(self, mode, base='a'):
         from walker_msgs.msg import ControlMode
@@ -345,6 +358,31 @@ def test_a_stopped_state_stream_is_reported_stale(ros_env, plant):
         # No more states: the controller's steady-clock watchdog reports on its own.
         assert plant.spin_until(lambda: any(s.stale and s.mode == ControlMode.HOLD
                                             for s in plant.states[count:]))
+
+
+def test_in_sim_time_a_clock_held_still_owes_no_states_and_a_running_one_does(ros_env, plant):
+    """The supervisor holds the simulated clock while it waits for an answer: no stale hold.
+
+    A controller that took that silence for a dead plant held, and stayed holding until the
+    next mode command: the step then stood still. Once the clock runs on without states, the
+    silence is stale as on the wall clock.
+    """
+    with start_controller(ros_env, '-p', 'use_sim_time:=true', timeouts=STRICT) as controller:
+        for _ in range(5):
+            plant.publish_clock(plant.stamp_ns + PERIOD_NS)
+            plant.step()
+        held = time.monotonic()
+        while time.monotonic() - held < 3.0:  # three state timeouts, the clock held still
+            plant.publish_clock(plant.stamp_ns)
+            plant.spin_until(lambda: False, timeout=0.1)
+        assert 'input stale' not in controller.output, controller.output
+        running = plant.stamp_ns
+        deadline = time.monotonic() + WAIT
+        while 'no joint state' not in controller.output and time.monotonic() < deadline:
+            running += PERIOD_NS  # the clock runs, no state comes
+            plant.publish_clock(running)
+            plant.spin_until(lambda: False, timeout=0.05)
+        assert 'input stale: no joint state' in controller.output, controller.output
 
 
 def _subscriptions_of_controller(plant, topic):

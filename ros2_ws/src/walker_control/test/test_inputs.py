@@ -148,6 +148,38 @@ def test_watchdog_watches_setpoints_only_when_expected_and_after_the_first():
     assert not watchdog.check(6.0).any
 
 
+def test_in_sim_time_a_silence_counts_only_once_the_clock_runs():
+    """A clock held still (the supervisor waiting for an answer) owes no states or setpoints.
+
+    The steady silence is the same in each case: the clock decides. On the wall clock (no
+    clock given) the steady silence alone counts.
+    """
+    T = 0.002
+    watchdog = InputWatchdog(state_timeout=0.5, setpoint_timeout=0.5, clock_slack=2 * T)
+    watchdog.expect_setpoints(True)
+    watchdog.state_received(10.0, stamp=4.0)
+    watchdog.setpoint_received(10.0)  # came with the state stamped 4 s
+    assert not watchdog.check(12.0, clock=4.0).any  # held at the state's time
+    assert not watchdog.check(12.0, clock=4.0 + 2 * T).any  # within the slack
+    stale = watchdog.check(12.0, clock=4.0 + 3 * T)  # the clock runs: nothing came
+    assert stale.state and stale.setpoint
+    assert watchdog.check(12.0).state and watchdog.check(12.0).setpoint  # wall clock
+    assert not watchdog.check(10.4, clock=5.0).any  # the clock ran, not the steady timeout
+
+
+def test_in_sim_time_setpoints_silent_while_states_come_are_stale():
+    """A planner gone while the plant steps: the states are fresh, the setpoints are not."""
+    T = 0.002
+    watchdog = InputWatchdog(state_timeout=0.5, setpoint_timeout=0.5, clock_slack=2 * T)
+    watchdog.expect_setpoints(True)
+    watchdog.state_received(10.0, stamp=4.0)
+    watchdog.setpoint_received(10.0)
+    for k in range(1, 4):  # a state every 0.3 s: each waited for its setpoint in vain
+        watchdog.state_received(10.0 + 0.3 * k, stamp=4.0 + k * T)
+    stale = watchdog.check(10.9, clock=4.0 + 3 * T)
+    assert stale.setpoint and not stale.state and 'no setpoint' in stale.reason
+
+
 def test_a_setpoint_too_old_for_the_state_is_stale_by_stamps():
     watchdog = InputWatchdog(state_timeout=0.2, setpoint_timeout=0.1)
     assert watchdog.setpoint_lag(10.05, 10.0) == ''

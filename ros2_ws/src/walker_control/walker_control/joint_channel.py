@@ -40,6 +40,9 @@ STATE_QOS = SENSOR_QOS
 # (re-matching would lengthen the stall) while a walker held on a silent input has a fresh
 # subscription by the time it is resumed.
 RESUBSCRIBE_AFTER_TIMEOUTS = 4.0
+# In sim time an input's silence counts only once the simulated clock has run this many
+# control periods past its last message (InputWatchdog): a clock held still owes nothing.
+CLOCK_SLACK_PERIODS = 2
 
 
 def seconds(stamp) -> float:
@@ -61,6 +64,9 @@ class JointChannel:
         The node's validated settings.
     steady_now : callable
         Steady-clock time [s].
+    clock_now : callable
+        The ROS clock's time [s] in sim time, None on the wall clock (see
+        :class:`~walker_control.core.inputs.InputWatchdog`).
     log_prefix : str
         Put before this channel's log lines (the joint's name in a node of several joints).
     after_setpoint : callable, optional
@@ -69,19 +75,21 @@ class JointChannel:
     """
 
     def __init__(self, node: Node, joint: str, settings: ControllerSettings, steady_now,
-                 log_prefix: str = '', after_setpoint=None) -> None:
+                 clock_now, log_prefix: str = '', after_setpoint=None) -> None:
         self.joint = joint
         self._node = node
         self._logger = node.get_logger()
         self._prefix = log_prefix
         self._steady_now = steady_now
+        self._clock_now = clock_now
         self._settings = settings
         self.controller = JointController(settings, joint, 'a')
         self._setpoints = SetpointBuffer()
         self._pacing = StreamPacing()
         self._after_setpoint = after_setpoint
         control = settings.control
-        self.watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout)
+        self.watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout,
+                                      CLOCK_SLACK_PERIODS * settings.sample_time)
         self._setpoint_resubscription = Resubscription(
             RESUBSCRIBE_AFTER_TIMEOUTS * control.setpoint_timeout)
         self.stale = StaleInputs()
@@ -133,6 +141,7 @@ class JointChannel:
         self.controller.apply_settings(settings)
         self.watchdog.state_timeout = settings.control.state_timeout
         self.watchdog.setpoint_timeout = settings.control.setpoint_timeout
+        self.watchdog.clock_slack = CLOCK_SLACK_PERIODS * settings.sample_time
         self._setpoint_resubscription.after = \
             RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.setpoint_timeout
 
@@ -165,7 +174,7 @@ class JointChannel:
         self.watchdog.expect_setpoints(mode.tracks_setpoints)
         # Judge the inputs again now: the next states must not report a staleness that this
         # command has ended (the supervisor would take it for a fault of the motion it starts).
-        self.stale = self.watchdog.check(self._steady_now())
+        self.stale = self.watchdog.check(self._steady_now(), self._clock_now())
 
     def _on_setpoint_message(self, msg: JointCommand) -> None:
         self.on_setpoint(msg)
@@ -228,9 +237,12 @@ class JointChannel:
         self._publish_state(header, stamp, measurement, output)
         return output.effort
 
-    def check_inputs(self, now: float) -> None:
-        """Check the inputs at steady time ``now`` [s]; hold on a stale one."""
-        stale = self.watchdog.check(now)
+    def check_inputs(self, now: float, clock: float | None) -> None:
+        """Check the inputs at steady time ``now`` [s]; hold on a stale one.
+
+        ``clock``: the ROS clock [s] in sim time, None on the wall clock.
+        """
+        stale = self.watchdog.check(now, clock)
         if stale.any and not self.stale.any:
             self._logger.warning(f'{self._prefix}input stale: {stale.reason}; holding')
         elif self.stale.any and not stale.any:

@@ -107,7 +107,7 @@ class ControllerNode(Node):
         # and the acceleration that arrived with a state are taken before the state itself.
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, MODE_QOS)
         self._channels = [JointChannel(self, joint, self._settings, self._steady_now,
-                                       f'{joint}: ' if several else '',
+                                       self._sim_clock_now, f'{joint}: ' if several else '',
                                        after_setpoint=self._answer_waiting_state)
                           for joint in self._joints]
         self._state_resubscription = Resubscription(
@@ -167,6 +167,13 @@ class ControllerNode(Node):
 
     def _steady_now(self) -> float:
         return self._steady.now().nanoseconds * 1e-9
+
+    def _sim_clock_now(self) -> float | None:
+        """Return the simulated clock's time [s] with ``use_sim_time``; None on the wall clock."""
+        clock = self.get_clock()
+        if not clock.ros_time_is_active:
+            return None
+        return clock.now().nanoseconds * 1e-9
 
     def answer_plant_directly(self, effort_sink) -> None:
         """Take the plant's states by call and answer them by calling ``effort_sink``.
@@ -289,9 +296,9 @@ class ControllerNode(Node):
 
     def _on_joint_state(self, msg: JointState) -> None:
         now = self._steady_now()
-        for channel in self._channels:
-            channel.watchdog.state_received(now)
         stamp = seconds(msg.header.stamp)
+        for channel in self._channels:
+            channel.watchdog.state_received(now, stamp)
         if stamp == self._last_stamp and self._last_effort is not None:
             self._send_effort(self._last_effort)  # the plant asked again
             return
@@ -371,8 +378,9 @@ class ControllerNode(Node):
 
     def _on_watchdog(self) -> None:
         now = self._steady_now()
+        clock = self._sim_clock_now()
         for channel in self._channels:
-            channel.check_inputs(now)
+            channel.check_inputs(now, clock)
         if any(channel.stale.any for channel in self._channels):
             self._resubscribe_silent_streams(now)
         self._answer_waiting_state()

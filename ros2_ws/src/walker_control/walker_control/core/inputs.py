@@ -10,7 +10,7 @@
 * :class:`StreamPacing`: in sim time, whether a state must wait for the setpoint a stream
   paced by the states owes it, instead of carrying an older one forward.
 * :class:`InputWatchdog`: decides, on a steady clock, whether the state or setpoint stream has
-  stopped for longer than its timeout.
+  stopped for longer than its timeout; in sim time only while the simulated clock runs.
 
 Times are float seconds: stamps in the ROS time of the messages, watchdog times on a steady
 clock. Nothing here knows about ROS.
@@ -250,19 +250,34 @@ class InputWatchdog:
     ----------
     state_timeout, setpoint_timeout : float
         [s] on the steady clock.
+    clock_slack : float, optional
+        [s] of ROS time the simulated clock may run past a stream's last message before that
+        stream's silence counts (see Notes); 0 by default.
 
     Notes
     -----
     The state stream is watched from the first state on. The setpoint stream is watched only
     while a tracking mode expects it, from the first setpoint received in that mode on: before
     any setpoint the controller holds the measured position, which is not a fault.
+
+    In sim time (:meth:`check` given the ROS clock) a silence counts only once the clock has
+    also run more than ``clock_slack`` past the ROS time of the stream's last message (for a
+    state its stamp; for a setpoint the newest state's stamp when it came): a clock standing
+    still (held while the supervisor waits for an answer, or a stopped plant) owes no states,
+    and the setpoints are paced by the states. A plant that stopped is then the supervisor's to
+    name (its watchdog also hears the plant's steady heartbeat); states lost while the clock
+    runs are still stale here.
     """
 
-    def __init__(self, state_timeout: float, setpoint_timeout: float) -> None:
+    def __init__(self, state_timeout: float, setpoint_timeout: float,
+                 clock_slack: float = 0.0) -> None:
         self.state_timeout = float(state_timeout)
         self.setpoint_timeout = float(setpoint_timeout)
+        self.clock_slack = float(clock_slack)
         self._last_state: float | None = None
         self._last_setpoint: float | None = None
+        self._state_clock: float | None = None  # [s] ROS time of the last state
+        self._setpoint_clock: float | None = None  # [s] ROS time known at the last setpoint
         self._watch_setpoints = False
 
     @property
@@ -275,13 +290,16 @@ class InputWatchdog:
         """[s] Steady time of the last setpoint received while watched (None: none yet)."""
         return self._last_setpoint if self._watch_setpoints else None
 
-    def state_received(self, now: float) -> None:
-        """Note a state received at steady time ``now`` [s]."""
+    def state_received(self, now: float, stamp: float | None = None) -> None:
+        """Note a state stamped ``stamp`` [s, ROS time] received at steady time ``now`` [s]."""
         self._last_state = now
+        if stamp is not None:
+            self._state_clock = stamp
 
     def setpoint_received(self, now: float) -> None:
         """Note a setpoint received at steady time ``now`` [s]."""
         self._last_setpoint = now
+        self._setpoint_clock = self._state_clock
 
     def expect_setpoints(self, expected: bool) -> None:
         """Start (tracking mode entered) or stop watching the setpoint stream."""
@@ -289,19 +307,30 @@ class InputWatchdog:
             self._last_setpoint = None
         self._watch_setpoints = expected
 
-    def check(self, now: float) -> StaleInputs:
-        """Which streams are stale at steady time ``now`` [s]."""
+    def check(self, now: float, clock: float | None = None) -> StaleInputs:
+        """Which streams are stale at steady time ``now`` [s].
+
+        ``clock``: the ROS clock now [s], in sim time only (None on the wall clock, where the
+        steady silence alone counts).
+        """
         reasons = []
-        state = self._last_state is not None and now - self._last_state > self.state_timeout
+        state = self._silent(now, self._last_state, self.state_timeout, clock,
+                             self._state_clock)
         if state:
             reasons.append(f'no joint state for {now - self._last_state:.3f} s '
                            f'(timeout {self.state_timeout:g} s)')
-        setpoint = (self._watch_setpoints and self._last_setpoint is not None
-                    and now - self._last_setpoint > self.setpoint_timeout)
+        setpoint = self._watch_setpoints and self._silent(
+            now, self._last_setpoint, self.setpoint_timeout, clock, self._setpoint_clock)
         if setpoint:
             reasons.append(f'no setpoint for {now - self._last_setpoint:.3f} s '
                            f'(timeout {self.setpoint_timeout:g} s)')
         return StaleInputs(state=state, setpoint=setpoint, reason='; '.join(reasons))
+
+    def _silent(self, now: float, last: float | None, timeout: float, clock: float | None,
+                clock_then: float | None) -> bool:
+        if last is None or now - last <= timeout:
+            return False
+        return clock is None or clock_then is None or clock - clock_then > self.clock_slack
 
     def setpoint_lag(self, state_stamp: float, setpoint_stamp: float) -> str:
         """Why the setpoint in force is too old for a state, by stamps [s] ('' when it is not).
