@@ -165,9 +165,10 @@ def main(args: list[str] | None = None) -> int:
     code = 0
     try:
         node = LossyLinkNode()
-        # Not the events executor: destroying a publisher or subscription while it relays at
-        # the control rate can abort the process at its shutdown under that executor (a race
-        # with its event callbacks, ros2/rclpy#1644; seen once in the fault tests).
+        # The default executor: a test tool needs no speed. (Chosen when the link was seen to
+        # end in SIGABRT as it stopped under the events executor, then taken for a race with
+        # that executor's callbacks; it was a hang in the middleware's teardown that the stop
+        # escalation ended: README, Known limits.)
         spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

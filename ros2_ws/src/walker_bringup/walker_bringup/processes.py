@@ -6,7 +6,9 @@ shutdown every node handles), then SIGTERM, SIGABRT and SIGKILL to whatever is l
 removes the Fast DDS shared-memory files that killed children leave in ``/dev/shm`` (only files
 created during the run and mapped by no live process). Children run with Python's fault
 handler on, so a native crash, or a hang ended by SIGABRT, leaves each thread's stack in the
-node's log.
+node's log; before that SIGABRT the native stacks of a hung node's threads are written there too
+when ``gdb`` is on the PATH (a hang inside the middleware shows only as a Python line).
+Children write their logs in append mode, so the notes this module adds are never overwritten.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -29,6 +32,8 @@ _SHM = Path('/dev/shm')
 STOP_TIMEOUT = 10.0
 #: [s] a hung node is given to write its threads' stacks after SIGABRT, before SIGKILL.
 _ABORT_WAIT = 5.0
+#: [s] longest wait for gdb to write a hung node's native stacks
+_NATIVE_STACKS_WAIT = 30.0
 
 
 @dataclasses.dataclass
@@ -124,7 +129,12 @@ class ProcessGroup:
               append_log: bool = False) -> ManagedProcess:
         """Start a node (its installed executable, or ``command``)."""
         log_path = self.log_dir / f'{spec.name}.log'
-        with open(log_path, 'a' if append_log else 'w') as log:
+        if not append_log:
+            log_path.write_bytes(b'')
+        # Append mode: the child's writes go to the end of the file, after this module's notes
+        # (with an offset of its own, its fault handler's dump overwrote the note that a
+        # SIGABRT was sent, and the log looked like a crash of its own).
+        with open(log_path, 'a') as log:
             popen = subprocess.Popen(command or spec.command(), env=self.env, stdout=log,
                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                      start_new_session=True)
@@ -173,6 +183,8 @@ class ProcessGroup:
             if sig != signal.SIGINT:
                 self._note(process, f'--- still running {timeout:g} s after the last signal: '
                                     f'sending {sig.name} ---')
+            if sig == signal.SIGABRT:
+                self._write_native_stacks(process)
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(process.popen.pid, sig)
             try:
@@ -180,6 +192,20 @@ class ProcessGroup:
             except subprocess.TimeoutExpired:
                 continue
         return process.popen.returncode
+
+    @staticmethod
+    def _write_native_stacks(process: ManagedProcess) -> None:
+        """Append every thread's native stack of a hung process to its log (with gdb)."""
+        gdb = shutil.which('gdb')
+        if gdb is None:
+            return
+        with contextlib.suppress(OSError, subprocess.SubprocessError), \
+                open(process.log_path, 'a') as log:
+            log.write(f'--- native stacks of pid {process.popen.pid} (gdb) ---\n')
+            log.flush()
+            subprocess.run([gdb, '-p', str(process.popen.pid), '-batch', '-nx',
+                            '-ex', 'thread apply all bt'], stdout=log, stderr=subprocess.STDOUT,
+                           stdin=subprocess.DEVNULL, timeout=_NATIVE_STACKS_WAIT, check=False)
 
     @staticmethod
     def _note(process: ManagedProcess, line: str) -> None:
