@@ -13,7 +13,7 @@ No control math here: the channel converts messages and calls the core.
 
 from __future__ import annotations
 
-from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 
@@ -105,10 +105,17 @@ class JointChannel:
 
     # ------------------------------------------------------------------------- settings
     def subscribe_setpoints(self):
-        """Subscribe to ``controllers/<joint>/setpoint`` (the node keeps the order)."""
+        """Subscribe to ``controllers/<joint>/setpoint`` (the node keeps the order).
+
+        Without QoS event handlers: the subscription is made anew while the node spins (see
+        :meth:`setpoint_resubscription_due`), and destroying one that has handlers under the
+        events executor is an open crash report (ros2/rclpy#1644). A publisher of incompatible
+        QoS is still warned of on its own side.
+        """
         self._setpoint_sub = self._node.create_subscription(
             JointCommand, f'controllers/{self.joint}/setpoint', self._on_setpoint_message,
-            COMMAND_QOS)
+            COMMAND_QOS,
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         return self._setpoint_sub
 
     def take_setpoints(self) -> None:
