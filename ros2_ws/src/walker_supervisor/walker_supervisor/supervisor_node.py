@@ -101,6 +101,9 @@ _MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMod
 #: state changes and when a motion ends: the step goes on without waiting up to a period
 #: (about 50 ms a step in sim time, measured from the bag of a walk).
 TICK_PERIOD = 0.02
+# The sources the watchdog names after the plant's streams (a controller's: 'controller <joint>')
+_PLANT_JOINT_STATES = 'plant joint states'
+_PLANT_GRIPPER_STATES = 'plant gripper states'
 _FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
 _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
 #: [s] (wall) a plan or follow request the planner has not answered this long is sent again,
@@ -212,8 +215,8 @@ class SupervisorNode(TeleopServer, Node):
             joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
                                            _CONTROLLER_STATES)
             for joint in PHYSICAL_JOINT_NAMES}
-        self.health = HealthMonitor({'plant joint states': timeout,
-                                     'plant gripper states': timeout,
+        self.health = HealthMonitor({_PLANT_JOINT_STATES: timeout,
+                                     _PLANT_GRIPPER_STATES: timeout,
                                      **{f'controller {j}': timeout
                                         for j in PHYSICAL_JOINT_NAMES}},
                                     trouble_grace=timeout)
@@ -285,7 +288,7 @@ class SupervisorNode(TeleopServer, Node):
                                         self._on_gripper_states, LATCHED_QOS)
 
     def _on_gripper_states(self, msg: GripperStates) -> None:
-        self.health.seen('plant gripper states', self._steady_now())
+        self.health.seen(_PLANT_GRIPPER_STATES, self._steady_now())
         first = not self._grippers
         before = dict(self._grippers)
         for state in msg.grippers:
@@ -512,7 +515,7 @@ class SupervisorNode(TeleopServer, Node):
         now = self._steady_now()
         states = self._sampler.take(self._joint_states)
         if states:
-            self.health.seen('plant joint states', now)
+            self.health.seen(_PLANT_JOINT_STATES, now)
             self._on_joint_states(states[-1])
         for pose in self._sampler.take(self._tip_poses):
             self._on_tip_pose(pose)
@@ -570,7 +573,7 @@ class SupervisorNode(TeleopServer, Node):
             # no fault, and no subscription to renew (the gripper heartbeat, on the steady
             # clock, still tells a dead plant; the hold itself is bounded by its deadlines)
             self.health.excuse([name for name in self.health.names
-                                if name != 'plant gripper states'], self._steady_now())
+                                if name != _PLANT_GRIPPER_STATES], self._steady_now())
         self._resubscribe_silent_sources()
         faults = [fault for fault in self.health.faults(self._steady_now(),
                                                         include_trouble=self.sequencer.busy)
@@ -607,9 +610,9 @@ class SupervisorNode(TeleopServer, Node):
             last_heard = self.health.last_heard(name)
             if not resubscription.due(now, last_heard):
                 continue
-            if name == 'plant joint states':
+            if name == _PLANT_JOINT_STATES:
                 self._joint_states = self._sampler.renew(self._joint_states)
-            elif name == 'plant gripper states':
+            elif name == _PLANT_GRIPPER_STATES:
                 self.destroy_subscription(self._gripper_states)
                 self._gripper_states = self._subscribe_gripper_states()
             else:
@@ -879,7 +882,7 @@ class SupervisorNode(TeleopServer, Node):
         attached in a gripper state heard within the watchdog timeout.
         """
         other = 'b' if gripper == 'a' else 'a'
-        fresh = not any(f.startswith('plant gripper states')
+        fresh = not any(f.startswith(_PLANT_GRIPPER_STATES)
                         for f in self.health.faults(self._steady_now(), False))
         if not fresh:
             return 'interlock: the gripper states are not fresh'
