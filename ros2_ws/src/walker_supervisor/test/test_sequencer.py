@@ -247,6 +247,12 @@ def test_with_a_sweep_lead_the_sweep_streams_with_the_lift_and_the_step_is_that_
     assert joined[0].then.purpose == 'coarse' and joined[0].lead == lead
     assert joined[0].mode == 'coarse'  # commanded as the stream begins: Ka as the sweep does
     assert 'coarse' not in [c.purpose for c in requests]
+    # both were asked for ahead as they stream, so both plans are taken and can be joined
+    # ahead: the lift is not planned again as its gripper comes free
+    prepared = [c.request for c in world.log if isinstance(c, PrepareTrajectory)]
+    assert [r.purpose for r in prepared] == ['extraction', 'coarse', 'insertion']
+    assert prepared[0].then.same_motion(prepared[1]) and prepared[0].lead == lead
+    assert joined[0].same_motion(prepared[0]) and joined[0].then.same_motion(prepared[1])
     # the sweep moved while the phase was still EXTRACTION; COARSE from the lift's end
     assert any(phase == Phase.EXTRACTION and sweep > 0 for _, phase, _, sweep in world.joined)
     assert all(lift == 1.0 for _, phase, lift, _ in world.joined if phase == Phase.COARSE)
@@ -262,6 +268,27 @@ def test_with_a_sweep_lead_the_sweep_streams_with_the_lift_and_the_step_is_that_
     assert separate.success, separate.message
     assert outcome.duration == pytest.approx(separate.duration - lead, abs=2 * DT + 1e-9)
     assert outcome.insertion_error <= SUPERVISOR.insertion_alignment
+
+
+def test_a_motion_asked_ahead_serves_its_request_whatever_mode_and_company_it_streams_in():
+    """The plan depends on the motion alone, not on the controller mode or what streams
+    with it: a lift asked ahead serves the lift streamed alone (the sweep's plan refused) as
+    well as the lift streamed with the sweep; another motion it does not serve."""
+    step = possible_steps(TRUSS, START)[0]
+    world = _leading_world(0.3, coarse_plan_delay=math.inf)
+    assert world.run_step(step).success
+    prepared = next(c.request for c in world.log if isinstance(c, PrepareTrajectory))
+    lift = next(c for c in world.log if isinstance(c, TrajectoryRequest))
+    assert prepared.then is not None and prepared.mode == 'coarse'
+    assert lift.purpose == 'extraction' and lift.then is None and lift.mode == 'fine'
+    assert lift.same_motion(prepared) and prepared.same_motion(lift)
+    lower = dataclasses.replace(lift, goal_point=lift.goal_point - [0.0, 0.0, 1e-3])
+    assert not lower.same_motion(prepared)
+    assert not dataclasses.replace(lift, purpose='retry_lift').same_motion(prepared)
+    without = World()
+    assert without.run_step(step).success
+    alone = next(c.request for c in without.log if isinstance(c, PrepareTrajectory))
+    assert alone.then is None  # no sweep_lead: the lift is asked for alone
 
 
 def _lift_start(world):

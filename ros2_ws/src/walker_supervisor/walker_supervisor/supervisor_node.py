@@ -32,6 +32,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock as RosClock
 from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
 from std_srvs.srv import Trigger
 from walker_msgs.action import FollowTrajectory, Step, WalkTo
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -64,6 +65,7 @@ from walker_supervisor.core.sequencer import (
 from walker_supervisor.core.step_geometry import (
     BaseFrame, StepTargets, measure_step_targets, recovery_targets)
 from walker_supervisor.core.walk import VibrationMeter, Walk
+from walker_supervisor.prepared_motions import PreparedMotions, stream_lead
 from walker_supervisor.step_state import (
     clear_step_state, read_step_state, step_state_path, write_step_state)
 from walker_supervisor.teleop_server import TeleopServer
@@ -183,9 +185,8 @@ class SupervisorNode(TeleopServer, Node):
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
         # the planner request waiting for its answer: (deadline, service, future, send again)
         self._awaited: tuple[float, str, object, object] | None = None
-        # motions planned ahead (PrepareTrajectory), each with its plan_trajectory answer
-        self._prepared: list[tuple[TrajectoryRequest, object]] = []
-        self._prepared_batch = 0  # counts the clearings of _prepared: older answers are stale
+        # motions planned ahead (PrepareTrajectory), with their plan_trajectory answers
+        self._prepared = PreparedMotions(_join)
         self.stop_client = self.create_client(Trigger, 'stop_trajectory')
         self.step_server = ActionServer(
             self, Step, 'step', execute_callback=self._execute_step,
@@ -747,7 +748,6 @@ class SupervisorNode(TeleopServer, Node):
             return
         step = walk.next_step()
         self._prepared.clear()
-        self._prepared_batch += 1
         try:
             targets = self._measure_targets(step, self._theta_roles())
             commands = self.sequencer.start(step, targets, now, dict(self._grippers),
@@ -963,7 +963,7 @@ class SupervisorNode(TeleopServer, Node):
 
     def _plan(self, request: TrajectoryRequest):
         """Return the planner's answer (future) to a motion: the one asked ahead, or a new one."""
-        return self._take_prepared(request) \
+        return self._prepared.take(request) \
             or self.plan_client.call_async(plan_request(request, self.kinematics))
 
     def _prepare_trajectory(self, request: TrajectoryRequest) -> None:
@@ -972,9 +972,9 @@ class SupervisorNode(TeleopServer, Node):
             self.sequencer.motion_not_planned(request.purpose)
             return
         future = self.plan_client.call_async(plan_request(request, self.kinematics))
-        batch = self._prepared_batch
+        batch = self._prepared.batch
         future.add_done_callback(lambda f: self._on_prepared(f, request, batch))
-        self._prepared.append((request, future))
+        self._prepared.add(request, future)
 
     def _on_prepared(self, future, request: TrajectoryRequest, batch: int) -> None:
         """Tell the sequencer a motion asked ahead is planned (or will not be).
@@ -982,7 +982,7 @@ class SupervisorNode(TeleopServer, Node):
         A freed gripper waiting for it lifts now, not at the next tick (in sim time the clock
         is held while it waits).
         """
-        if batch != self._prepared_batch:
+        if batch != self._prepared.batch:
             return  # asked for a step since ended or cancelled
         try:
             response = future.result()
@@ -991,24 +991,11 @@ class SupervisorNode(TeleopServer, Node):
         waiting = self.sequencer.awaiting_plan
         if response is not None and response.success:
             self.sequencer.motion_planned(request.purpose, response.duration)
+            self._prepared.join_ahead()
         else:
             self.sequencer.motion_not_planned(request.purpose)
         if waiting:
             self._tick()
-
-    def _take_prepared(self, request: TrajectoryRequest):
-        """Return the planner's answer (future) to the same motion asked ahead, once; else None.
-
-        An answer that came back unsuccessful is not taken: the motion is planned afresh.
-        """
-        for entry in self._prepared:
-            prepared, future = entry
-            if prepared.same_motion(request):
-                self._prepared.remove(entry)
-                failed = future.done() and (future.result() is None
-                                            or not future.result().success)
-                return None if failed else future
-        return None
 
     def _when_ready(self, ready, send, unavailable) -> None:
         """Send a request now, or once its server is discovered (within _SERVER_WAIT s)."""
@@ -1090,15 +1077,15 @@ class SupervisorNode(TeleopServer, Node):
         trajectory, duration, first_duration = response.trajectory, response.duration, None
         if request.then is not None:
             following = answers[1][1]
-            lead = min(request.lead, response.duration, following.duration)
             try:
-                trajectory = chained_message(response.trajectory, following.trajectory, lead)
+                trajectory = self._prepared.joined(response, following, request.lead)
             except PlanningError as error:
                 self._planning_failed(request, f'it cannot stream with the {request.then.purpose} '
                                       f'motion: {error}')
                 return
             first_duration = response.duration
-            duration = response.duration + following.duration - lead
+            duration = response.duration + following.duration - stream_lead(
+                response, following, request.lead)
         goal = FollowTrajectory.Goal(trajectory=trajectory)
         self._publish_mode(request.mode, request.base_gripper)  # clears a latched hold
 
@@ -1161,7 +1148,6 @@ class SupervisorNode(TeleopServer, Node):
         self._trajectory_generation += 1
         self._awaited = None
         self._prepared.clear()
-        self._prepared_batch += 1
         if self._follow_handle is not None:
             self._follow_handle.cancel_goal_async()
             self._follow_handle = None
@@ -1267,6 +1253,16 @@ class SupervisorNode(TeleopServer, Node):
             feedback = Step.Feedback(phase=int(self.sequencer.phase),
                                      tip_position_error=float(error))
         handle.publish_feedback(feedback)
+
+
+def _join(first, second, lead: float) -> JointTrajectory:
+    """Return two ``plan_trajectory`` answers as one trajectory.
+
+    The second starts ``lead`` [s] before the first ends, within both
+    (:func:`walker_planner.conversions.chained_message`).
+    """
+    return chained_message(first.trajectory, second.trajectory,
+                           stream_lead(first, second, lead))
 
 
 def main(args: list[str] | None = None) -> None:

@@ -227,7 +227,8 @@ class TrajectoryRequest:
         The base during the motion.
     mode : str
         Controller mode for the motion ('coarse' or 'fine'), commanded again just before it
-        streams: a controller that latched a hold (a stale input) tracks again.
+        streams: a controller that latched a hold (a stale input) tracks again. Not part of
+        :meth:`same_motion`: the plan does not depend on it.
     then : TrajectoryRequest or None
         A motion streamed with this one, as one trajectory: it starts ``lead`` [s] before
         this one ends, and over the overlap the two motions add (the lift and the sweep,
@@ -248,9 +249,12 @@ class TrajectoryRequest:
     lead: float = 0.0
 
     def same_motion(self, other: 'TrajectoryRequest') -> bool:
-        """Return True if ``other`` asks for exactly this motion (a plan of one serves both)."""
+        """Return True if ``other`` asks for exactly this motion (a plan of one serves both).
+
+        The mode it streams in and what streams with it do not change the plan.
+        """
         return (self.purpose == other.purpose and self.base_gripper == other.base_gripper
-                and self.mode == other.mode and self.sweep == other.sweep
+                and self.sweep == other.sweep
                 and all(np.array_equal(getattr(self, name), getattr(other, name))
                         for name in ('start', 'goal', 'start_point', 'goal_point')))
 
@@ -260,7 +264,9 @@ class PrepareTrajectory:
     """Plan a trajectory that will be requested later, unchanged, so it can stream at once.
 
     Nothing streams: a later :class:`TrajectoryRequest` equal to ``request``
-    (:meth:`TrajectoryRequest.same_motion`) may use the plan; any other plans afresh.
+    (:meth:`TrajectoryRequest.same_motion`) may use the plan; any other plans afresh. With
+    ``request.then`` (prepared too, on its own), the two plans may also be joined ahead, for
+    a later request that streams them together with the same ``lead``.
     """
 
     request: TrajectoryRequest
@@ -583,12 +589,10 @@ class StepSequencer:
         self.stage = 'lifting'
         self._remeasure = None  # too late: the chain is open
         request = self._extraction_request()
-        if self.parameters.sweep_lead > 0.0 and 'coarse' in self._planned_ahead:
-            # the sweep streams with the lift, overlapping, the controllers in COARSE mode
-            # from the start (acceleration feedback on joint 1 as its sweep begins); only
-            # with the coarse motion's plan already back, so the lift does not wait for it
-            request = dataclasses.replace(request, then=self._coarse_request(),
-                                          lead=self.parameters.sweep_lead, mode='coarse')
+        if 'coarse' in self._planned_ahead:
+            # the sweep streams with the lift, overlapping; only with the coarse motion's
+            # plan already back, so the lift does not wait for it
+            request = self._lift_with_sweep(request)
         return [self._issue(request)]
 
     def _extraction_request(self) -> TrajectoryRequest:
@@ -602,10 +606,23 @@ class StepSequencer:
                              t.point_above_to, t.sweep)
 
     def _prepare(self) -> list:
-        """Plan the extraction and the coarse motion ahead: the targets are final."""
+        """Plan the extraction and the coarse motion ahead: the targets are final.
+
+        The extraction is asked for as it will stream once both plans are back: with the
+        sweep from ``sweep_lead`` before its end, so the two can be joined ahead too.
+        """
         self._planned_ahead, self._asked_ahead = set(), {'extraction', 'coarse'}
-        return [PrepareTrajectory(self._extraction_request()),
+        return [PrepareTrajectory(self._lift_with_sweep(self._extraction_request())),
                 PrepareTrajectory(self._coarse_request())]
+
+    def _lift_with_sweep(self, extraction: TrajectoryRequest) -> TrajectoryRequest:
+        """Return the extraction streamed with the coarse motion (``sweep_lead`` > 0)."""
+        if self.parameters.sweep_lead <= 0.0:
+            return extraction
+        # the controllers in COARSE mode from the start: acceleration feedback on joint 1 as
+        # its sweep begins
+        return dataclasses.replace(extraction, then=self._coarse_request(),
+                                   lead=self.parameters.sweep_lead, mode='coarse')
 
     def _measure_stance_again(self, state: str, now: float) -> list:
         """Once relaxed, with the chain still closed: the targets from the joints now."""
