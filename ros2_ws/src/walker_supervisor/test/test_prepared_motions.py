@@ -111,8 +111,10 @@ def test_a_join_ahead_serves_only_the_same_answers_and_lead():
 
 @pytest.mark.parametrize('outcome', ['refused', 'failed', 'not joinable'])
 def test_a_pair_that_cannot_be_joined_ahead_is_left_to_its_request(outcome):
-    """A refused or failed plan is not taken (it is planned afresh); a pair that does not
-    join fails when it is requested, with the reason."""
+    """A refused or failed plan is not taken (it is planned afresh).
+
+    A pair that does not join fails when it is requested, with the reason.
+    """
     joiner = Joiner(refuse=outcome == 'not joinable')
     motions = PreparedMotions(joiner)
     sweep = Pending()

@@ -271,9 +271,11 @@ def test_with_a_sweep_lead_the_sweep_streams_with_the_lift_and_the_step_is_that_
 
 
 def test_a_motion_asked_ahead_serves_its_request_whatever_mode_and_company_it_streams_in():
-    """The plan depends on the motion alone, not on the controller mode or what streams
-    with it: a lift asked ahead serves the lift streamed alone (the sweep's plan refused) as
-    well as the lift streamed with the sweep; another motion it does not serve."""
+    """The plan depends on the motion alone, not on the controller mode or what streams with it.
+
+    A lift asked ahead serves the lift streamed alone (the sweep's plan refused) as well as
+    the lift streamed with the sweep; another motion it does not serve.
+    """
     step = possible_steps(TRUSS, START)[0]
     world = _leading_world(0.3, coarse_plan_delay=math.inf)
     assert world.run_step(step).success
