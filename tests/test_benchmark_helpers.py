@@ -268,3 +268,35 @@ def _files(*counts):
 def test_the_soak_counts_only_open_files_held_for_good(counts, change):
     changes = run_benchmarks.lasting_open_files_change(_files(*counts))
     assert changes == {'/walker/recorder': change, '/walker/plant': 0}
+
+
+def _soak(ratios, tips_mm, **row):
+    steps = [dict({'from': 'n1_1', 'to': 'n2_2', 'success': True, 'duration_s': 2.73 * r,
+                   'bound_s': 2.73, 'bound_ratio': r, 'insertion_error_m': 1e-3 * tip},
+                  **row) for r, tip in zip(ratios, tips_mm, strict=True)]
+    return {'soak': {'minutes_walked': 1.0, 'steps': len(steps), 'failed_steps': 0,
+                     'safe_holds': 0, 'rss_growth_after_first_leg_bytes': {'/walker/plant': 0},
+                     'open_files_change_after_first_leg': {'/walker/plant': 0},
+                     'drift': {'duration_s': None}, 'step_rows': steps}}
+
+
+def test_the_soak_reports_each_steps_ratio_to_its_own_bound_and_the_share_within_targets():
+    ratios = [1.40] * 8 + [1.48, 1.52]
+    tips = [0.3] * 9 + [0.6]
+    rows = {r['figure']: r for r in run_benchmarks.figures(_soak(ratios, tips))}
+    ratio = rows['soak: step time / time-optimal bound (median, p90, max; steps at most 1.5)']
+    assert ratio['value'] == '1.40, 1.48, 1.52; 90 %' and ratio['met'] is False
+    tip = rows['soak: tip error at insertion (mean, max; steps under 0.5 mm)']
+    assert tip['value'] == '0.33, 0.60 mm; 90 %' and tip['met'] is False
+    within = {r['figure']: r['met'] for r in run_benchmarks.figures(_soak([1.2] * 3, [0.4] * 3))}
+    assert within['soak: step time / time-optimal bound (median, p90, max; steps at most 1.5)']
+    assert within['soak: tip error at insertion (mean, max; steps under 0.5 mm)']
+
+
+def test_a_soak_without_bounds_in_its_rows_has_no_step_time_figure():
+    """Rows of a soak written before the bounds were kept, or failed steps, give no ratio."""
+    old = _soak([1.4], [0.3])
+    del old['soak']['step_rows'][0]['bound_ratio']
+    assert not any('time-optimal bound' in r['figure'] for r in run_benchmarks.figures(old))
+    failed = _soak([1.4], [0.3], success=False)
+    assert not any('soak: tip error' in r['figure'] for r in run_benchmarks.figures(failed))
