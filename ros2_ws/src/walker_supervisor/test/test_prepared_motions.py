@@ -7,7 +7,7 @@ import pytest
 
 from walker_planner.core.errors import PlanningError
 from walker_supervisor.core.sequencer import TrajectoryRequest
-from walker_supervisor.prepared_motions import PreparedMotions, stream_lead
+from walker_supervisor.prepared_motions import PreparedMotions, plan_answer, stream_lead
 
 
 @dataclasses.dataclass
@@ -63,6 +63,12 @@ class Joiner:
         if self.refuse:
             raise PlanningError('the second motion starts 0.5 rad from where the first ends')
         return f'{first.trajectory}+{second.trajectory}@{stream_lead(first, second, lead):g}'
+
+
+def test_a_failed_call_answers_nothing():
+    assert plan_answer(Pending().fail()) is None
+    answer = Answer('lift', 0.29)
+    assert plan_answer(Pending().answer(answer)) is answer
 
 
 def test_the_lead_is_within_both_motions():

@@ -18,7 +18,15 @@ from collections.abc import Callable
 from walker_planner.core.errors import PlanningError
 from walker_supervisor.core.sequencer import TrajectoryRequest
 
-__all__ = ['PreparedMotions', 'stream_lead']
+__all__ = ['PreparedMotions', 'plan_answer', 'stream_lead']
+
+
+def plan_answer(future):
+    """Return a done ``plan_trajectory`` future's answer, or None if the call failed."""
+    try:
+        return future.result()
+    except Exception:  # a failed call is a plan that will not come
+        return None
 
 
 def stream_lead(first, second, lead: float) -> float:
@@ -62,7 +70,7 @@ class PreparedMotions:
         """
         for prepared, future in self._entries:
             if prepared.same_motion(request) and future.done():
-                response = _result(future)
+                response = plan_answer(future)
                 return response if response is not None and response.success else None
         return None
 
@@ -76,7 +84,7 @@ class PreparedMotions:
             if prepared.same_motion(request):
                 self._entries.remove(entry)
                 if future.done():
-                    response = _result(future)
+                    response = plan_answer(future)
                     if response is None or not response.success:
                         return None
                 return future
@@ -114,10 +122,3 @@ class PreparedMotions:
                 self._joined.remove(entry)
                 return entry[3]
         return self._join(first, second, lead)
-
-
-def _result(future):
-    try:
-        return future.result()
-    except Exception:  # a failed call is a plan that will not come
-        return None

@@ -65,7 +65,7 @@ from walker_supervisor.core.sequencer import (
 from walker_supervisor.core.step_geometry import (
     BaseFrame, StepTargets, measure_step_targets, recovery_targets)
 from walker_supervisor.core.walk import VibrationMeter, Walk
-from walker_supervisor.prepared_motions import PreparedMotions, stream_lead
+from walker_supervisor.prepared_motions import PreparedMotions, plan_answer, stream_lead
 from walker_supervisor.step_state import (
     clear_step_state, read_step_state, step_state_path, write_step_state)
 from walker_supervisor.teleop_server import TeleopServer
@@ -984,10 +984,7 @@ class SupervisorNode(TeleopServer, Node):
         """
         if batch != self._prepared.batch:
             return  # asked for a step since ended or cancelled
-        try:
-            response = future.result()
-        except Exception:  # a failed call is a plan that will not come
-            response = None
+        response = plan_answer(future)
         waiting = self.sequencer.awaiting_plan
         if response is not None and response.success:
             self.sequencer.motion_planned(request.purpose, response.duration)
