@@ -73,10 +73,11 @@ from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['SupervisorNode', 'main']
 
-# The phase is latched with a short history: a subscriber that matches late (a recorder
-# matching a restarted supervisor, seen to take more than a second over UDP) still receives
-# the phases it missed, a safe hold among them, and its newest message is the phase now.
-_PHASE_QOS = latched_qos(20)
+# The phase is latched with a history: a subscriber that matches late (a recorder matching a
+# supervisor restarted after a SIGKILL, seen to take from one to about 30 s over UDP, about
+# 20 phase messages of a walk in sim time) still receives the phases it missed, a safe hold
+# among them, and its newest message is the phase now. 100 messages are about five steps.
+_PHASE_QOS = latched_qos(100)
 #: [s] steady clock: least time between two mode commands re-sent to controllers that fell
 #: back to HOLD on a stall (one command serves all five)
 _TELL_MODE_AGAIN_PERIOD = 0.25
