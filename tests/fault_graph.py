@@ -18,9 +18,13 @@ from pathlib import Path
 from ros_test_support import SharedMemoryGuard, log_tails, ros_environment
 
 __all__ = ['FaultGraph', 'assert_the_bag_holds_the_faults', 'write_outcomes', 'TIMEOUT',
+           'TEST_TIMEOUT',
            'FAULT_TIMEOUT', 'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LINK_INPUT', 'LINK_OUTPUT']
 
 TIMEOUT = 300.0  # [s] of wall time for a step (or the rest of one) on a loaded 2-core machine
+#: [s] pytest's limit for a test on this graph: above its waits' own, so that a wait that is
+#: not met fails with what it waited for (the project's default limit is TIMEOUT)
+TEST_TIMEOUT = 3 * TIMEOUT
 FAULT_TIMEOUT = 60.0  # [s] wall time for a fault to be noticed and reported
 WATCHDOG = 3.0  # [s] steady clock: the supervisor's watchdog (shipped: 1 s)
 INPUT_TIMEOUTS = (('control.setpoint_timeout', '2.0'),  # [s] the controllers' (shipped: 0.5 s)
@@ -343,6 +347,18 @@ class FaultGraph:
     def count_in_log(self, name: str, text: str) -> int:
         """How often ``text`` appears in the log of the node ``name`` so far."""
         return log_tails(self.group, [name], 100_000).count(text)
+
+    def wait_step_end(self, since: float):
+        """Wait for a step started after ``since`` to end; return its last phase message.
+
+        The step has begun once EXTRACTION is seen; it ends in IDLE (completed) or SAFE_HOLD.
+        A test expecting one fails at once on the other, with its reason, instead of waiting.
+        """
+        from walker_msgs.msg import StepPhase
+
+        began = self.wait_phase_in((StepPhase.EXTRACTION,), TIMEOUT, since)
+        self.wait_phase_in((StepPhase.IDLE, StepPhase.SAFE_HOLD), TIMEOUT, began)
+        return self.last_phase
 
     def wait_phase_in(self, phases, timeout: float, since: float) -> float:
         """Wait for a phase message in ``phases`` received after ``since``; return its time."""

@@ -19,10 +19,11 @@ About 20 minutes on a 2-core machine, so it is not part of the default test run:
 
 import pytest
 
-from fault_graph import FaultGraph, assert_the_bag_holds_the_faults, write_outcomes
+from fault_graph import TEST_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults, write_outcomes
 from ros_test_support import running_graph
 
-pytestmark = [pytest.mark.integration, pytest.mark.fault_matrix]
+pytestmark = [pytest.mark.integration, pytest.mark.fault_matrix,
+              pytest.mark.timeout(TEST_TIMEOUT)]
 
 PHASES = ('EXTRACTION', 'COARSE', 'FINE', 'INSERTION')
 #: The controller killed at each phase (the suite kills the vertex one in COARSE).

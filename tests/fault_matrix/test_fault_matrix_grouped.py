@@ -14,10 +14,11 @@ About 4 minutes, so it runs with the matrix only:
 
 import pytest
 
-from fault_graph import FaultGraph, assert_the_bag_holds_the_faults, write_outcomes
+from fault_graph import TEST_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults, write_outcomes
 from ros_test_support import running_graph
 
-pytestmark = [pytest.mark.integration, pytest.mark.fault_matrix]
+pytestmark = [pytest.mark.integration, pytest.mark.fault_matrix,
+              pytest.mark.timeout(TEST_TIMEOUT)]
 
 PHASES = ('EXTRACTION', 'COARSE', 'FINE', 'INSERTION')
 

@@ -13,10 +13,10 @@ import time
 
 import pytest
 
-from fault_graph import FAULT_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults
+from fault_graph import FAULT_TIMEOUT, TEST_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults
 from ros_test_support import running_graph
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.timeout(TEST_TIMEOUT)]
 
 # [s] wall time for a SIGKILLed process's participant to leave the graph (its lease)
 PARTICIPANT_GONE = 60.0

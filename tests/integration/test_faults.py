@@ -20,10 +20,10 @@ import time
 import pytest
 
 from fault_graph import (
-    FAULT_TIMEOUT, STILL, TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults)
+    FAULT_TIMEOUT, STILL, TEST_TIMEOUT, TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults)
 from ros_test_support import running_graph
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.timeout(TEST_TIMEOUT)]
 
 
 @pytest.fixture(scope='module')
@@ -213,7 +213,8 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
     reports = len(graph.step_reports)
     started = time.monotonic()
     handle = graph.start_walk(step.to_node)
-    held = graph.wait_phase(StepPhase.SAFE_HOLD, TIMEOUT, started)
+    held = graph.wait_step_end(started)
+    assert held.phase == StepPhase.SAFE_HOLD, 'the step completed: a screw-in did not jam'
     assert f'insertion jammed {attempts} times' in held.reason, held.reason
     assert 'fouled' in held.reason, held.reason
     wrapped = graph.result(handle)
@@ -269,9 +270,7 @@ def test_a_descent_that_leaves_the_hole_axis_is_stopped_lifted_back_then_held(gr
         first_state = len(graph.gripper_states)
         started = time.monotonic()
         graph.start_walk(step.to_node)
-        moving = graph.wait_phase_in((StepPhase.EXTRACTION,), TIMEOUT, started)
-        graph.wait_phase_in((StepPhase.IDLE, StepPhase.SAFE_HOLD), TIMEOUT, moving)
-        held = graph.last_phase
+        held = graph.wait_step_end(started)
         assert held.phase == StepPhase.SAFE_HOLD, \
             f'the step completed: a descent stayed on the axis\n{graph.log_tails("supervisor")}'
         assert "left the hole's axis" in held.reason, held.reason

@@ -12,10 +12,10 @@ import time
 
 import pytest
 
-from fault_graph import FAULT_TIMEOUT, TIMEOUT, FaultGraph
+from fault_graph import FAULT_TIMEOUT, TEST_TIMEOUT, TIMEOUT, FaultGraph
 from ros_test_support import running_graph
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.timeout(TEST_TIMEOUT)]
 
 
 @pytest.fixture(scope='module')

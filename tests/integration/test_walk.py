@@ -17,9 +17,10 @@ import pytest
 from ros_test_support import (
     REPO_ROOT, isolated_domain, processes_with, ros_environment, running_graph)
 
-pytestmark = pytest.mark.integration
-
 WALK_TIMEOUT = 600.0  # [s] of wall time for a walk on a loaded 2-core machine
+
+# above the walk's own limit, so that a walk that does not end fails as itself
+pytestmark = [pytest.mark.integration, pytest.mark.timeout(WALK_TIMEOUT + 300.0)]
 
 
 class Graph:
