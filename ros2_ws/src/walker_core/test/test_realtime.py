@@ -72,14 +72,16 @@ def test_priority_0_leaves_the_scheduling_alone():
 
 
 _CHILD = """
-import os, threading, time
+import os, threading
 from walker_core.realtime import request_realtime_priority
-early = threading.Thread(target=time.sleep, args=(1.0,)); early.start()
+listed = threading.Event()  # the threads live until they have been looked at, however slow
+early = threading.Thread(target=listed.wait); early.start()
 granted, report = request_realtime_priority(7)
-late = threading.Thread(target=time.sleep, args=(0.5,)); late.start()
+late = threading.Thread(target=listed.wait); late.start()
 policies = set()
 for task in os.listdir(f'/proc/{os.getpid()}/task'):
     policies.add((os.sched_getscheduler(int(task)), os.sched_getparam(int(task)).sched_priority))
+listed.set(); early.join(); late.join()
 print(granted, sorted(policies) == [(os.SCHED_FIFO, 7)], sorted(policies) == [(os.SCHED_OTHER, 0)])
 print(report)
 """
