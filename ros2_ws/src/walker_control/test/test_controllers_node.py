@@ -175,13 +175,25 @@ def test_one_effort_message_answers_each_state_for_every_joint(ros_env, rclpy_co
 
 def test_each_joint_answers_as_its_own_controller_process_would(ros_env, stand_in):
     """Same inputs, same effort: the vertex joint in the group and in a process of its own."""
+    import time
+
     from walker_control.core.modes import Mode
+    from walker_msgs.msg import ControllerState
 
     joint = 'vertex_joint'
     with start_grouped(ros_env), start_single(ros_env, joint):
         stand_in.step()  # both discovered
         stand_in.command(int(Mode.COARSE))
-        stand_in.spin_until(lambda: False, timeout=0.5)  # the mode reaches both
+
+        def coarse_in_both() -> bool:
+            newest = {ns: [s.mode for s in stand_in.states[ns] if s.joint_name == joint][-1:]
+                      for ns in ('/grouped', '/single')}
+            return all(modes == [ControllerState.COARSE] for modes in newest.values())
+
+        deadline = time.monotonic() + WAIT
+        while not coarse_in_both():  # the mode has reached both, however loaded the machine
+            assert time.monotonic() < deadline, 'the COARSE command did not reach both'
+            stand_in.step()
         compared = 0
         for k in range(300):
             # a ramp of the vertex joint's setpoint, ten periods ahead of the state it applies
