@@ -42,7 +42,7 @@ from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from walker_core.node_parameters import declare_section
 from walker_core.parameter_schema import ParameterError
-from walker_core.spinning import TopicSampler, init_node_process
+from walker_core.spinning import TopicSampler, freeze_start_up_objects, init_node_process
 
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_writer import BagWriter
@@ -241,6 +241,7 @@ def main(args: list[str] | None = None) -> int:
         node = RecorderNode()
         executor = SingleThreadedExecutor()
         executor.add_node(node)
+        freeze_start_up_objects()
         while not stop.requested and rclpy.ok():
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
         node.drain(executor)

@@ -150,3 +150,33 @@ def test_a_sampled_subscription_made_anew_keeps_its_topic_and_receives_again(rcl
     finally:
         sampler.destroy()
         publisher_node.destroy_node()
+
+
+def test_spinning_takes_the_start_up_objects_out_of_the_collector_and_collects_the_rest(
+        monkeypatch, rclpy_context):
+    """Objects made before spinning are frozen; garbage cycles made afterwards still go."""
+    import gc
+    import weakref
+
+    class Cycle:
+        pass
+
+    made_at_start_up = [Cycle()]
+    node = Node('freeze_probe', context=rclpy_context, start_parameter_services=False,
+                enable_rosout=False)
+    monkeypatch.setattr(spinning, 'make_executor',
+                        lambda ctx: _FailingExecutor(rclpy_context, 'now'))
+    try:
+        assert any(o is made_at_start_up for o in gc.get_objects())
+        spinning.spin_nodes(node, context=rclpy_context)
+        assert gc.get_freeze_count() > 0
+        assert not any(o is made_at_start_up for o in gc.get_objects()), 'not frozen'
+        later = Cycle()
+        later.itself = later  # garbage only the cyclic collector can free
+        gone = weakref.ref(later)
+        del later
+        gc.collect()
+        assert gone() is None, 'a cycle made after the freeze was not collected'
+    finally:
+        gc.unfreeze()
+        node.destroy_node()
