@@ -179,7 +179,7 @@ class ComposedGraph:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
 
-        from walker_core.spinning import make_executor
+        from walker_core.spinning import freeze_start_up_objects, make_executor
 
         # The loop by call runs in this thread between turns of the executor, holding the
         # interpreter: the events executor's timers (a thread of their own) then fell behind
@@ -191,6 +191,7 @@ class ComposedGraph:
         for _, component, node in self.nodes:
             (default if component.default_executor else fast).add_node(node)
         self._default_executor = default
+        freeze_start_up_objects()  # as each node's own process does (walker_core.spinning)
 
         def running() -> bool:
             return rclpy.ok(context=self.context) and not stop()

@@ -1,11 +1,19 @@
 """spin_nodes: how spinning ends (in-process, no DDS traffic needed)."""
 
+import gc
 import threading
 
 import pytest
 from rclpy.node import Node
 
 from walker_core import spinning
+
+
+@pytest.fixture(autouse=True)
+def _collector_unfrozen():
+    """spin_nodes freezes what exists: give the test process its collector back afterwards."""
+    yield
+    gc.unfreeze()
 
 
 class _FailingExecutor:
@@ -155,7 +163,6 @@ def test_a_sampled_subscription_made_anew_keeps_its_topic_and_receives_again(rcl
 def test_spinning_takes_the_start_up_objects_out_of_the_collector_and_collects_the_rest(
         monkeypatch, rclpy_context):
     """Objects made before spinning are frozen; garbage cycles made afterwards still go."""
-    import gc
     import weakref
 
     class Cycle:
@@ -178,5 +185,4 @@ def test_spinning_takes_the_start_up_objects_out_of_the_collector_and_collects_t
         gc.collect()
         assert gone() is None, 'a cycle made after the freeze was not collected'
     finally:
-        gc.unfreeze()
         node.destroy_node()
