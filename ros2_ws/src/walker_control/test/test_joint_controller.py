@@ -19,10 +19,12 @@ from walker_control.core.joint_controller import (
     JointController, Measurement, MeasurementError, RoleChangeError)
 from walker_control.core.modes import Mode
 
-#: The terms of Figure 3 alone (no reference shaping, no friction feed-forward), so each term
-#: can be checked against the design; the two additions are checked on their own below.
+#: The terms of Figure 3 alone (no reference shaping, no setpoint filter, no friction
+#: feed-forward), so each term can be checked against the design; the additions are checked on
+#: their own below.
 SETTINGS = replace_in_section(load_controller_settings(),
                               {'control.filter.reference': False,
+                               'control.filter.setpoint_order': [0, 0, 0, 0, 0],
                                'control.friction_compensation.feedforward_speed': 0.0})
 #: With reference shaping and friction feed-forward on, J1-J3's compensator deadband and ramp
 #: 0.2 and 0.3 mrad, J4's 0.5 and 1 mrad: the controller as shipped.
@@ -30,6 +32,9 @@ SHAPED = replace_in_section(SETTINGS, {
     'control.filter.reference': True, 'control.friction_compensation.feedforward_speed': 0.02,
     'control.friction_compensation.deadband': [0.0002, 0.0002, 0.0002, 0.0005, 0.005],
     'control.friction_compensation.ramp': [0.0003, 0.0003, 0.0003, 0.001, 0.005]})
+#: As shipped, with J4's setpoints through J2 and J3's command filter (off by default).
+WRIST_IN_STEP = replace_in_section(SHAPED, {'control.filter.setpoint_order': [0, 0, 0, 2, 0],
+                                            'control.filter.setpoint_corner': [0, 0, 0, 24.0, 0]})
 T = SETTINGS.sample_time
 STANCE = np.array([0.0, 0.85, 1.45, 0.85, 0.0])  # physical joint angles [rad]
 
@@ -504,6 +509,71 @@ def test_shaping_runs_on_through_coarse_to_fine_and_restarts_after_a_hold():
     controller.command(Mode.FINE)
     out = controller.update(plant.measurement(), move(1500), T)
     assert abs(out.shaped_reference.position - plant.position) < 2e-3
+
+
+def _follow_on_rigid_joints(settings, joints, move, samples):
+    """Each of ``joints`` (base a) follows ``move`` alone on the frictionless rigid model."""
+    traces = []
+    for joint in joints:
+        controller = JointController(settings, joint, 'a')
+        plant = RigidJoint(joint, position=0.85, friction=False)
+        controller.command(Mode.FINE)
+        _, outputs = run(controller, plant, samples, move)
+        traces.append((np.array([out.shaped_reference.position for out in outputs]),
+                       np.array([out.reference.position for out in outputs]), plant))
+    return traces
+
+
+def test_the_wrist_keeps_step_with_joint_2_through_its_setpoint_filter():
+    """J4 (no command filter) follows a descent-like move as J2 does behind its filter.
+
+    A 34 mrad minimum-jerk move in 0.3 s (J2 and J4 in a descent): on the rigid model each
+    joint follows its shaped reference, J2 through its command filter and J4 through its
+    setpoint filter (the same design), so the two move together within a microradian. Without
+    the setpoint filter (as shipped) J4 leads J2 by its filter's delay, several milliradians
+    in mid-move.
+    """
+    move = sweep(0.85, 0.034, 0.3)
+    samples = int(0.6 / T)
+    gaps = {}
+    for name, settings in (('in step', WRIST_IN_STEP), ('shipped', SHAPED)):
+        (shaped2, _, joint2), (shaped4, received4, joint4) = _follow_on_rigid_joints(
+            settings, ('a_pitch_joint', 'b_pitch_joint'), move, samples)
+        gaps[name] = np.abs(shaped4 - shaped2).max()
+        assert received4[-1] == pytest.approx(0.85 + 0.034)  # the setpoint, as received
+        for joint in (joint2, joint4):  # both arrive
+            assert joint.position == pytest.approx(
+                0.85 + 0.034, abs=SHAPED.control.in_position_tolerance[1])
+    assert gaps['in step'] < 1e-6
+    assert gaps['shipped'] > 5e-3
+
+
+def test_the_setpoint_filter_starts_at_the_measured_joint_and_restarts_after_a_hold():
+    controller = JointController(WRIST_IN_STEP, 'b_pitch_joint', 'a')  # role J4
+    plant = RigidJoint('b_pitch_joint', position=0.85)
+    controller.command(Mode.FINE)
+    out = controller.update(plant.measurement(), Setpoint(0.9), T)
+    assert out.reference.position == 0.9
+    assert out.shaped_reference.position == pytest.approx(0.85, abs=1e-4)  # no jump
+    run(controller, plant, 1000, Setpoint(0.9))
+    assert plant.position == pytest.approx(0.9,
+                                           abs=SHAPED.control.in_position_tolerance[3])
+    controller.hold('test')
+    run(controller, plant, 10)
+    controller.command(Mode.FINE)
+    out = controller.update(plant.measurement(), Setpoint(0.95), T)
+    assert out.shaped_reference.position == pytest.approx(plant.position, abs=1e-4)
+
+
+@pytest.mark.parametrize('changes, words', [
+    ({'control.filter.setpoint_corner': [0.0, 0.0, 0.0, 0.0, 0.0]},
+     'setpoint_corner of role J4 must be > 0 rad/s when its setpoint_order is 2'),
+    ({'control.filter.setpoint_order': [0, 0, 0, 2]}, 'setpoint_order needs one value per'),
+    ({'control.filter.setpoint_order': [0, 0, 0, 9, 0]}, 'setpoint_order'),
+])
+def test_bad_setpoint_filters_are_refused(changes, words):
+    with pytest.raises(ParameterError, match=words):
+        replace_in_section(WRIST_IN_STEP, changes)
 
 
 def test_friction_feedforward_follows_the_setpoint_velocity():

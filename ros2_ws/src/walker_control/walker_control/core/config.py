@@ -110,13 +110,22 @@ class FilterSettings:
         'too, so the '
         'feedback compares the joint with the motion the filtered feed-forward produces',
         read_only=False)
+    setpoint_order: tuple[int, ...] = parameter(
+        'order of the filter (of kind control.filter.kind) that the setpoints of roles J1..J5 '
+        'pass before the controller, outside its loop (0: none)', '', 0, 8, read_only=False)
+    setpoint_corner: tuple[float, ...] = parameter(
+        'corner frequency of the setpoint filter of roles J1..J5 (ignored without one)',
+        'rad/s', 0.0, 1000.0, read_only=False)
 
     def __post_init__(self) -> None:
-        _require_five(self, 'order', 'corner')
-        for role, (order, corner) in enumerate(zip(self.order, self.corner, strict=True), 1):
-            if order > 0 and corner <= 0.0:
-                raise ValueError(f'corner of role J{role} must be > 0 rad/s with a filter of '
-                                 f'order {order}')
+        _require_five(self, 'order', 'corner', 'setpoint_order', 'setpoint_corner')
+        for what, orders, corners in (('', self.order, self.corner),
+                                      ('setpoint_', self.setpoint_order,
+                                       self.setpoint_corner)):
+            for role, (order, corner) in enumerate(zip(orders, corners, strict=True), 1):
+                if order > 0 and corner <= 0.0:
+                    raise ValueError(f'{what}corner of role J{role} must be > 0 rad/s when its '
+                                     f'{what}order is {order}')
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,6 +3,8 @@
 Structure (one sample, ``I = I_ii(q)`` the rigid-model inertia of the joint's role at the
 current configuration, eqs (9)-(13))::
 
+    theta_r, omega_r, a_r                 the setpoint; through the role's setpoint filter G
+                                          first, outside the loop, if it has one
     e   = F theta_r - theta,  de = F omega_r - omega   (reference shaped by the filter F)
     v   = I a_r + effort_r + f(omega_r)       feed-forward (rigid model, Coulomb friction)
         + I wc^2 e + integral + 2 zc wc I de  PID (integral only with Ti > 0)
@@ -18,8 +20,13 @@ section 4 and the stability check describe the loop that runs, and no part of th
 excite the structural modes that the filter is there to keep out. The feedback compares the
 joint with the setpoint shaped by the same filter (``control.filter.reference``,
 :mod:`~walker_control.core.reference_shaping`): the motion the filtered feed-forward produces,
-so the filter's delay is not an error to fight. The Coulomb friction the setpoint's velocity will
-meet is part of the feed-forward (``control.friction_compensation.feedforward_speed``,
+so the filter's delay is not an error to fight. A role without a command filter can pass its
+setpoints through a filter of their own first (``control.filter.setpoint_order`` and
+``setpoint_corner``, none as shipped), outside its loop: joint 4 (the moving wrist) through
+joints 2 and 3's command filter keeps step with them, and a Cartesian line stays straighter
+(leading them by their filters' 56-58 ms, it swings a descent 2.4 mm off the hole's axis). The Coulomb
+friction the setpoint's velocity will meet is part of the feed-forward
+(``control.friction_compensation.feedforward_speed``,
 :func:`~walker_control.core.friction_compensation.friction_feedforward`). The friction
 compensator is added after the filter: it cancels a plant nonlinearity, and the filter's delay
 (about 0.5 s for joint 1) would keep it pushing long after the error changed sign.
@@ -107,8 +114,8 @@ class ControlOutput:
     Torques in N*m, angles in rad, rates in rad/s. ``feedforward`` to ``acceleration_feedback``
     and ``transfer`` are before the filter; ``friction_compensation`` (with its transfer offset)
     and ``effort`` after it. ``reference`` is the setpoint in force as commanded;
-    ``shaped_reference`` the same after reference shaping, which ``position_error`` is measured
-    from (equal to ``reference`` when shaping is off).
+    ``shaped_reference`` the same after the role's setpoint filter and reference shaping, which
+    ``position_error`` is measured from (equal to ``reference`` when neither is on).
     """
 
     effort: float
@@ -151,6 +158,7 @@ class _RoleDesign:
     friction: tuple         # (level, deadband, ramp) of the friction compensator
     compensator: FrictionCompensator
     shaping: tuple | None   # the reference shaper's design, None without shaping
+    setpoint_filter: tuple | None  # the setpoint filter's design, None without one
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -190,6 +198,8 @@ class JointController:
         self._filter.reset_to(0.0)
         self._shaper: ReferenceShaper | None = None
         self._shaper_design: tuple | None = None
+        self._setpoint_filter: ReferenceShaper | None = None
+        self._setpoint_filter_design: tuple | None = None
         self._key: tuple[int, Mode] | None = None
         self._design: object = None
         self._hold_position = 0.0
@@ -339,11 +349,14 @@ class JointController:
                                   and (design, friction_design) != self._design)
         if transition:
             self._hold_position = measurement.position
-        if setpoint is not None and mode.tracks_setpoints:
-            commanded = setpoint
-        else:
-            commanded = Setpoint(position=self._hold_position)
         periods = self._periods(dt)
+        if setpoint is not None and mode.tracks_setpoints:
+            received = setpoint
+            commanded = self._filter_setpoint(cached.setpoint_filter, transition, measurement,
+                                              setpoint, periods)
+        else:
+            self._setpoint_filter = None
+            received = commanded = Setpoint(position=self._hold_position)
         reference = self._shape(cached.shaping, transition, measurement, commanded, periods)
 
         inertia = self._feedforward.inertia(role, configuration)
@@ -392,7 +405,7 @@ class JointController:
         else:
             self._saturation = 0.0
         output = ControlOutput(
-            effort=effort, mode=mode, role=role, reference=commanded, position_error=error,
+            effort=effort, mode=mode, role=role, reference=received, position_error=error,
             inertia=inertia, feedforward=feedforward, proportional=terms.proportional,
             integral=terms.integral, derivative=terms.derivative,
             acceleration_feedback=accel_term, transfer=self._transfer, filtered=filtered,
@@ -438,6 +451,33 @@ class JointController:
         """
         return min(_MAX_CATCH_UP_PERIODS, max(1, round(dt / self._settings.sample_time)))
 
+    def _keeps_tracking(self, transition: bool) -> bool:
+        """Return True unless this sample enters or leaves HOLD, or changes the role."""
+        return not transition or (
+            self._key is not None and self._key[0] == self.role
+            and self._key[1].tracks_setpoints and self.mode.tracks_setpoints)
+
+    def _filter_setpoint(self, design: tuple | None, transition: bool,
+                         measurement: Measurement, setpoint: Setpoint,
+                         periods: int) -> Setpoint:
+        """Return the setpoint through the role's setpoint filter, if it has one.
+
+        ``design`` is ``(order, corner, sample_time, kind)`` of ``control.filter.setpoint_*``,
+        None for a role without. The filter is outside the loop: the feed-forward and the
+        reference shaper take its output as the setpoint. It restarts at the joint's measured
+        state when tracking begins (from HOLD, on a role change) and when its design changes,
+        and advances by ``periods`` control periods, as the command filter does.
+        """
+        if design is None:
+            self._setpoint_filter = None
+            return setpoint
+        if (self._setpoint_filter is None or design != self._setpoint_filter_design
+                or not self._keeps_tracking(transition)):
+            self._setpoint_filter = ReferenceShaper(*design)
+            self._setpoint_filter.reset_to(measurement.position, measurement.velocity)
+            self._setpoint_filter_design = design
+        return self._setpoint_filter.update(setpoint, periods)
+
     def _shape(self, design: tuple | None, transition: bool, measurement: Measurement,
                commanded: Setpoint, periods: int) -> Setpoint:
         """Return the setpoint the feedback compares with: shaped by the role's filter, if on.
@@ -452,10 +492,8 @@ class JointController:
         if design is None:
             self._shaper = None
             return commanded
-        keeps_tracking = not transition or (
-            self._key is not None and self._key[0] == self.role
-            and self._key[1].tracks_setpoints and self.mode.tracks_setpoints)
-        if self._shaper is None or design != self._shaper_design or not keeps_tracking:
+        if (self._shaper is None or design != self._shaper_design
+                or not self._keeps_tracking(transition)):
             self._shaper = ReferenceShaper(*design)
             self._shaper.reset_to(measurement.position, measurement.velocity)
             self._shaper_design = design
@@ -477,10 +515,14 @@ class JointController:
             shaping = ((control.filter.order[role - 1], control.filter.corner[role - 1],
                         settings.sample_time, control.filter.kind)
                        if control.filter.reference else None)
+            setpoint_order = control.filter.setpoint_order[role - 1]
+            setpoint_filter = ((setpoint_order, control.filter.setpoint_corner[role - 1],
+                                settings.sample_time, control.filter.kind)
+                               if setpoint_order > 0 else None)
             cached = _RoleDesign(loop=loop, kp=loop.kp, ki=loop.ki, kd=loop.kd,
                                  torque_limit=drive.torque_limit, coulomb=drive.friction_torque,
                                  friction=friction, compensator=FrictionCompensator(*friction),
-                                 shaping=shaping)
+                                 shaping=shaping, setpoint_filter=setpoint_filter)
             self._role_designs[(role, mode)] = cached
         return cached
 
@@ -541,7 +583,7 @@ class JointController:
 
     def _off(self, measurement: Measurement) -> ControlOutput:
         self._filter.reset_to(0.0)
-        self._shaper = None
+        self._shaper = self._setpoint_filter = None
         self._pid.reset(0.0)
         self._transfer = self._friction_transfer = 0.0
         self._last_command = self._last_friction = 0.0
