@@ -24,8 +24,8 @@ so the filter's delay is not an error to fight. A role without a command filter 
 setpoints through a filter of their own first (``control.filter.setpoint_order`` and
 ``setpoint_corner``, none as shipped), outside its loop: joint 4 (the moving wrist) through
 joints 2 and 3's command filter keeps step with them, and a Cartesian line stays straighter
-(leading them by their filters' 56-58 ms, it swings a descent 2.4 mm off the hole's axis). The Coulomb
-friction the setpoint's velocity will meet is part of the feed-forward
+(leading them by their filters' 56-58 ms, it swings a descent 2.4 mm off the hole's axis).
+The Coulomb friction the setpoint's velocity will meet is part of the feed-forward
 (``control.friction_compensation.feedforward_speed``,
 :func:`~walker_control.core.friction_compensation.friction_feedforward`). The friction
 compensator is added after the filter: it cancels a plant nonlinearity, and the filter's delay
