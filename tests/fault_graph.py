@@ -323,7 +323,8 @@ class FaultGraph:
             # the supervisor publishes the phase a resume enters at once (a SAFE_HOLD seen
             # first would be the old hold, published again as the walk it stopped ended)
             moving = self.wait_phase_in((StepPhase.EXTRACTION, StepPhase.FINE), TIMEOUT, since)
-            self.wait_phase_in((StepPhase.IDLE, StepPhase.SAFE_HOLD), TIMEOUT, moving)
+            self.wait_phase_in((StepPhase.IDLE, StepPhase.SAFE_HOLD), TIMEOUT, moving,
+                               tails=('supervisor', 'planner'))
             if self.last_phase.phase == StepPhase.IDLE:
                 self.complete_step(step, since)
                 return attempt
@@ -360,15 +361,24 @@ class FaultGraph:
         self.wait_phase_in((StepPhase.IDLE, StepPhase.SAFE_HOLD), TIMEOUT, began)
         return self.last_phase
 
-    def wait_phase_in(self, phases, timeout: float, since: float) -> float:
-        """Wait for a phase message in ``phases`` received after ``since``; return its time."""
+    def wait_phase_in(self, phases, timeout: float, since: float, tails=()) -> float:
+        """Wait for a phase message in ``phases`` received after ``since``; return its time.
+
+        A timeout names the phase last seen and the end of the logs of the nodes in ``tails``.
+        """
         found = []
 
         def seen() -> bool:
             found[:] = [(t, m) for t, m in self.phases if t > since and m.phase in phases]
             return bool(found)
 
-        self.wait_until(seen, timeout, f'a phase in {phases}')
+        def what() -> str:
+            last = self.phases[-1][1] if self.phases else None
+            return (f'a phase in {phases} (last seen: '
+                    f'{(last.phase, last.reason) if last else None})'
+                    + (f'\n{self.log_tails(*tails)}' if tails else ''))
+
+        self.wait_until(seen, timeout, what)
         self.last_phase = found[0][1]
         return found[0][0]
 

@@ -64,6 +64,7 @@ from walker_supervisor.core.sequencer import (
     SetControlMode, StepOutcome, StepSequencer, SupervisorParameters, TrajectoryRequest)
 from walker_supervisor.core.step_geometry import (
     BaseFrame, StepTargets, measure_step_targets, recovery_targets)
+from walker_supervisor.core.unanswered import GIVE_UP, WAIT, UnansweredRequest
 from walker_supervisor.core.walk import VibrationMeter, Walk
 from walker_supervisor.prepared_motions import PreparedMotions, plan_answer, stream_lead
 from walker_supervisor.step_state import (
@@ -110,9 +111,10 @@ _PLANT_GRIPPER_STATES = 'plant gripper states'
 _FIRST_STATE_WAIT = 5.0  # [s] (wall) a goal waits this long for the first measurements
 _SERVER_WAIT = 5.0  # [s] (wall) a request waits this long for its server to be discovered
 #: [s] (wall) a plan or follow request the planner has not answered this long is sent again,
-#: over a new client: a planner restarted after a crash was seen never to answer the old
-#: client (its requests or its answers lost in discovery), while a new one was answered at once.
+#: over a new client; unanswered _ANSWER_GIVE_UP after it was first sent, its motion fails and
+#: the step holds (core.unanswered)
 _ANSWER_WAIT = 4.0
+_ANSWER_GIVE_UP = 20.0
 _WATCHDOG_PERIOD = 0.1  # [s] steady clock
 # A source silent for this many watchdog timeouts has its subscription made anew, and again as
 # often while the silence lasts (see Resubscription): the walker is in safe hold after one
@@ -184,8 +186,9 @@ class SupervisorNode(TeleopServer, Node):
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
         self.follow_client = ActionClient(self, FollowTrajectory, 'follow_trajectory')
-        # the planner request waiting for its answer: (deadline, service, future, send again)
-        self._awaited: tuple[float, str, object, object] | None = None
+        # the planner request waiting for its answer: (its sendings, service, future, send again)
+        self._awaited: tuple[UnansweredRequest, str, object, object] | None = None
+        self._sending_again: UnansweredRequest | None = None  # while a request is sent again
         # motions planned ahead (PrepareTrajectory), with their plan_trajectory answers
         self._prepared = PreparedMotions(_join)
         self.stop_client = self.create_client(Trigger, 'stop_trajectory')
@@ -1016,7 +1019,10 @@ class SupervisorNode(TeleopServer, Node):
 
     def _await_answer(self, service: str, future, send_again) -> None:
         """Watch a request to the planner; unanswered after _ANSWER_WAIT, it is sent again."""
-        self._awaited = (time.monotonic() + _ANSWER_WAIT, service, future, send_again)
+        now = time.monotonic()
+        sendings = (self._sending_again.sent_again(now) if self._sending_again is not None
+                    else UnansweredRequest(now, now, _ANSWER_WAIT, _ANSWER_GIVE_UP))
+        self._awaited = (sendings, service, future, send_again)
 
     def _answered(self, future) -> bool:
         """Return True for the answer awaited (and stop awaiting it); False for a stale one."""
@@ -1026,13 +1032,25 @@ class SupervisorNode(TeleopServer, Node):
         return True
 
     def _ask_again_if_unanswered(self) -> None:
-        """Send an unanswered planner request again, over a new client (see _ANSWER_WAIT)."""
+        """Send an unanswered planner request again, over a new client (see _ANSWER_WAIT).
+
+        Unanswered for _ANSWER_GIVE_UP since it was first sent, the motion fails instead.
+        """
         if self._awaited is None:
             return
-        deadline, service, future, send_again = self._awaited
-        if future.done() or time.monotonic() < deadline:
+        sendings, service, future, send_again = self._awaited
+        now = time.monotonic()
+        action = sendings.action(now)
+        if future.done() or action == WAIT:
             return
         self._awaited = None
+        if action == GIVE_UP:
+            reason = (f'the planner answered no {service} request in '
+                      f'{now - sendings.first_sent:.0f} s, asked again every '
+                      f'{_ANSWER_WAIT:g} s over a new connection')
+            self.get_logger().error(reason)
+            self._execute(self.sequencer.trajectory_done(False, reason, self._now()))
+            return
         self.get_logger().warning(f'no answer from the planner to {service} within '
                                   f'{_ANSWER_WAIT:g} s: asking again over a new connection')
         if service == 'plan_trajectory':
@@ -1050,7 +1068,14 @@ class SupervisorNode(TeleopServer, Node):
                 self._execute(self.sequencer.trajectory_done(
                     False, f'the planner {service} is not available', self._now()))
 
-        self._when_ready(ready, send_again, unavailable)
+        def send_again_since_first() -> None:
+            self._sending_again = sendings
+            try:
+                send_again()
+            finally:
+                self._sending_again = None
+
+        self._when_ready(ready, send_again_since_first, unavailable)
 
     def _on_planned(self, future, request: TrajectoryRequest, generation: int) -> None:
         """Stream a planned motion; with ``request.then``, both (``future`` has both answers)."""
