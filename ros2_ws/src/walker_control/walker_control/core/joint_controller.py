@@ -65,7 +65,7 @@ from walker_control.core.inputs import Setpoint
 from walker_control.core.lowpass import LowPassFilter
 from walker_control.core.modes import Mode
 from walker_control.core.pid import Pid, PidGains
-from walker_control.core.reference_shaping import ReferenceShaper
+from walker_control.core.reference_shaping import RestartingShaper
 from walker_control.core.stability import LoopDesign
 
 __all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
@@ -196,10 +196,8 @@ class JointController:
         self._pid = Pid(PidGains(0.0, 0.0, 0.0, limit, limit))
         self._filter = self._new_filter(self.role)
         self._filter.reset_to(0.0)
-        self._shaper: ReferenceShaper | None = None
-        self._shaper_design: tuple | None = None
-        self._setpoint_filter: ReferenceShaper | None = None
-        self._setpoint_filter_design: tuple | None = None
+        self._shaper = RestartingShaper()  # reference shaping (control.filter.reference)
+        self._setpoint_filter = RestartingShaper()  # control.filter.setpoint_*
         self._key: tuple[int, Mode] | None = None
         self._design: object = None
         self._hold_position = 0.0
@@ -355,7 +353,7 @@ class JointController:
             commanded = self._filter_setpoint(cached.setpoint_filter, transition, measurement,
                                               setpoint, periods)
         else:
-            self._setpoint_filter = None
+            self._setpoint_filter.stop()
             received = commanded = Setpoint(position=self._hold_position)
         reference = self._shape(cached.shaping, transition, measurement, commanded, periods)
 
@@ -372,7 +370,7 @@ class JointController:
                 cached.coulomb, commanded.velocity,
                 settings.control.friction_compensation.feedforward_speed))
         acceleration = measurement.acceleration if measurement.acceleration is not None else 0.0
-        if self._shaper is not None:  # feed back the acceleration error (reference_shaping)
+        if self._shaper.active:  # feed back the acceleration error (reference_shaping)
             acceleration -= reference.acceleration
         accel_term = acceleration_feedback_torque(design.acceleration_feedback, inertia,
                                                   acceleration)
@@ -468,15 +466,9 @@ class JointController:
         state when tracking begins (from HOLD, on a role change) and when its design changes,
         and advances by ``periods`` control periods, as the command filter does.
         """
-        if design is None:
-            self._setpoint_filter = None
-            return setpoint
-        if (self._setpoint_filter is None or design != self._setpoint_filter_design
-                or not self._keeps_tracking(transition)):
-            self._setpoint_filter = ReferenceShaper(*design)
-            self._setpoint_filter.reset_to(measurement.position, measurement.velocity)
-            self._setpoint_filter_design = design
-        return self._setpoint_filter.update(setpoint, periods)
+        return self._setpoint_filter.update(design, not self._keeps_tracking(transition),
+                                            measurement.position, measurement.velocity,
+                                            setpoint, periods)
 
     def _shape(self, design: tuple | None, transition: bool, measurement: Measurement,
                commanded: Setpoint, periods: int) -> Setpoint:
@@ -489,15 +481,9 @@ class JointController:
         filter's design changes. It advances by ``periods`` control periods (:meth:`_periods`),
         holding the setpoint over them, as the command filter does.
         """
-        if design is None:
-            self._shaper = None
-            return commanded
-        if (self._shaper is None or design != self._shaper_design
-                or not self._keeps_tracking(transition)):
-            self._shaper = ReferenceShaper(*design)
-            self._shaper.reset_to(measurement.position, measurement.velocity)
-            self._shaper_design = design
-        return self._shaper.update(commanded, periods)
+        return self._shaper.update(design, not self._keeps_tracking(transition),
+                                   measurement.position, measurement.velocity, commanded,
+                                   periods)
 
     def _role_design(self, role: int, mode: Mode) -> _RoleDesign:
         """Return the settings of ``role`` in ``mode``, derived once per settings (_RoleDesign)."""
@@ -583,7 +569,8 @@ class JointController:
 
     def _off(self, measurement: Measurement) -> ControlOutput:
         self._filter.reset_to(0.0)
-        self._shaper = self._setpoint_filter = None
+        self._shaper.stop()
+        self._setpoint_filter.stop()
         self._pid.reset(0.0)
         self._transfer = self._friction_transfer = 0.0
         self._last_command = self._last_friction = 0.0

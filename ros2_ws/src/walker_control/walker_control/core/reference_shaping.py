@@ -27,7 +27,7 @@ from __future__ import annotations
 from walker_control.core.inputs import Setpoint
 from walker_control.core.lowpass import LowPassFilter
 
-__all__ = ['ReferenceShaper']
+__all__ = ['ReferenceShaper', 'RestartingShaper']
 
 
 class ReferenceShaper:
@@ -60,3 +60,47 @@ class ReferenceShaper:
                         velocity=self._velocity.update(setpoint.velocity, samples),
                         acceleration=self._acceleration.update(setpoint.acceleration, samples),
                         effort=setpoint.effort)
+
+
+class RestartingShaper:
+    """A :class:`ReferenceShaper` of a design that may change, started at the joint's state.
+
+    The controller keeps one for its reference shaping and one for its setpoint filter. Each
+    sample it says which design is in force (None: none, the setpoint passes unchanged) and
+    whether tracking begins anew (into or out of HOLD, a role change); the shaper then restarts
+    at the measured position and velocity, as it does when the design changes.
+    """
+
+    def __init__(self) -> None:
+        self._shaper: ReferenceShaper | None = None
+        self._design: tuple | None = None
+
+    @property
+    def active(self) -> bool:
+        """True while a shaper runs (a design was in force at the last sample)."""
+        return self._shaper is not None
+
+    def stop(self) -> None:
+        """Drop the shaper: the next sample with a design starts it afresh."""
+        self._shaper = None
+
+    def update(self, design: tuple | None, restart: bool, position: float, velocity: float,
+               setpoint: Setpoint, samples: int = 1) -> Setpoint:
+        """Return ``setpoint`` shaped over ``samples`` periods by ``design``, if any.
+
+        Parameters
+        ----------
+        design : tuple or None
+            ``(order, corner, sample_time, kind)`` of the filter (:class:`ReferenceShaper`).
+        restart : bool
+            Start again at ``position`` [rad] and ``velocity`` [rad/s] even if the design is
+            the same.
+        """
+        if design is None:
+            self._shaper = None
+            return setpoint
+        if self._shaper is None or design != self._design or restart:
+            self._shaper = ReferenceShaper(*design)
+            self._shaper.reset_to(position, velocity)
+            self._design = design
+        return self._shaper.update(setpoint, samples)
