@@ -570,6 +570,9 @@ def test_the_setpoint_filter_starts_at_the_measured_joint_and_restarts_after_a_h
      'setpoint_corner of role J4 must be > 0 rad/s when its setpoint_order is 2'),
     ({'control.filter.setpoint_order': [0, 0, 0, 2]}, 'setpoint_order needs one value per'),
     ({'control.filter.setpoint_order': [0, 0, 0, 9, 0]}, 'setpoint_order'),
+    # above the 785 rad/s Nyquist frequency of a 250 Hz loop: refused, not built mid-walk
+    ({'timing.control_rate': 250.0, 'control.filter.setpoint_corner': [0, 0, 0, 900.0, 0]},
+     'setpoint_corner of role J4: filter corner 900.0 rad/s must be positive and below'),
 ])
 def test_bad_setpoint_filters_are_refused(changes, words):
     with pytest.raises(ParameterError, match=words):

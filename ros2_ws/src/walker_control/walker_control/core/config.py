@@ -35,7 +35,7 @@ from walker_core.parameter_schema import (
     ParameterError, load_parameter_file, parameter, section_from_flat)
 from walker_core.robot_parameters import (
     Drive, RobotParameters, TimingParameters, default_parameter_file)
-from walker_control.core.lowpass import FILTER_KINDS
+from walker_control.core.lowpass import FILTER_KINDS, FilterDesignError, design_lowpass_sos
 from walker_control.core.modes import GAIN_MODES, Mode
 from walker_control.core.relaxation import RelaxationDither
 from walker_control.core.stability import (
@@ -249,6 +249,14 @@ class ControllerSettings:
 
     def __post_init__(self) -> None:
         check_controller_settings(self)
+        filters = self.control.filter
+        for role, (order, corner) in enumerate(zip(filters.setpoint_order,
+                                                   filters.setpoint_corner, strict=True), 1):
+            try:  # built on a role's first tracking sample: refused here, not in the loop
+                design_lowpass_sos(order, corner, self.sample_time, filters.kind)
+            except FilterDesignError as error:
+                raise ParameterError(f'control.filter.setpoint_corner of role J{role}: '
+                                     f'{error}') from None
         relaxation = self.control.relaxation
         highest = relaxation.frequency * relaxation_frequency_factor(ROLES[-1])
         if relaxation.duration > 0.0 and highest > self.timing.control_rate / 4:
