@@ -122,6 +122,31 @@ def test_a_node_interrupted_in_a_callback_stops_in_order_without_an_error(ros_en
         assert 'Exception' not in output and 'FATAL' not in output, output
 
 
+def test_a_node_process_writes_every_threads_stack_on_sigusr1_and_spins_on(ros_env):
+    """``kill -USR1`` shows where each thread of a node stands, and the node keeps running."""
+    import subprocess
+    import sys
+    import time
+
+    from walker_core.spinning import STACK_DUMP_SIGNAL
+
+    child = subprocess.Popen([sys.executable, '-c', _BUSY_NODE], env=ros_env,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == 'ready'
+        child.send_signal(STACK_DUMP_SIGNAL)
+        time.sleep(0.5)
+        assert child.poll() is None  # it spins on
+    finally:
+        child.terminate()
+    code = child.wait(timeout=20)
+    output, errors = child.communicate()
+    assert code == 0 and 'stopped' in output, output + errors
+    # the main thread, caught in the spin loop or in the node's callback, by file and function
+    assert 'thread 0x' in errors and 'spinning.py' in errors, errors
+    assert 'in spin_nodes' in errors or 'in busy' in errors, errors
+
+
 def test_a_sampled_subscription_made_anew_keeps_its_topic_and_receives_again(rclpy_context):
     import time
 

@@ -17,6 +17,7 @@ This module imports rclpy; the rest of ``walker_core`` does not.
 
 from __future__ import annotations
 
+import faulthandler
 import gc
 import os
 import signal
@@ -31,12 +32,15 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 __all__ = ['make_executor', 'spin_nodes', 'freeze_start_up_objects', 'destroy_actions',
-           'StopSignals', 'init_node_process', 'TopicSampler', 'EXECUTOR_VARIABLE']
+           'StopSignals', 'init_node_process', 'TopicSampler', 'EXECUTOR_VARIABLE',
+           'STACK_DUMP_SIGNAL']
 
 #: Environment variable choosing the executor: ``events`` (default) or ``single``.
 EXECUTOR_VARIABLE = 'WALKER_EXECUTOR'
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before the loop checks for shutdown again
 _SHUTDOWN_GRACE = 1.0  # [s] how long an error in spinning waits for a shutdown under way
+#: The signal on which a node process writes every thread's Python stack to its stderr.
+STACK_DUMP_SIGNAL = signal.SIGUSR1
 
 
 def make_executor(context=None) -> Executor:
@@ -91,8 +95,13 @@ def init_node_process(args: list[str] | None = None, context=None) -> StopSignal
     The signal handlers are installed first, so a signal during start-up also stops the
     process as soon as it spins. Returns the :class:`StopSignals` for :func:`spin_nodes`.
     ``context``: the context to initialise (the default context when omitted).
+
+    ``SIGUSR1`` (:data:`STACK_DUMP_SIGNAL`) makes the process write the Python stack of every
+    thread to its stderr and go on (``faulthandler``, which needs no Python lock to do it): a
+    node that has stopped answering can be asked where it stands (``kill -USR1 <pid>``).
     """
     stop = StopSignals()
+    faulthandler.register(STACK_DUMP_SIGNAL, all_threads=True, chain=False)
     rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
     return stop
 
