@@ -51,11 +51,12 @@ class FaultGraph:
 
         self.params = load_walker_parameters(default_parameter_file())
         self.bag = tmp / 'bag' / 'faults'
-        env = ros_environment(domain)
-        # The graph's nodes talk over UDP on loopback only: a participant killed with SIGKILL
-        # leaves its Fast DDS shared-memory ports behind, and a node restarted in its place has
-        # been seen deaf to the graph (no control mode, no states) over shared memory.
-        env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
+        from walker_bringup.transport import udp_loopback_environment
+
+        # The graph's nodes are reached over UDP on loopback only: a participant killed with
+        # SIGKILL leaves its Fast DDS shared-memory ports behind, and a node restarted in its
+        # place has been seen deaf to the graph over them (walker_bringup.transport).
+        env = udp_loopback_environment(ros_environment(domain))
         self.specs = {spec.name: spec for spec in walker_graph(
             default_parameter_file(), sim_time=True, record=True, bag_path=self.bag,
             grouped_controllers=grouped, parameters=parameters)}
@@ -309,10 +310,12 @@ class FaultGraph:
         """Resume until the interrupted step completes, as an operator would; return how often.
 
         A node restarted a moment ago may not be matched yet with the supervisor's clients: a
-        request it never answers ends in safe hold again, and the operator resumes again.
+        request it never answers ends in safe hold again, and the operator resumes again. A
+        planner that answers none is asked where it stands (:meth:`probe`), for the failure.
         """
         from walker_msgs.msg import StepPhase
 
+        probes = []
         for attempt in range(1, attempts + 1):
             since = time.monotonic()
             answer = self.resume_when_healthy()
@@ -328,10 +331,51 @@ class FaultGraph:
             if self.last_phase.phase == StepPhase.IDLE:
                 self.complete_step(step, since)
                 return attempt
+            if 'planner answered no' in self.last_phase.reason:
+                probes.append(self.probe('planner', 'stop_trajectory')[1])
             self.client.spin_for(2.0)  # an operator's pause before trying again
         tails = self.log_tails('supervisor', 'planner')
         raise AssertionError(f'the step did not complete after {attempts} resumes: '
-                             f'{self.last_phase.reason}\n{tails}')
+                             f'{self.last_phase.reason}\n{tails}\n' + '\n'.join(probes))
+
+    def probe(self, name: str, trigger: str) -> tuple[bool, str]:
+        """Ask node ``name`` where it stands: its threads, its stacks, a call to ``trigger``.
+
+        For a node that has stopped answering: the state and kernel wait of each of its threads
+        (``/proc``), a call of its ``Trigger`` service ``trigger`` from this process's client,
+        and the Python stack of every thread, which the node writes to its log on ``SIGUSR1``.
+        Returns whether the call was answered, and the report.
+        """
+        from std_srvs.srv import Trigger
+
+        from walker_core.spinning import STACK_DUMP_SIGNAL
+
+        pid = self.processes[name].popen.pid
+        threads = []
+        for task in sorted(Path(f'/proc/{pid}/task').glob('*')):
+            try:
+                stat = (task / 'stat').read_text()
+                wchan = (task / 'wchan').read_text()
+            except OSError:
+                continue
+            comm, rest = stat[stat.index('(') + 1:stat.rindex(')')], stat[stat.rindex(')') + 2:]
+            threads.append(f'{task.name} {comm} {rest.split()[0]} {wchan}')
+        client = self.client.node.create_client(Trigger, trigger)
+        try:
+            ready = client.wait_for_service(timeout_sec=5.0)
+            future = client.call_async(Trigger.Request())
+            deadline = time.monotonic() + 5.0
+            while not future.done() and time.monotonic() < deadline:
+                self.client.spin_for(0.1)
+            answer = future.result().message if future.done() else 'no answer in 5 s'
+        finally:
+            self.client.node.destroy_client(client)
+        os.kill(pid, STACK_DUMP_SIGNAL)
+        self.client.spin_for(1.0)
+        return future.done(), (f'--- {name} (pid {pid}): {trigger} discovered {ready}, '
+                               f'answer: {answer!r}\n'
+                               f'threads (tid name state wchan): {threads}\n'
+                               f'{self.log_tails(name)}')
 
     def log_tails(self, *names: str) -> str:
         """Return the end of the named nodes' logs, for a failure message."""

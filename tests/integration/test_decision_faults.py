@@ -75,4 +75,11 @@ def test_a_step_started_with_the_planner_gone_holds_and_the_simulation_runs_on(g
     finally:
         node.destroy_subscription(subscription)
     graph.restart('planner', 'planner ready')
+    # the restarted planner is heard: it answers a call of its own, and writes where each of
+    # its threads stands on SIGUSR1 and runs on
+    answered, report = graph.probe('planner', 'stop_trajectory')
+    assert answered, report
+    graph.wait_until(lambda: graph.count_in_log('planner', 'most recent call first') > 0,
+                     FAULT_TIMEOUT,
+                     'the thread stacks of the restarted planner in its log')
     graph.resume_and_complete(step)  # the moving gripper screwed in at the step's target

@@ -1,0 +1,62 @@
+"""The UDP-on-loopback profile: selected in an environment, and taking effect in a node."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from walker_bringup.transport import (PROFILES_VARIABLE, udp_loopback_environment,
+                                      udp_loopback_profile)
+
+# A node that prints "ready" once its participant is up, then lives until its stdin closes.
+_NODE = """
+import sys
+import rclpy
+from rclpy.node import Node
+from std_msgs.msg import Float64
+rclpy.init()
+node = Node('transport_probe')
+node.create_subscription(Float64, 'probe', lambda message: None, 10)
+print('ready', flush=True)
+sys.stdin.read()
+node.destroy_node()
+rclpy.try_shutdown()
+"""
+
+
+def _receive_threads(env) -> set[str]:
+    """Return the names of the Fast DDS receive threads of a node started in ``env``.
+
+    Fast DDS names each listening thread after its transport and port: ``dds.udp.<port>``,
+    ``dds.shm.<port>`` (``dds.shm.wdog`` is the shared-memory watchdog, no port).
+    """
+    child = subprocess.Popen([sys.executable, '-c', _NODE], env=env, stdin=subprocess.PIPE,
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        assert child.stdout.readline().strip() == 'ready'
+        names = {(task / 'comm').read_text().strip()
+                 for task in Path(f'/proc/{child.pid}/task').iterdir()}
+    finally:
+        child.stdin.close()
+        child.wait(timeout=20)
+    return {name for name in names
+            if name.startswith(('dds.udp.', 'dds.shm.')) and name.split('.')[-1].isdigit()}
+
+
+def test_the_profile_is_installed_and_selected_without_replacing_another():
+    profile = udp_loopback_profile()
+    assert profile.is_file() and '127.0.0.1' in profile.read_text()
+    env = udp_loopback_environment({'ROS_DOMAIN_ID': '3'})
+    assert env == {'ROS_DOMAIN_ID': '3', PROFILES_VARIABLE: str(profile)}
+    assert udp_loopback_environment(env) == env  # selected twice: the same
+    with pytest.raises(ValueError, match=PROFILES_VARIABLE):
+        udp_loopback_environment({PROFILES_VARIABLE: '/etc/other_profiles.xml'})
+
+
+def test_a_node_with_the_profile_is_reached_over_udp_only(ros_env):
+    """Without it the node also listens on shared memory (which LOCALHOST discovery keeps on)."""
+    default = _receive_threads({k: v for k, v in ros_env.items() if k != PROFILES_VARIABLE})
+    assert any(name.startswith('dds.shm.') for name in default), default
+    chosen = _receive_threads(udp_loopback_environment(ros_env))
+    assert chosen and all(name.startswith('dds.udp.') for name in chosen), chosen

@@ -1,0 +1,47 @@
+"""The DDS transport of a graph whose nodes may be killed and started again.
+
+Fast DDS carries data between processes of one machine over shared memory by default. A process
+killed with SIGKILL leaves its shared-memory ports behind; a node started again in its place
+gets the same participant id, so the same ports, and has been seen deaf over them for minutes
+(its service discovered and matched, no request delivered). The profile installed with this
+package (``config/fastdds_udp_loopback.xml``) has every node's readers reached over UDP on
+127.0.0.1 instead, where the kernel closes a dead process's sockets. Discovery stays as
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` makes it.
+
+``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` does not do this: under the LOCALHOST discovery range
+rmw_fastrtps sets its own transports and the variable is ignored.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ['PROFILES_VARIABLE', 'udp_loopback_profile', 'udp_loopback_environment']
+
+#: The environment variable naming Fast DDS's XML profiles file (Fast DDS 2.x, ROS 2 Jazzy).
+PROFILES_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
+_PROFILE_NAME = 'fastdds_udp_loopback.xml'
+
+
+def udp_loopback_profile() -> Path:
+    """Return the installed path of the UDP-on-loopback participant profile."""
+    from ament_index_python.packages import get_package_share_directory
+
+    path = Path(get_package_share_directory('walker_bringup')) / 'config' / _PROFILE_NAME
+    if not path.is_file():
+        raise FileNotFoundError(f'the Fast DDS profile {path} is not installed')
+    return path
+
+
+def udp_loopback_environment(env: dict[str, str]) -> dict[str, str]:
+    """Return ``env`` with the UDP-on-loopback profile selected (a new dict; ``env`` is kept).
+
+    Refused when ``env`` already names another profiles file: one would silently replace the
+    other.
+    """
+    profile = str(udp_loopback_profile())
+    chosen = env.get(PROFILES_VARIABLE)
+    if chosen and chosen != profile:
+        raise ValueError(f'{PROFILES_VARIABLE} is already {chosen!r}; the UDP-on-loopback '
+                         f'profile {profile!r} would replace it')
+    return {**env, PROFILES_VARIABLE: profile}
