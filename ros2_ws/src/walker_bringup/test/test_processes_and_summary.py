@@ -127,6 +127,45 @@ def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
             os.kill(process.popen.pid, 0)
 
 
+# A child that notes (monotonic clock, shared by every process) when SIGINT came and when it
+# ended, taking a moment to stop as a node does
+_TIMED = ('import signal, sys, time\n'
+          'signal.signal(signal.SIGINT, signal.default_int_handler)\n'
+          'try:\n    print("ready", flush=True)\n    time.sleep(60)\n'
+          'except KeyboardInterrupt:\n'
+          '    print("interrupted", time.monotonic(), flush=True)\n'
+          '    time.sleep(0.3)\n'
+          '    print("ended", time.monotonic(), flush=True)\n')
+
+
+def test_stop_all_stops_one_at_a_time_deciders_and_plant_first_recorder_last(tmp_path):
+    group = ProcessGroup(tmp_path, ENV)
+    names = ['recorder', 'plant', 'controller_a_yaw', 'controller_vertex', 'planner',
+             'supervisor']
+    processes = {name: group.start(NodeSpec('p', 'e', name, '/w', 'f'), python_child(_TIMED))
+                 for name in names}
+    # a node killed and started again: its newest process is the one whose code counts
+    processes['controller_a_yaw'].popen.kill()
+    processes['controller_a_yaw'].popen.wait()
+    processes['controller_a_yaw'] = group.restart(processes['controller_a_yaw'],
+                                                  python_child(_TIMED))
+    deadline = time.monotonic() + 30.0
+    while not all(p.log_tail().count('ready') == (2 if n == 'controller_a_yaw' else 1)
+                  for n, p in processes.items()) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    codes = group.stop_all(timeout=10.0)
+    assert codes == dict.fromkeys(names, 0)
+
+    def moment(name, what):
+        line = [t for t in processes[name].log_tail(5).splitlines() if t.startswith(what)][-1]
+        return float(line.split()[1])
+    order = sorted(names, key=lambda name: moment(name, 'interrupted'))
+    assert order == ['supervisor', 'planner', 'plant', 'controller_a_yaw',
+                     'controller_vertex', 'recorder']  # newest first between first and last
+    for before, after in zip(order[:-1], order[1:], strict=True):
+        assert moment(after, 'interrupted') > moment(before, 'ended'), (before, after)
+
+
 def test_only_shared_memory_no_live_process_uses_is_stale(tmp_path, monkeypatch):
     from walker_bringup import processes
 
