@@ -607,7 +607,8 @@ def figures(results: dict) -> list[dict]:
     planner = results.get('planner')
     if planner:
         for case in planner['results']:
-            if case['case'].startswith('solve') or 'bang_bang_node' in case['case'] \
+            if case['case'].startswith(('solve', 'direct method')) \
+                    or 'bang_bang_node' in case['case'] \
                     or 'insertion' in case['case'] or 'joint_parabolic_time' in case['case'] \
                     or 'cartesian_line' in case['case']:
                 solve = case['case'].startswith('solve')

@@ -1,6 +1,11 @@
 """Fixtures of the planner's tests: the default robot, planner parameters, planning context."""
 
+import sys
+from pathlib import Path
+
 import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the tests' own helpers (shooting)
 
 from walker_core.parameter_schema import load_parameter_file, section_from_flat
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters

@@ -35,6 +35,7 @@ def test_the_report_prints_the_solutions_and_the_simplification_errors(capsys):
 
     assert report([]) == 0
     out = capsys.readouterr().out
-    for step in ('90 deg nominal', '90 deg bound', '180 deg nominal', '180 deg bound'):
+    for step in ('90 deg nominal', '90 deg family minimum', '180 deg nominal',
+                 '180 deg family minimum'):
         assert f'| {step} | simplified |' in out and f'| {step} | full |' in out
         assert f'| {step} | lumped |' in out

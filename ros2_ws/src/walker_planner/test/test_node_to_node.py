@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from walker_core.truss import UnknownNodeError
 from walker_planner.core.bang_bang import summarize_profile
 from walker_planner.core.bounds import (
-    bound_solution, step_time_optimal_bound, time_optimal_bound, tip_move_bound)
+    coarse_move_bound, family_minimum_solution, family_minimum_time, step_time_optimal_bound,
+    time_optimal_bound)
 from walker_planner.core.errors import LimitError, NoSolutionError
 from walker_planner.core.node_to_node import (
     NodeToNodeTrajectory, PlanarModel, solve_node_to_node)
@@ -119,20 +120,22 @@ def test_cartesian_velocity_and_acceleration_are_the_derivatives_of_the_position
                                    (ahead.velocity - behind.velocity) / (2 * step), atol=1e-4)
 
 
-def test_the_bound_on_the_default_truss_for_90_and_180_degree_steps(robot):
-    ninety = step_time_optimal_bound(robot, 'n1_1', 'n2_1', 'n1_2')
-    half_turn = step_time_optimal_bound(robot, 'n1_1', 'n2_1', 'n0_1')
+def test_the_step_bound_on_the_default_truss_for_90_and_180_degree_steps(robot):
+    ninety = step_time_optimal_bound(robot, 'n1_1', 'n2_1', 'n1_2', min_radius=0.5)
+    half_turn = step_time_optimal_bound(robot, 'n1_1', 'n2_1', 'n0_1', min_radius=0.5)
     assert 0.0 < ninety < half_turn
-    rho = robot.truss.spacing / (2 * robot.robot.geometry.l2)
-    assert ninety == pytest.approx(time_optimal_bound(robot, math.pi / 2, rho))
-    # the bound is at the full available torque: no nominal plan (half the torque) is faster
-    nominal = solve_node_to_node(PlanarModel.from_parameters(robot, 0.5), rho, math.pi / 4,
-                                 1e-3)
-    assert nominal.duration == pytest.approx(ninety * math.sqrt(2), rel=1e-6)
+    assert ninety == pytest.approx(time_optimal_bound(robot, math.pi / 2, 0.9, 0.5))
+    # J1 cannot turn faster than its velocity limit: the bound is at least the sweep at it
+    yaw = robot.robot.drive.yaw
+    assert half_turn > math.pi / yaw.velocity_limit
+    # the fastest of the family at the full torques and rates is no faster than the bound
+    nominal = solve_node_to_node(PlanarModel.from_parameters(robot, 1.0, 1.0), 0.75,
+                                 math.pi / 4, 0.5 / 1.2)
+    assert nominal.duration >= ninety
 
 
-def test_the_bound_is_at_the_full_available_torque(robot):
-    solution = bound_solution(robot, math.pi, 0.75)
+def test_the_family_minimum_is_at_the_full_available_torque(robot):
+    solution = family_minimum_solution(robot, math.pi, 0.75)
     yaw, vertex = robot.robot.drive.yaw, robot.robot.drive.vertex
     assert max(solution.circular_torque / (yaw.torque_limit - yaw.friction_torque),
                solution.radial_torque / (vertex.torque_limit - vertex.friction_torque)) \
@@ -146,12 +149,12 @@ def test_the_bound_is_at_the_full_available_torque(robot):
 ])
 def test_steps_that_are_not_sweeps_are_refused(robot, base, start, goal, error, words):
     with pytest.raises(error, match=words):
-        step_time_optimal_bound(robot, base, start, goal)
+        step_time_optimal_bound(robot, base, start, goal, min_radius=0.5)
 
 
 def test_moves_that_are_not_sweeps_have_no_bound(robot):
-    assert tip_move_bound(robot, [0, 0.9, 0.03], [0, 0.8, 0.03]) is None
-    assert tip_move_bound(robot, [0, 0.9, 0.03], [0.9, 0, 0.0]) is None
-    assert tip_move_bound(robot, [0, 1.5, 0.0], [1.5, 0, 0.0]) is None  # out of reach
+    assert coarse_move_bound(robot, [0, 0.9, 0.03], [0, 0.8, 0.03], 0.5) is None
+    assert coarse_move_bound(robot, [0, 0.9, 0.03], [0.9, 0, 0.0], 0.5) is None
+    assert coarse_move_bound(robot, [0, 1.5, 0.0], [1.5, 0, 0.0], 0.5) is None  # out of reach
     with pytest.raises(NoSolutionError, match='equal start and end radii'):
-        time_optimal_bound(robot, math.pi, 0.75, rho_end=0.6)
+        family_minimum_time(robot, math.pi, 0.75, rho_end=0.6)

@@ -167,18 +167,17 @@ def test_the_time_optimal_bound_is_reported_for_sweeps_and_lines(planned, contex
         assert result.time_optimal_bound is None
 
 
-def test_the_sweep_bound_is_the_larger_of_the_torque_and_rate_bounds(context):
-    from walker_planner.core.bounds import sweep_rate_bound, tip_move_bound
+def test_a_sweep_reports_the_time_optimal_lower_bound_at_the_planner_min_radius(context):
+    from walker_planner.core.bounds import time_optimal_bound
 
+    min_radius = context.planner.bang_bang.min_radius
     for goal, sweep in (((-0.9, 0.0, H), math.pi / 2), ((0.0, -0.9, H), math.pi)):
         result = plan(PlanRequest('bang_bang_node', 'a', ABOVE, goal), context)
-        torque = tip_move_bound(context.robot, ABOVE, goal,
-                                context.planner.bang_bang.min_radius)
-        rate = sweep_rate_bound(context.robot, sweep, context.planner.bang_bang.min_radius, H)
-        assert result.time_optimal_bound == pytest.approx(max(torque, rate))
+        assert result.time_optimal_bound == pytest.approx(
+            time_optimal_bound(context.robot, sweep, 0.9, min_radius))
         yaw = context.robot.robot.drive.yaw
-        assert rate >= sweep / yaw.velocity_limit  # no faster than the yaw's speed limit
-        assert rate > sweep / yaw.velocity_limit + 0.1  # it must also speed up and slow down
+        # no faster than the yaw's speed limit, and it must also speed up and slow down
+        assert result.time_optimal_bound > sweep / yaw.velocity_limit + 0.1
 
 
 def test_the_bang_bang_plan_ends_on_the_node_and_reports_its_solution(context, stance):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from walker_planner.core.bounds import bound_solution
+from walker_planner.core.bounds import family_minimum_solution
 from walker_planner.core.node_to_node import PlanarModel, solve_node_to_node
 from walker_planner.core.simplification import (
     PlanarDynamics, feasible_duration, required_torques, simplification_errors)
@@ -15,9 +15,9 @@ from walker_planner.core.simplification import (
 @pytest.fixture(scope='module', params=['bound_180', 'bound_90', 'nominal_180'])
 def solution(request, robot):
     if request.param == 'bound_180':
-        return bound_solution(robot, math.pi, 0.75, rho_min=0.4)
+        return family_minimum_solution(robot, math.pi, 0.75, rho_min=0.4)
     if request.param == 'bound_90':
-        return bound_solution(robot, math.pi / 2, 0.75, rho_min=0.4)
+        return family_minimum_solution(robot, math.pi / 2, 0.75, rho_min=0.4)
     model = PlanarModel.from_parameters(robot, 0.5, 0.8)
     return solve_node_to_node(model, 0.75, math.pi / 2, 0.4)
 
@@ -118,7 +118,7 @@ def test_a_fuller_model_follows_the_path_within_the_torques_at_the_feasible_dura
 
 
 def test_at_the_bound_the_centrifugal_force_needs_more_than_the_radial_torque(robot):
-    solution = bound_solution(robot, math.pi, 0.75, rho_min=0.4)
+    solution = family_minimum_solution(robot, math.pi, 0.75, rho_min=0.4)
     full = PlanarDynamics.named('full', solution)
     assert feasible_duration(solution, full, solution.model.circular_torque,
                              solution.model.radial_torque) > 1.5 * solution.duration

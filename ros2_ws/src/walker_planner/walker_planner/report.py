@@ -1,10 +1,15 @@
 """The bang-bang planner's numbers for the robot in the parameter file, as the README quotes them.
 
-``python -m walker_planner.report`` prints, for 90 and 180 deg steps at the truss spacing: the
-midpoint radius, switch and midpoint times, torque ratio, torques and duration of the nominal
-plan and of the time-optimal bound; and, for each, the endpoint error of the planned torques
-driven open loop through the fuller models (:mod:`walker_planner.core.simplification`) and the
-duration at which those models could follow the same path within the same torques.
+``python -m walker_planner.report`` prints, for 90 and 180 deg steps at the truss spacing:
+
+* the midpoint radius, switch and midpoint times, torque ratio, torques and duration of the
+  nominal plan and of the paper's family minimum (the torque limits alone);
+* for each, the endpoint error of the planned torques driven open loop through the fuller
+  models (:mod:`walker_planner.core.simplification`) and the duration at which those models
+  could follow the same path within the same torques;
+* the time-optimal lower bound, the minimum time found by direct optimisation and the family
+  minimum side by side, under the torque and rate limits and under the torque limits alone
+  (:mod:`walker_planner.core.bounds`); ``--no-direct`` leaves out the direct method (seconds).
 """
 
 from __future__ import annotations
@@ -14,7 +19,9 @@ import sys
 
 from walker_core.parameter_schema import load_parameter_file, section_from_flat
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-from walker_planner.core.bounds import bound_solution
+from walker_planner.core.bounds import (
+    family_minimum_solution, minimum_time_found, move_problem)
+from walker_planner.core.minimum_time import lower_bound
 from walker_planner.core.node_to_node import PlanarModel, solve_node_to_node
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.simplification import (
@@ -24,7 +31,7 @@ __all__ = ['solutions', 'main']
 
 
 def solutions(robot=None, planner=None) -> dict:
-    """Nominal and bound solutions of 90 and 180 deg steps, by name."""
+    """Nominal and family-minimum bang-bang solutions of 90 and 180 deg steps, by name."""
     robot = robot or load_walker_parameters()
     planner = planner or section_from_flat(
         PlannerParameters, load_parameter_file(default_parameter_file()), PREFIX)
@@ -37,13 +44,45 @@ def solutions(robot=None, planner=None) -> dict:
     for sweep in (90, 180):
         half = 0.5 * math.radians(sweep)
         found[f'{sweep} deg nominal'] = solve_node_to_node(nominal, rho, half, rho_min)
-        found[f'{sweep} deg bound'] = bound_solution(robot, math.radians(sweep), rho,
-                                                     rho_min=rho_min)
+        found[f'{sweep} deg family minimum'] = family_minimum_solution(
+            robot, math.radians(sweep), rho, rho_min=rho_min)
     return found
 
 
+def bound_rows(robot=None, planner=None, direct: bool = True) -> list[dict]:
+    """Give the three numbers of 90 and 180 deg steps, with and without the rate limits [s].
+
+    Each row has ``step``, ``limits``, ``lower_bound`` (provable), ``minimum_found`` (direct
+    optimisation, None without ``direct``), ``family_minimum`` (the paper's family under the
+    same limits: at the full torque and, with rate limits, the full velocity limits) and
+    ``solve_time`` of the direct method.
+    """
+    robot = robot or load_walker_parameters()
+    planner = planner or section_from_flat(
+        PlannerParameters, load_parameter_file(default_parameter_file()), PREFIX)
+    radius, min_radius = robot.truss.spacing, planner.bang_bang.min_radius
+    l2 = robot.robot.geometry.l2
+    rows = []
+    for rates, limits in ((True, 'torques and rates'), (False, 'torques alone')):
+        family_model = PlanarModel.from_parameters(robot, 1.0, 1.0 if rates else None)
+        for sweep in (90, 180):
+            problem = move_problem(robot, math.radians(sweep), radius, min_radius, rates)
+            move = minimum_time_found(robot, math.radians(sweep), radius, min_radius,
+                                      rates) if direct else None
+            family = solve_node_to_node(family_model, radius / (2 * l2),
+                                        0.5 * math.radians(sweep),
+                                        min(min_radius, radius) / (2 * l2))
+            rows.append({'step': f'{sweep} deg', 'limits': limits,
+                         'lower_bound': lower_bound(problem),
+                         'minimum_found': move.duration if move else None,
+                         'family_minimum': family.duration,
+                         'solve_time': move.solve_time if move else None})
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Print the tables (Markdown)."""
+    """Print the tables (Markdown); ``--no-direct`` skips the direct method."""
+    argv = sys.argv[1:] if argv is None else argv
     robot = load_walker_parameters()
     found = solutions(robot)
     print('| step | rho(0) | rho(phi2) | phi1 | phi2 | tau = tau1/tau3 | tau1 [N m] | '
@@ -66,6 +105,15 @@ def main(argv: list[str] | None = None) -> int:
             stopped = f'{error.end_time:.3f}' if error.stopped else '-'
             print(f'| {name} | {error.model} | {error.position:.3g} | {error.radius:.3g} | '
                   f'{math.degrees(error.angle):.3g} | {stopped} | {feasible:.3f} |')
+    print()
+    print('| step | limits | time-optimal lower bound [s] | minimum time found by direct '
+          "optimisation [s] | paper's family minimum [s] | direct method solve [s] |")
+    print('| --- | --- | --- | --- | --- | --- |')
+    for row in bound_rows(robot, direct='--no-direct' not in argv):
+        found_cell = '-' if row['minimum_found'] is None else f'{row["minimum_found"]:.4f}'
+        solve_cell = '-' if row['solve_time'] is None else f'{row["solve_time"]:.2f}'
+        print(f'| {row["step"]} | {row["limits"]} | {row["lower_bound"]:.4f} | {found_cell} | '
+              f'{row["family_minimum"]:.4f} | {solve_cell} |')
     return 0
 
 

@@ -3,7 +3,8 @@
 :func:`plan` is everything the planner node's service does, without ROS: it refuses a malformed
 or impossible request with a :class:`~walker_planner.core.errors.PlanningError` naming what was
 wrong, builds the requested type, maps a Cartesian one to joint space, samples it every control
-period, checks the samples against the joint limits and reports the time-optimal bound.
+period, checks the samples against the joint limits and reports a provable lower bound of the
+move's duration (:mod:`walker_planner.core.bounds`).
 Joint vectors on the wire are in physical order (``a_yaw_joint`` .. ``b_yaw_joint``); inside,
 everything is in role order J1..J5 of the given base gripper (:mod:`walker_core.joint_roles`).
 """
@@ -109,8 +110,10 @@ class Plan:
     samples : Samples
         Joint positions, velocities, accelerations at ``times``, physical order, (N, 5).
     time_optimal_bound : float or None
-        Bang-bang minimum time of this move under the torque limits [s], when it is a sweep
-        about the base; ``None`` otherwise.
+        A lower bound of this move's duration [s]: for a sweep about the base at one radius,
+        the provable bound of :func:`walker_planner.core.bounds.time_optimal_bound` (the
+        torque and rate limits on eqs (19)-(20)); for a straight line, rest to rest at the
+        planner's Cartesian acceleration limit; ``None`` otherwise.
     """
 
     type_name: str
@@ -241,10 +244,11 @@ _LINES = frozenset({'cartesian_line', 'insertion_line', 'extraction_line'})
 
 
 def _bound(kind, valid: ValidRequest, context: PlanningContext) -> float | None:
-    """Lower bound of the move's time under the robot's limits, or None when there is none.
+    """Bound the move's duration from below [s], or return None when there is no bound.
 
-    A sweep about the base at one radius: the larger of the paper's bang-bang bound (torques)
-    and the yaw's rate bound; a straight line: rest to rest at the Cartesian acceleration limit.
+    A sweep about the base at one radius: the provable bound under the robot's torque and rate
+    limits and ``min_radius`` (:func:`walker_planner.core.bounds.coarse_move_bound`); a straight
+    line: rest to rest at the planner's Cartesian acceleration limit.
     """
     if kind.name in _LINES:
         return line_bound(float(np.linalg.norm(valid.goal - valid.start)),
