@@ -46,7 +46,7 @@ def test_bad_parameter_updates_are_refused_and_nothing_moves(graph):
 
     before = graph.joints()
     cases = [  # (node, parameter, bad value, words of the reason)
-        ('controller_vertex', 'control.fine.bandwidth', [5.0, 5.0, 5.0, 8.0, 8.0], 'eq (15)'),
+        ('controller_vertex', 'control.fine.bandwidth', [5.0, 5.0, 5.0, 8.0, 8.0], 'unstable'),
         ('controller_vertex', 'control.state_timeout', -1.0, 'state_timeout'),
         ('supervisor', 'supervisor.watchdog_timeout', 1000.0, 'watchdog_timeout'),
         ('supervisor', 'supervisor.insertion_alignment', 0.1, 'insertion_alignment'),

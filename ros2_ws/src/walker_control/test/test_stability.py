@@ -143,3 +143,50 @@ def test_a_larger_inertia_mismatch_can_destabilise_a_loop():
 def test_inertia_ratio_grid_includes_its_ends_and_one():
     grid = inertia_ratio_grid(0.5, 2.0, 4)
     assert grid[0] == pytest.approx(0.5) and grid[-1] == pytest.approx(2.0) and 1.0 in grid
+
+
+def continuous_poles_behind(filter_order, corner, kind, wc, zc=1.0, ka=0.0):
+    """Poles of the continuous loop of eq (14) with another filter: s^2 D + N (Ka s^2 + ...)."""
+    from scipy import signal
+
+    if kind == 'bessel':
+        numerator, denominator = signal.bessel(filter_order, corner, analog=True, norm='mag')
+    else:
+        numerator, denominator = [corner ** filter_order], np.poly([-corner] * filter_order)
+    characteristic = np.polyadd(np.polymul([1.0, 0.0, 0.0], denominator),
+                                np.polymul(numerator, [ka, 2.0 * zc * wc, wc ** 2]))
+    return np.roots(characteristic)
+
+
+def test_eq15_is_not_the_stability_condition_behind_a_4th_order_bessel_filter():
+    # joint 1's filter: eq (15) allows wc up to 2.5 rad/s at Ka = 0, the loop fails from 1.69
+    assert eq15_margin(2.0, 1.0, 5.0, 0.0) > 0.0
+    assert np.max(continuous_poles_behind(4, 5.0, 'bessel', 1.65).real) < 0.0
+    assert np.max(continuous_poles_behind(4, 5.0, 'bessel', 1.75).real) > 0.0
+    # with the paper's own filter eq (15) is exact
+    assert np.max(continuous_poles_behind(2, 5.0, 'critical', 2.45).real) < 0.0
+    assert np.max(continuous_poles_behind(2, 5.0, 'critical', 2.55).real) > 0.0
+
+
+def test_check_loop_applies_eq15_only_to_the_filter_it_was_derived_for():
+    bessel = LoopDesign(1.5, 1.0, 0.0, 0.0, 4, 5.0, 'bessel')
+    report = check_loop(bessel, 0.002, label='J1 coarse')
+    assert report.eq15_margin is None
+    assert 'does not apply' in report.stability_condition
+    assert 'bessel filter of order 4' in report.stability_condition
+    critical = check_loop(LoopDesign(1.5, 1.0, 0.0, 0.0, 2, 5.0, 'critical'), 0.002,
+                          label='J2 coarse')
+    assert critical.eq15_margin == pytest.approx(0.5 - 0.3)
+    assert critical.stability_condition == 'sampled poles and eq (15)'
+
+
+def test_a_bessel_loop_is_judged_by_its_poles_not_by_eq15():
+    # eq (15) allows wc = 2 behind joint 1's filter; its poles refuse it, without naming eq (15)
+    with pytest.raises(UnstableLoopError, match='unstable') as refused:
+        check_loop(LoopDesign(2.0, 1.0, 0.0, 0.0, 4, 5.0, 'bessel'), 0.002, label='J1 coarse')
+    assert 'eq (15)' not in str(refused.value)
+    # eq (15) would refuse wc / wf = 0.55 behind a 2nd-order Bessel filter; the loop is stable
+    design = LoopDesign(2.75, 1.0, 0.0, 0.0, 2, 5.0, 'bessel')
+    assert eq15_margin(2.75, 1.0, 5.0, 0.0) < 0.0
+    assert np.max(continuous_poles_behind(2, 5.0, 'bessel', 2.75).real) < 0.0
+    assert check_loop(design, 0.002, label='J2 coarse').largest_pole_magnitude < 1.0

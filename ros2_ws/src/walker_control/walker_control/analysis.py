@@ -291,12 +291,13 @@ def _run_design(args: argparse.Namespace) -> int:
           f'ratio {stability.inertia_ratio_min:g}..{stability.inertia_ratio_max:g}, delay 0 or '
           f'1 period, minimum damping {stability.minimum_damping:g})')
     print(' role | mode   |  wc   zc    Ti    Ka  | filter        | max |z|  | min damping '
-          '(where)                          | eq (15) margin')
+          '(where)                          | eq (15) margin (2nd-order critical filter only)')
     for (role, mode), report in check_controller_settings(settings).items():
         d = settings.loop_design(role, mode)
         filt = (f'{d.filter_kind[:4]} {d.filter_order} @ {d.filter_corner:g}'
                 if d.filter_order else 'none')
-        margin = '-' if report.eq15_margin is None else f'{report.eq15_margin:+.3f}'
+        margin = (f'{report.eq15_margin:+.3f}' if report.eq15_margin is not None
+                  else 'does not apply' if d.filter_order else '-')
         print(f'  J{role}  | {mode.key:6s} | {d.bandwidth:4.1f} {d.damping:4.1f} '
               f'{d.integral_time:5.1f} {d.acceleration_feedback:4.2f} | {filt:13s} | '
               f'{report.largest_pole_magnitude:.5f} | {report.smallest_damping:.3f} '

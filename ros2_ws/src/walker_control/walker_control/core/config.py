@@ -325,7 +325,8 @@ def check_controller_settings(settings: ControllerSettings) -> dict[tuple[int, M
     """Run the stability check on every role and mode; return the report of each loop.
 
     For each role J1..J5 and each of hold, coarse and fine: the paper's condition eq (15) with
-    the filter corner as ``wf`` (filtered roles), and the closed-loop poles of the sampled loop
+    the filter corner as ``wf`` where it applies (a 2nd-order critically damped filter; the
+    report of a loop says what judged it), and the closed-loop poles of the sampled loop
     (:func:`walker_control.core.stability.check_loop`) at the control period, with and without
     one period of delay, over the inertia ratios of ``control.stability``.
 

@@ -7,7 +7,12 @@ acceleration feedback ``-Ka s^2 theta`` added to the command, and the second-ord
 theta]``. Multiplying out gives eq (14), as printed. Routh-Hurwitz on its quartic denominator
 gives, besides positive coefficients, ``b1 = wf^2 (1 + Ka) - zc wc wf > 0`` and
 ``c1 = 2 zc wc wf^2 - 2 wc^2 wf^3 / b1 > 0``; the second implies the first and is eq (15);
-``zc = 1`` gives eq (16). All three are right as printed.
+``zc = 1`` gives eq (16). All three are right as printed, **for that filter only**: eq (15) is
+neither necessary nor sufficient with another one. Behind joint 1's 4th-order Bessel filter at
+5 rad/s, for instance, the continuous loop is unstable from wc = 1.69 rad/s at Ka = 0, where eq
+(15) would allow up to 2.5. :func:`check_loop` therefore applies eq (15) only to a 2nd-order
+critically damped filter (:func:`eq15_applies`) and says so in its report; every loop is
+judged by the poles of the sampled loop.
 
 The controller that runs is discrete and more general than eq (14): PID (integral action in fine
 mode), a Bessel, Butterworth or critically damped filter of any order designed with scipy.signal
@@ -36,7 +41,7 @@ __all__ = [
     'LoopDesign', 'LoopReport', 'UnstableLoopError',
     'eq14_transfer_function', 'eq14_poles', 'eq15_margin', 'eq16_margin', 'routh_array',
     'routh_hurwitz_stable', 'discrete_loop_matrix', 'discrete_closed_loop_poles',
-    'pole_damping', 'check_loop', 'inertia_ratio_grid',
+    'pole_damping', 'check_loop', 'inertia_ratio_grid', 'eq15_applies',
 ]
 
 
@@ -101,15 +106,19 @@ class LoopReport:
     smallest_damping : float
         Smallest equivalent damping ratio of a closed-loop pole over every case.
     eq15_margin : float or None
-        ``(1 + Ka) zc / (1 + zc^2) - wc / wf`` (> 0 satisfies eq (15)); None without a filter.
+        ``(1 + Ka) zc / (1 + zc^2) - wc / wf`` (> 0 satisfies eq (15)) when eq (15) applies
+        (a 2nd-order critically damped filter, :func:`eq15_applies`); None otherwise.
     worst_case : str
         The inertia ratio and delay of the case with the smallest damping.
+    stability_condition : str
+        What judged the loop: the sampled poles, with or without eq (15), and why not.
     """
 
     largest_pole_magnitude: float
     smallest_damping: float
     eq15_margin: float | None
     worst_case: str
+    stability_condition: str = 'sampled poles'
 
 
 # --------------------------------------------------------------------------- the paper's model
@@ -159,6 +168,15 @@ def eq16_margin(wc: float, wf: float, Ka: float) -> float:
     It is twice :func:`eq15_margin` at ``zc = 1``, so it has the same sign.
     """
     return (1.0 + Ka) - 2.0 * wc / wf
+
+
+def eq15_applies(design: 'LoopDesign') -> bool:
+    """Tell whether eq (15) is the stability condition of a loop's filter.
+
+    Eq (15) is Routh-Hurwitz on eq (14), derived for the second-order critically damped filter
+    ``wf^2 / (s + wf)^2``: true for ``filter_kind == 'critical'`` of order 2 only.
+    """
+    return design.filter_order == 2 and design.filter_kind == 'critical'
 
 
 def routh_array(coefficients: Sequence[float]) -> np.ndarray:
@@ -332,7 +350,9 @@ def check_loop(design: LoopDesign, sample_time: float, *, label: str,
     delays : sequence of {0, 1}
         Transport delays [periods] to check.
     require_eq15 : bool
-        Also require eq (15), taking the filter corner as ``wf``, when the loop is filtered.
+        Also require eq (15), taking the filter corner as ``wf``, when it applies: a 2nd-order
+        critically damped filter (:func:`eq15_applies`). Other filters are judged by the
+        sampled poles alone.
 
     Returns
     -------
@@ -345,7 +365,14 @@ def check_loop(design: LoopDesign, sample_time: float, *, label: str,
         Naming the loop, the case and the pole magnitude or damping, or the eq (15) value.
     """
     margin = None
-    if design.filter_order > 0:
+    if not design.filter_order:
+        condition = 'sampled poles (no filter: eq (15) does not apply)'
+    elif not eq15_applies(design):
+        condition = (f'sampled poles (eq (15) does not apply: it is derived for a 2nd-order '
+                     f'critically damped filter, this is a {design.filter_kind} filter of order '
+                     f'{design.filter_order})')
+    else:
+        condition = 'sampled poles and eq (15)' if require_eq15 else 'sampled poles'
         margin = eq15_margin(design.bandwidth, design.damping, design.filter_corner,
                              design.acceleration_feedback)
         if require_eq15 and not margin > 0.0:
@@ -381,4 +408,5 @@ def check_loop(design: LoopDesign, sample_time: float, *, label: str,
             f'{label}: a closed-loop pole is too poorly damped ({smallest_case}): damping '
             f'{smallest:.4f} < the minimum {minimum_damping:g} ({described})')
     return LoopReport(largest_pole_magnitude=largest, smallest_damping=smallest,
-                      eq15_margin=margin, worst_case=smallest_case)
+                      eq15_margin=margin, worst_case=smallest_case,
+                      stability_condition=condition)
