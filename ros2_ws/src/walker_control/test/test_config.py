@@ -63,8 +63,8 @@ def test_a_violation_of_eq15_is_refused_naming_role_mode_and_value():
     # eq (15) is the condition of the paper's filter: 2nd-order critically damped (J2, J3)
     fine = list(DEFAULT_FLAT['control.fine.bandwidth'])
     fine[1] = 13.0  # above wf / 2 = 12 rad/s
-    with pytest.raises(UnstableControllerError,
-                       match=r'role J2, mode fine.*eq \(15\).*0\.5 .*wc / wf = 0\.54.*control\.fine'):
+    refusal = r'role J2, mode fine.*eq \(15\).*0\.5 .*wc / wf = 0\.54.*control\.fine'
+    with pytest.raises(UnstableControllerError, match=refusal):
         with_overrides(control__filter__kind='critical', control__fine__bandwidth=fine,
                        control__filter__corner=[8.0, 24.0, 24.0, 0.0, 0.0])
 
