@@ -4,6 +4,7 @@ import math
 import sys
 
 import numpy as np
+from numpy.polynomial import polynomial as npp
 import pytest
 
 from walker_control import analysis
@@ -36,6 +37,28 @@ def test_figure5_curves_have_unit_dc_gain_and_a_consistent_bandwidth(feedforward
         assert curve.magnitude_db[index] < -3.0 <= curve.magnitude_db[index - 1]
         assert np.all(curve.magnitude_db[:index] >= -3.0)
         assert curve.peak_db == pytest.approx(max(0.0, curve.magnitude_db.max()))
+
+
+def exact_minus_3db_crossing(numerator, denominator):
+    """Smallest w > 0 with |N(jw)|^2 = 10^-0.3 |D(jw)|^2: polynomial roots, no grid."""
+    def squared_magnitude(coefficients):  # ascending powers of w of |P(jw)|^2
+        ascending = np.asarray(coefficients, dtype=complex)[::-1] * 1j ** np.arange(
+            len(coefficients))
+        return npp.polymul(ascending, np.conj(ascending)).real
+    gap = npp.polysub(squared_magnitude(numerator),
+                      10 ** -0.3 * squared_magnitude(denominator))
+    roots = npp.polyroots(gap)
+    return min(r.real for r in roots if abs(r.imag) < 1e-9 and r.real > 0)
+
+
+def test_figure5_bandwidth_is_the_exact_minus_3db_crossing_not_a_grid_point():
+    for curve in analysis.figure5_curves():
+        numerator, denominator = eq14_transfer_function(1.0, 1.0, analysis.FIGURE5_RATIO,
+                                                        curve.ka)
+        assert curve.bandwidth == pytest.approx(
+            exact_minus_3db_crossing(numerator, denominator), rel=1e-9)
+    assert analysis.figure5_curves(ka_values=(1.0,))[0].bandwidth == pytest.approx(2.6935,
+                                                                                   abs=1e-4)
 
 
 @pytest.mark.parametrize('ka', [0.0, 0.5, 1.0])

@@ -25,6 +25,7 @@ from typing import Protocol
 
 import numpy as np
 from scipy import signal
+from scipy.optimize import brentq
 
 from walker_control.core.stability import (
     LoopDesign, discrete_closed_loop_poles, eq14_poles, eq14_transfer_function, eq15_margin,
@@ -161,7 +162,8 @@ def _plot_stability_map(path: Path) -> None:
 class BodeCurve:
     """One curve of Figure 5: frequency response of eq (14) and its figures of merit.
 
-    Frequencies are in units of wc.
+    Frequencies are in units of wc; ``bandwidth`` is the first -3 dB crossing, solved on the
+    transfer function between the grid points that bracket it.
     """
 
     ka: float
@@ -173,11 +175,30 @@ class BodeCurve:
     peak_frequency: float
 
 
+def _bandwidth(numerator, denominator, w, magnitude) -> float:
+    """Frequency where the gain first falls to -3 dB, solved between the grid points.
+
+    The grid brackets the first crossing; ``brentq`` solves ``20 log10 |H(jw)| = -3`` inside
+    the bracket on the transfer function itself. ``inf`` when the gain never falls that low
+    on the grid.
+    """
+    below = np.nonzero(magnitude < -3.0)[0]
+    if not len(below):
+        return math.inf
+    if below[0] == 0:
+        return float(w[0])
+
+    def excess(frequency):
+        _, value = signal.freqs(numerator, denominator, worN=[frequency])
+        return 20.0 * math.log10(abs(value[0])) + 3.0
+
+    return float(brentq(excess, w[below[0] - 1], w[below[0]], xtol=1e-12, rtol=1e-12))
+
+
 def _curve(numerator, denominator, ka, w) -> BodeCurve:
     _, response = signal.freqs(numerator, denominator, worN=w)
     magnitude = 20.0 * np.log10(np.abs(response))
-    below = np.nonzero(magnitude < -3.0)[0]
-    bandwidth = float(w[below[0]]) if len(below) else math.inf
+    bandwidth = _bandwidth(numerator, denominator, w, magnitude)
     peak = int(np.argmax(magnitude))
     return BodeCurve(ka=ka, frequency=w, magnitude_db=magnitude,
                      phase_deg=np.degrees(np.unwrap(np.angle(response))), bandwidth=bandwidth,
