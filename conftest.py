@@ -6,7 +6,6 @@ import os
 from collections.abc import Iterator
 
 import pytest
-
 from ros_test_support import isolated_domain, ros_environment
 
 

@@ -402,7 +402,6 @@ def _report_walk(suite: Suite, walk: dict) -> None:
 def part_soak(suite: Suite) -> dict:
     """Walk back and forth for long: memory, files, shared memory and step figures over time."""
     import numpy as np
-
     from bench_support import fastdds_shm_files, process_stats
     from graph_runner import GraphRun, walk_resuming
     from walker_bringup.summary import rows_from_reports

@@ -11,7 +11,6 @@ the graph is shut down).
 import time
 
 import pytest
-
 from fault_graph import FAULT_TIMEOUT, TEST_TIMEOUT, TIMEOUT, FaultGraph
 from ros_test_support import running_graph
 

@@ -2,11 +2,11 @@
 
 import math
 import sys
+import types
 
 import numpy as np
-from numpy.polynomial import polynomial as npp
 import pytest
-
+from numpy.polynomial import polynomial as npp
 from walker_control import analysis
 from walker_control.core.config import load_controller_settings
 from walker_control.core.stability import eq14_transfer_function, eq15_margin
@@ -85,6 +85,32 @@ def test_figure6_harness_runs_on_any_plant_core():
     assert run.joint1_motion == 0.0
     assert run.residual_frequency == pytest.approx(
         SETTINGS.robot.flexibility.joint1_mode, rel=0.05)
+
+
+class LateArrival:
+    """A plant core whose tip creeps in late: 1 mm off for 2 s of the window, then at rest."""
+
+    rest = np.array([0.0, 0.9, 0.03])
+
+    def reset(self):
+        self.time = 0.0
+
+    def step(self, torques, dt):
+        self.time += dt
+
+    def state(self):
+        offset = 1e-3 if self.time < 3.5 else 0.0
+        zeros = np.zeros(5)
+        return types.SimpleNamespace(position=zeros, velocity=zeros, acceleration=zeros,
+                                     tip_position=self.rest + [offset, 0.0, 0.0])
+
+
+def test_figure6_residual_is_measured_from_where_the_tip_ends():
+    # the window runs from 1.5 s to 4 s; a mean over it would sit 0.8 mm out, the rest is 0
+    run = analysis.figure6_experiment(LateArrival, SETTINGS, 0.0, move_time=1.0,
+                                      settle_time=3.0, allowance=0.5)
+    assert run.residual_amplitude == pytest.approx(1e-3, rel=1e-9)
+    assert run.tip_deviation[-1] == pytest.approx(0.0, abs=1e-12)
 
 
 def test_dominant_frequency_finds_the_peak_of_a_moving_point():

@@ -50,10 +50,8 @@ class StandInPlant:
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
         from sensor_msgs.msg import JointState
-        from walker_msgs.msg import (
-            ControlMode, ControllerState, JointAccelerations, JointCommand)
-
         from walker_control.joint_controller_node import COMMAND_QOS, MODE_QOS, STATE_QOS
+        from walker_msgs.msg import ControllerState, ControlMode, JointAccelerations, JointCommand
 
         self.node = Node('stand_in_plant', namespace='/walker', context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -90,9 +88,8 @@ class StandInPlant:
 
     def publish_state(self, acceleration=0.0):
         from sensor_msgs.msg import JointState
-        from walker_msgs.msg import JointAccelerations
-
         from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+        from walker_msgs.msg import JointAccelerations
 
         accel = JointAccelerations(name=list(PHYSICAL_JOINT_NAMES),
                                    acceleration=[acceleration] * 5)

@@ -3,7 +3,6 @@
 import math
 
 import pytest
-
 from walker_control.core.pid import Pid, PidGains
 
 

@@ -4,11 +4,18 @@ import math
 
 import pytest
 import yaml
-
 from walker_core.parameter_schema import (
-    ParameterError, leaf_specs, load_parameter_file, replace_in_section, section_to_flat)
+    ParameterError,
+    leaf_specs,
+    load_parameter_file,
+    replace_in_section,
+    section_to_flat,
+)
 from walker_core.robot_parameters import (
-    WalkerParameters, default_parameter_file, load_walker_parameters)
+    WalkerParameters,
+    default_parameter_file,
+    load_walker_parameters,
+)
 
 DEFAULT_FLAT = load_parameter_file(default_parameter_file())
 LEAVES = [spec.name for spec in leaf_specs(WalkerParameters)]

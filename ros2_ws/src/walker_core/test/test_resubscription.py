@@ -3,7 +3,6 @@
 import math
 
 import pytest
-
 from walker_core.resubscription import Resubscription, clock_ran_past
 
 

@@ -7,14 +7,18 @@ frozen, validated dataclasses. Units are SI (m, kg, s, rad, N*m; REP 103).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
-from collections.abc import Mapping
 
 import numpy as np
 
 from walker_core.parameter_schema import (
-    ParameterError, load_parameter_file, parameter, section_from_flat)
+    ParameterError,
+    load_parameter_file,
+    parameter,
+    section_from_flat,
+)
 
 __all__ = [
     'Geometry', 'Masses', 'Drive', 'Drives', 'Flexibility', 'RobotParameters',

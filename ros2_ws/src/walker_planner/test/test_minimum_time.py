@@ -13,10 +13,13 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from shooting import reintegrate_polar, shoot_move
 from walker_planner.core.bounds import (
-    family_minimum_time, minimum_time_found, move_problem, step_move_problem)
+    family_minimum_time,
+    minimum_time_found,
+    move_problem,
+    step_move_problem,
+)
 from walker_planner.core.direct_method import FEASIBILITY_TOLERANCE, reintegrate
 from walker_planner.core.errors import NoSolutionError
 from walker_planner.core.minimum_time import MoveProblem, lower_bound

@@ -6,15 +6,17 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from walker_core.truss import UnknownNodeError
 from walker_planner.core.bang_bang import summarize_profile
 from walker_planner.core.bounds import (
-    coarse_move_bound, family_minimum_solution, family_minimum_time, step_time_optimal_bound,
-    time_optimal_bound)
+    coarse_move_bound,
+    family_minimum_solution,
+    family_minimum_time,
+    step_time_optimal_bound,
+    time_optimal_bound,
+)
 from walker_planner.core.errors import LimitError, NoSolutionError
-from walker_planner.core.node_to_node import (
-    NodeToNodeTrajectory, PlanarModel, solve_node_to_node)
+from walker_planner.core.node_to_node import NodeToNodeTrajectory, PlanarModel, solve_node_to_node
 
 torque_fractions = st.floats(0.1, 1.0)
 rate_caps = st.floats(0.3, 10.0) | st.just(math.inf)

@@ -5,11 +5,14 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-
 from walker_planner.core.bounds import family_minimum_solution
 from walker_planner.core.node_to_node import PlanarModel, solve_node_to_node
 from walker_planner.core.simplification import (
-    PlanarDynamics, feasible_duration, required_torques, simplification_errors)
+    PlanarDynamics,
+    feasible_duration,
+    required_torques,
+    simplification_errors,
+)
 
 
 @pytest.fixture(scope='module', params=['bound_180', 'bound_90', 'nominal_180'])

@@ -105,6 +105,7 @@ def duration_figure(path: Path, params=None, nominal=None) -> Path:
     """Step duration against the midpoint radius, for the default robot and planner."""
     from walker_core.parameter_schema import load_parameter_file, section_from_flat
     from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+
     from walker_planner.core.parameters import PREFIX, PlannerParameters
 
     plt = _pyplot()

@@ -19,13 +19,16 @@ import sys
 
 from walker_core.parameter_schema import load_parameter_file, section_from_flat
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-from walker_planner.core.bounds import (
-    family_minimum_solution, minimum_time_found, move_problem)
+
+from walker_planner.core.bounds import family_minimum_solution, minimum_time_found, move_problem
 from walker_planner.core.minimum_time import lower_bound
 from walker_planner.core.node_to_node import PlanarModel, solve_node_to_node
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.simplification import (
-    PlanarDynamics, feasible_duration, simplification_errors)
+    PlanarDynamics,
+    feasible_duration,
+    simplification_errors,
+)
 
 __all__ = ['solutions', 'main']
 

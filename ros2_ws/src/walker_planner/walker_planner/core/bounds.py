@@ -27,12 +27,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from walker_core.truss import Truss
+
 from walker_planner.core.errors import NoSolutionError
 from walker_planner.core.minimum_time import MoveProblem, lower_bound
-from walker_planner.core.node_to_node import (
-    NodeToNodeSolution, PlanarModel, solve_node_to_node)
+from walker_planner.core.node_to_node import NodeToNodeSolution, PlanarModel, solve_node_to_node
 
 __all__ = ['family_minimum_solution', 'family_minimum_time', 'move_problem',
            'time_optimal_bound', 'minimum_time_found', 'step_move_problem',

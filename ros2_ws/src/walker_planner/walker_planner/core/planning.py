@@ -15,11 +15,15 @@ import dataclasses
 import math
 
 import numpy as np
-
 from walker_core.joint_roles import GRIPPERS, joint_of_role, physical_to_roles, roles_to_physical
 from walker_core.kinematics import KinematicsError, WalkerKinematics
+
 from walker_planner.core.bounds import (
-    MIN_SWEEP, NODE_RADIUS_TOLERANCE, coarse_move_bound, line_bound)
+    MIN_SWEEP,
+    NODE_RADIUS_TOLERANCE,
+    coarse_move_bound,
+    line_bound,
+)
 from walker_planner.core.cartesian import CartesianInJointSpace, branch_of
 from walker_planner.core.errors import InvalidRequestError, LimitError, WorkspaceError
 from walker_planner.core.registry import TRAJECTORY_TYPES, ValidRequest

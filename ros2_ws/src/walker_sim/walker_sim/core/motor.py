@@ -24,7 +24,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = ['DriveCommand', 'DriveModel']
