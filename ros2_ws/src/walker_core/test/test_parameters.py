@@ -1,6 +1,9 @@
 """The shared parameter file: loading, validation, clear refusals, nothing half-applied."""
 
 import math
+import os
+import subprocess
+import sys
 
 import pytest
 import yaml
@@ -137,3 +140,27 @@ def test_the_deciding_processes_never_outrank_the_loop(tmp_path, realtime, decis
     path = write_params(tmp_path, {'timing.realtime_priority': realtime,
                                    'timing.decision_priority': decision})
     assert load_walker_parameters(path).timing.decision_scheduling_priority == expected
+
+
+def test_the_parameter_file_is_found_without_ament_prefix_path():
+    """Outside a sourced workspace the file beside the package source is used (figures, report)."""
+    env = {k: v for k, v in os.environ.items() if k != 'AMENT_PREFIX_PATH'}
+    script = ('from walker_core.robot_parameters import default_parameter_file, '
+              'load_walker_parameters\n'
+              'print(default_parameter_file())\n'
+              'print(load_walker_parameters().robot.geometry.l2)\n')
+    result = subprocess.run([sys.executable, '-c', script], env=env, capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    path, l2 = result.stdout.split()
+    assert path.endswith('walker_core/config/walker.yaml') and float(l2) > 0.0
+
+
+def test_no_parameter_file_anywhere_is_a_clear_error(monkeypatch, tmp_path):
+    from walker_core import robot_parameters
+
+    monkeypatch.delenv('AMENT_PREFIX_PATH', raising=False)
+    monkeypatch.setattr(robot_parameters, '_source_parameter_file',
+                        lambda: tmp_path / 'missing' / 'walker.yaml')
+    with pytest.raises(FileNotFoundError, match='AMENT_PREFIX_PATH.*pass the parameter file'):
+        robot_parameters.default_parameter_file()

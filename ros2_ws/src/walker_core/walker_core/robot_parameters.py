@@ -7,6 +7,7 @@ frozen, validated dataclasses. Units are SI (m, kg, s, rad, N*m; REP 103).
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -238,14 +239,35 @@ class WalkerParameters:
 
 
 def default_parameter_file() -> Path:
-    """Path of the installed (or source) ``walker.yaml``."""
+    """Path of the installed ``walker.yaml``, or of the source one next to this package.
+
+    The ament index is asked first; without it (no ``AMENT_PREFIX_PATH``, or the package not
+    in it) the file beside the package's source (a source checkout or a symlink install) is
+    used.
+
+    Raises
+    ------
+    FileNotFoundError
+        When neither exists, saying how to point at the file.
+    """
     try:
         from ament_index_python.packages import get_package_share_directory
         candidate = Path(get_package_share_directory('walker_core')) / 'config' / 'walker.yaml'
         if candidate.exists():
             return candidate
-    except (ImportError, LookupError, ValueError):
+    except (ImportError, LookupError, ValueError, OSError):  # OSError: no AMENT_PREFIX_PATH
         pass
+    source = _source_parameter_file()
+    if source.exists():
+        return source
+    raise FileNotFoundError(
+        f'walker_core/config/walker.yaml was found neither through the ament index '
+        f'(AMENT_PREFIX_PATH={os.environ.get("AMENT_PREFIX_PATH", "")!r}) nor beside the '
+        f'package source ({source}): source the workspace install/setup.bash, or pass '
+        f'the parameter file explicitly')
+
+
+def _source_parameter_file() -> Path:
     return Path(__file__).resolve().parents[1] / 'config' / 'walker.yaml'
 
 
