@@ -64,8 +64,10 @@ def write_markdown(path: Path, content, figures: dict[str, Path],
         lines += [f'- {note}' for note in content.notes] + ['']
 
     lines += ['## Steps', '',
-              'Times in s (the phases as the supervisor timed them), the time-optimal bound of '
-              'the coarse motion and the ratio of the step time to it; insertion error (tip '
+              "Times in s (the phases as the supervisor timed them), the step's time-optimal "
+              'lower bound (the screw actions, and its extraction, coarse motion and insertion '
+              "at the robot's limits: no step can be faster; not the paper's bang-bang "
+              'family minimum) and the ratio of the step time to it; insertion error (tip '
               'distance from the hole axis, plant measurement) and residual vibration (largest '
               'tip deviation from its mean over the last settling before screw-in) in mm, from '
               'the step reports.', '']

@@ -39,7 +39,7 @@ class StepRow:
 
     @property
     def bound_ratio(self) -> float:
-        """Step time over the time-optimal bound (NaN when the bound is unknown)."""
+        """Step time over the step's time-optimal lower bound (NaN when it is unknown)."""
         return self.duration / self.bound if self.bound > 0 else math.nan
 
 
