@@ -7,8 +7,8 @@
 * ``figure9_family_180deg.png``: tip paths of 180 deg steps in the x-y plane (in units of 2l)
   for several start radii rho(0) and midpoint radii rho_min, with the torque ratio tau found;
 * ``duration_vs_midpoint.png``: duration of a 180 deg and a 90 deg step on the default robot
-  against the midpoint radius, under the torque limits alone (the time-optimal bound) and with
-  the joint rate limits of nominal plans.
+  against the midpoint radius, under the torque limits alone (the paper's family, whose
+  minimum is the family minimum, not a bound) and with the joint rate limits of nominal plans.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ def duration_figure(path: Path, params=None, nominal=None) -> Path:
     nominal = nominal or section_from_flat(
         PlannerParameters, load_parameter_file(default_parameter_file()), PREFIX).bang_bang
     rho_start = params.truss.spacing / (2.0 * params.robot.geometry.l2)
-    bound = PlanarModel.from_parameters(params)
+    torques_alone = PlanarModel.from_parameters(params)
     planned = PlanarModel.from_parameters(params, nominal.torque_fraction,
                                           nominal.velocity_fraction)
     rho_min = nominal.min_radius / (2.0 * params.robot.geometry.l2)
@@ -121,8 +121,8 @@ def duration_figure(path: Path, params=None, nominal=None) -> Path:
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
     for sweep, style in ((180.0, '-'), (90.0, '--')):
         half = 0.5 * math.radians(sweep)
-        ax.plot(rhos, [_duration(bound, rho_start, r, half) for r in rhos], style,
-                color='tab:blue', label=f'{sweep:.0f} deg, torque limits (bound)')
+        ax.plot(rhos, [_duration(torques_alone, rho_start, r, half) for r in rhos], style,
+                color='tab:blue', label=f'{sweep:.0f} deg, torque limits alone')
         ax.plot(rhos, [_duration(planned, rho_start, r, half) for r in rhos], style,
                 color='tab:orange', label=f'{sweep:.0f} deg, nominal (torque and rate limits)')
     ax.axvline(rho_min, color='grey', ls=':', label='rho_min (planner.bang_bang.min_radius)')
