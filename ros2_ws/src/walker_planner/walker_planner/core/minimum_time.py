@@ -41,6 +41,10 @@ from optimal the move found can be. The bound holds on the paper's own model too
 (22) keep 1 and 2), so it is also below the paper's bang-bang family minimum
 (:func:`walker_planner.core.bounds.family_minimum_time`), which is only a minimum over that
 family, in a model without the centrifugal term.
+
+Every claim is about this model. On the robot the rotors and the vertex mass add inertia about
+the yaw axis (slower), but Coulomb friction, which the available torque subtracts in both
+directions, helps a joint brake: the bound is not a proof about the plant.
 """
 
 from __future__ import annotations
