@@ -6,6 +6,7 @@ import os
 from collections.abc import Iterator
 
 import pytest
+
 from ros_test_support import isolated_domain, ros_environment
 
 

@@ -101,8 +101,9 @@ class StandInPlant:
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
         from sensor_msgs.msg import JointState
-        from walker_control.joint_controller_node import COMMAND_QOS, MODE_QOS, STATE_QOS
         from walker_msgs.msg import ControlMode, JointAccelerations
+
+        from walker_control.joint_controller_node import COMMAND_QOS, MODE_QOS, STATE_QOS
 
         self.node = Node('stand_in_plant', namespace='/walker', context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -160,9 +161,10 @@ def _run(args: argparse.Namespace, rate: float) -> dict:
     import rclpy
     from ament_index_python.packages import get_package_prefix
     from rclpy.context import Context
+    from walker_msgs.msg import ControlMode
+
     from ros_test_support import NodeProcess, isolated_domain, ros_environment
     from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-    from walker_msgs.msg import ControlMode
 
     executable = f'{get_package_prefix("walker_control")}/lib/walker_control/' \
                  'joint_controller_node'
@@ -395,10 +397,11 @@ def _run_real_plant(args: argparse.Namespace, rate: float) -> dict:
     from ament_index_python.packages import get_package_prefix
     from rclpy.context import Context
     from rclpy.node import Node
+    from walker_msgs.msg import ControlMode
+
     from ros_test_support import NodeProcess, isolated_domain, ros_environment
     from walker_control.joint_controller_node import MODE_QOS
     from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-    from walker_msgs.msg import ControlMode
 
     executable = f'{get_package_prefix("walker_control")}/lib/walker_control/' \
                  'joint_controller_node'

@@ -9,14 +9,8 @@ its load; the JSON records both (CPU count, load average) so runs can be compare
 Cases:
 
 * ``solve``: the bang-bang node-to-node solve (midpoint radius, switch, torque ratio and time
-  scale; eqs (23)-(27)) for 90 and 180 deg steps, nominal and the paper's family minimum (the
-  torque limits alone); and the time-optimal lower bound every sweep's plan reports (its
-  first computation: the cache is cleared before each run). The target is under 5 ms.
-* ``direct method``: the minimum-time move found by direct optimisation (multiple shooting,
-  IPOPT through CasADi, three starting guesses, each move re-integrated) for 90 and 180 deg
-  steps under the torque and rate limits and under the torque limits alone; building the
-  solver (once per process) is left out. A few runs: it takes seconds, and is computed for
-  reports, never during a walk.
+  scale; eqs (23)-(27)) for 90 and 180 deg steps, nominal and at the time-optimal bound. The
+  target is under 5 ms.
 * ``plan``: a whole ``plan_trajectory`` request of each of the nine types without ROS:
   validation, building, mapping Cartesian paths through the IK at every control period,
   checking the limits and computing the bound. It grows with the trajectory's duration (one

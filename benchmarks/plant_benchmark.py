@@ -51,10 +51,12 @@ def percentiles(values, points=(50, 99)):
 def physics_benchmark(seconds: float) -> dict:
     """Step the plant core in sim time; return real-time factors and step costs."""
     import numpy as np
-    import pybullet
+
     from walker_core.robot_parameters import load_walker_parameters
     from walker_sim.core.config import StartConfiguration, load_sim_parameters
     from walker_sim.core.plant import WalkerPlant
+
+    import pybullet
 
     engine = []
     step_simulation = pybullet.stepSimulation
@@ -110,6 +112,7 @@ def _pulse_response(params, sim, joint: int, iterations: int, residual: float,
                     seconds: float = 1.0, pulse: float = 0.3):
     """Speed of ``joint`` and tip path under a torque pulse (half the limit), friction on."""
     import numpy as np
+
     from walker_sim.core.config import StartConfiguration
     from walker_sim.core.plant import WalkerPlant
 
@@ -133,6 +136,7 @@ def accuracy_benchmark() -> dict:
     import dataclasses
 
     import numpy as np
+
     from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
     from walker_core.robot_parameters import load_walker_parameters
     from walker_sim.core.config import load_sim_parameters
@@ -165,8 +169,9 @@ def jitter_benchmark(seconds: float) -> dict:
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
-    from ros_test_support import NodeProcess, isolated_domain, ros_environment
     from sensor_msgs.msg import JointState
+
+    from ros_test_support import NodeProcess, isolated_domain, ros_environment
     from walker_sim.messages import SENSOR_QOS
 
     executable = str(Path(get_package_prefix('walker_sim')) / 'lib' / 'walker_sim' /

@@ -99,8 +99,9 @@ class FaultGraph:
         from diagnostic_msgs.msg import DiagnosticArray
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
-        from walker_bringup.graph_client import GraphClient, init_context
         from walker_msgs.msg import GripperStates, StepPhase, StepReport
+
+        from walker_bringup.graph_client import GraphClient, init_context
 
         self.processes = {name: self.group.start(spec) for name, spec in self.specs.items()}
         self.context = init_context(domain)
@@ -346,6 +347,7 @@ class FaultGraph:
         Returns whether the call was answered, and the report.
         """
         from std_srvs.srv import Trigger
+
         from walker_core.spinning import STACK_DUMP_SIGNAL
 
         pid = self.processes[name].popen.pid

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import JointController, Measurement

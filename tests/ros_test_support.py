@@ -16,8 +16,8 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
+from collections.abc import Iterator
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',

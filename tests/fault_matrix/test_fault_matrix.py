@@ -18,6 +18,7 @@ About 20 minutes on a 2-core machine, so it is not part of the default test run:
 """
 
 import pytest
+
 from fault_graph import TEST_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults, write_outcomes
 from ros_test_support import running_graph
 

@@ -13,6 +13,7 @@ About 4 minutes, so it runs with the matrix only:
 """
 
 import pytest
+
 from fault_graph import TEST_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults, write_outcomes
 from ros_test_support import running_graph
 

@@ -1,11 +1,13 @@
 """``run_all.py --composed`` and ``--grouped-controllers``: up, walking, nothing left."""
 
 import json
+
 import os
 import subprocess
 import sys
 
 import pytest
+
 from ros_test_support import REPO_ROOT, isolated_domain, processes_with, ros_environment
 
 pytestmark = pytest.mark.integration

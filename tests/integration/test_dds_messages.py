@@ -5,6 +5,7 @@ domain must hear nothing, which is what keeps parallel runs apart.
 """
 
 import pytest
+
 from ros_test_support import NodeProcess, isolated_domain, ros_environment
 
 pytestmark = pytest.mark.integration

@@ -12,6 +12,7 @@ over every gripper state when the graph is shut down).
 import time
 
 import pytest
+
 from fault_graph import FAULT_TIMEOUT, TEST_TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults
 from ros_test_support import running_graph
 
@@ -45,8 +46,8 @@ def test_a_step_started_with_the_planner_gone_holds_and_the_simulation_runs_on(g
     restarted planner was still being discovered.
     """
     from action_msgs.msg import GoalStatus
-    from rclpy.qos import qos_profile_sensor_data
     from sensor_msgs.msg import JointState
+    from rclpy.qos import qos_profile_sensor_data
     from walker_msgs.msg import StepPhase
 
     stamps = []  # [s] the plant's joint-state stamps (simulated time)

@@ -18,14 +18,9 @@ import signal
 import time
 
 import pytest
+
 from fault_graph import (
-    FAULT_TIMEOUT,
-    STILL,
-    TEST_TIMEOUT,
-    TIMEOUT,
-    FaultGraph,
-    assert_the_bag_holds_the_faults,
-)
+    FAULT_TIMEOUT, STILL, TEST_TIMEOUT, TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults)
 from ros_test_support import running_graph
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(TEST_TIMEOUT)]

@@ -11,6 +11,7 @@ the graph is shut down).
 import time
 
 import pytest
+
 from fault_graph import FAULT_TIMEOUT, TEST_TIMEOUT, TIMEOUT, FaultGraph
 from ros_test_support import running_graph
 

@@ -11,14 +11,10 @@ itself asks for nothing, they leave the scheduling alone.
 import os
 
 import pytest
+
 from ros_test_support import (
-    REPO_ROOT,
-    NodeProcess,
-    isolated_domain,
-    realtime_permitted,
-    ros_environment,
-    thread_policies,
-)
+    REPO_ROOT, NodeProcess, isolated_domain, realtime_permitted, ros_environment,
+    thread_policies)
 
 pytestmark = pytest.mark.integration
 

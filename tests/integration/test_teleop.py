@@ -13,6 +13,7 @@ import sys
 import time
 
 import pytest
+
 from ros_test_support import REPO_ROOT, ros_environment, running_graph
 
 pytestmark = pytest.mark.integration
@@ -46,9 +47,10 @@ class Graph:
     def _start(self, domain: int) -> None:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
-        from walker_bringup.graph_client import GraphClient, init_context
         from walker_msgs.msg import GripperStates
         from walker_msgs.srv import GripperCommand, JogJoint, JogTip
+
+        from walker_bringup.graph_client import GraphClient, init_context
 
         for spec in self.nodes:
             self.group.start(spec)

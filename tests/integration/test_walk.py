@@ -13,13 +13,9 @@ import time
 from pathlib import Path
 
 import pytest
+
 from ros_test_support import (
-    REPO_ROOT,
-    isolated_domain,
-    processes_with,
-    ros_environment,
-    running_graph,
-)
+    REPO_ROOT, isolated_domain, processes_with, ros_environment, running_graph)
 
 WALK_TIMEOUT = 600.0  # [s] of wall time for a walk on a loaded 2-core machine
 
@@ -33,11 +29,12 @@ class Graph:
     def __init__(self, tmp: Path, domain: int) -> None:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
+        from walker_msgs.msg import GripperStates, StepPhase
+
         from walker_bringup.graph import walker_graph
         from walker_bringup.graph_client import GraphClient, init_context
         from walker_bringup.processes import ProcessGroup
         from walker_core.robot_parameters import default_parameter_file
-        from walker_msgs.msg import GripperStates, StepPhase
 
         env = ros_environment(domain)
         self.domain = domain

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+
 from plant_loop import ClosedLoop
 from walker_control.core.config import load_controller_settings
 from walker_control.core.modes import Mode

@@ -15,6 +15,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from plant_loop import ClosedLoop
 from walker_control.core.config import ControllerSettings, load_controller_settings
 from walker_control.core.modes import Mode

@@ -9,6 +9,7 @@ Without it (``control.relaxation.duration`` 0) the bend stays.
 
 import numpy as np
 import pytest
+
 from plant_loop import ClosedLoop
 from walker_control.core.config import load_controller_settings
 from walker_control.core.modes import Mode

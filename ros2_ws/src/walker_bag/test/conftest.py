@@ -9,6 +9,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from walker_bag.core.bag_reader import walker_typestore
 from walker_bag.core.bag_writer import BagWriter
+
 from walker_bag_samples import add_walk_topics, write_walk
 
 

@@ -18,11 +18,13 @@ from mcap.reader import make_reader
 from mcap.records import Chunk, Message
 from mcap.stream_reader import StreamReader, breakup_chunk
 from rosbags.highlevel import AnyReader
+
 from walker_bag.core.bag_metadata import read_metadata
 from walker_bag.core.bag_reader import BagReader
 from walker_bag.core.bag_recovery import recover_bag
 from walker_bag.core.bag_writer import BagWriter
 from walker_bag.core.errors import BagExistsError, BagPathError
+
 from walker_bag_samples import WALK_TOPICS, add_walk_topics
 
 HERE = Path(__file__).resolve().parent

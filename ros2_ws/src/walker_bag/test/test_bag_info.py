@@ -2,6 +2,7 @@
 
 from walker_bag.bag_info import main
 from walker_bag.core.bag_metadata import read_metadata
+
 from walker_bag_samples import WALK_TOPICS
 
 

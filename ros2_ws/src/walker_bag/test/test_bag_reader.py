@@ -1,10 +1,12 @@
 """The reading helper later tools use: decoded messages of chosen topics, in time order."""
 
 import pytest
+
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_reader import BagReader, read_messages, walker_typestore
 from walker_bag.core.bag_writer import BagWriter
 from walker_bag.core.errors import BagPathError, UnknownTopicError
+
 from walker_bag_samples import WALK_TOPICS, build_message, index_of
 
 

@@ -11,18 +11,16 @@ import yaml
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
-from walker_bag.core.bag_metadata import NO_MESSAGE_TIME_NS, TopicMetadata, read_metadata
+
+from walker_bag.core.bag_metadata import NO_MESSAGE_TIME_NS, read_metadata
 from walker_bag.core.bag_writer import BagWriter
 from walker_bag.core.errors import (
-    BagClosedError,
-    BagError,
-    BagExistsError,
-    BagPathError,
-    TopicConflictError,
-    UnknownTopicError,
-)
+    BagClosedError, BagError, BagExistsError, BagPathError, TopicConflictError,
+    UnknownTopicError)
+from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.message_definitions import message_definition, type_description_hash
 from walker_bag.core.qos import qos_profiles_from_yaml
+
 from walker_bag_samples import WALK_TOPICS, add_walk_topics, index_of, write_walk
 
 

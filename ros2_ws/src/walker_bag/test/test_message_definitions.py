@@ -2,14 +2,11 @@
 
 import pytest
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
 from walker_bag.core.errors import MessageDefinitionError
 from walker_bag.core.message_definitions import (
-    SEPARATOR,
-    interface_prefixes,
-    message_definition,
-    split_type_name,
-    type_description_hash,
-)
+    SEPARATOR, interface_prefixes, message_definition, split_type_name, type_description_hash)
+
 from walker_bag_samples import WALK_TOPICS
 
 WALK_TYPES = sorted({type_name for _, type_name, _ in WALK_TOPICS})

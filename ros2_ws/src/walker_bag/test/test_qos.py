@@ -2,16 +2,13 @@
 
 import pytest
 import yaml
-from rosbags.interfaces import QosDurability, QosReliability
 from rosbags.rosbag2.metadata import parse_qos
+from rosbags.interfaces import QosDurability, QosReliability
+
 from walker_bag.core.errors import MetadataError, TopicConflictError
 from walker_bag.core.qos import (
-    INFINITE_DURATION_NS,
-    QosProfile,
-    qos_profiles_from_yaml,
-    qos_profiles_to_yaml,
-    subscription_policies,
-)
+    INFINITE_DURATION_NS, QosProfile, qos_profiles_from_yaml, qos_profiles_to_yaml,
+    subscription_policies)
 
 ROSBAG2_KEYS = ['history', 'depth', 'reliability', 'durability', 'deadline', 'lifespan',
                 'liveliness', 'liveliness_lease_duration', 'avoid_ros_namespace_conventions']

@@ -19,6 +19,7 @@ from mcap.reader import make_reader
 from mcap.records import Message
 from mcap.stream_reader import StreamReader
 from mcap_ros2.decoder import DecoderFactory
+
 from ros_test_support import NodeProcess, isolated_domain, ros_environment
 from walker_bag.core.bag_metadata import read_metadata
 from walker_bag.core.bag_reader import BagReader

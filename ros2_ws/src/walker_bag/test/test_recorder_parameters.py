@@ -4,16 +4,14 @@ import datetime
 from pathlib import Path
 
 import pytest
+
+from walker_core.parameter_schema import (
+    ParameterError, load_parameter_file, replace_in_section, section_from_flat)
+from walker_core.robot_parameters import default_parameter_file
+
 from walker_bag.core.errors import TopicNameError
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
 from walker_bag.core.topic_selection import TopicSelection, is_hidden_topic
-from walker_core.parameter_schema import (
-    ParameterError,
-    load_parameter_file,
-    replace_in_section,
-    section_from_flat,
-)
-from walker_core.robot_parameters import default_parameter_file
 
 DEFAULTS = section_from_flat(RecorderParameters, load_parameter_file(default_parameter_file()),
                              RECORDER_PREFIX)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_writer import BagWriter
 from walker_bag.core.message_definitions import message_definition, type_description_hash

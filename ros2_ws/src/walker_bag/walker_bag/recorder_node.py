@@ -36,8 +36,10 @@ from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (
+    DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 from rclpy.topic_endpoint_info import TopicEndpointInfo
+
 from walker_core.node_parameters import declare_section
 from walker_core.parameter_schema import ParameterError
 from walker_core.spinning import TopicSampler, freeze_start_up_objects, init_node_process

@@ -1,6 +1,7 @@
 """The loop's record from the plant's diagnostic status, and the line run_all.py prints."""
 
 import pytest
+
 from walker_bringup.loop_health import loop_health, sources_not_heard
 
 JOINTS = ('a_yaw_joint', 'a_pitch_joint', 'vertex_joint', 'b_pitch_joint', 'b_yaw_joint')

@@ -4,6 +4,7 @@ import time
 
 import numpy as np
 import pytest
+
 from ros_test_support import NodeProcess
 from walker_bringup.lossy_link import LossyLink
 
@@ -117,6 +118,7 @@ def test_the_node_refuses_to_start_on_invalid_parameters(ros_env, parameters, wo
 
 def test_the_settings_change_at_run_time_and_invalid_ones_change_nothing(rclpy_context):
     from rclpy.parameter import Parameter
+
     from walker_bringup.lossy_link_node import LossyLinkNode
 
     node = LossyLinkNode(context=rclpy_context, namespace='/test', parameter_overrides=[

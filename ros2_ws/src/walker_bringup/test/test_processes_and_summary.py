@@ -9,6 +9,7 @@ import time
 from types import SimpleNamespace
 
 import pytest
+
 from walker_bringup.graph import NodeSpec, controller_node_name, walker_graph
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
@@ -243,8 +244,9 @@ def test_an_output_directory_holding_a_bag_is_refused_before_anything_starts(
 
 
 def test_walk_progress_names_the_step_under_way_and_counts_the_steps_done_between_them():
-    from walker_bringup.run import walk_feedback_text
     from walker_msgs.action import WalkTo
+
+    from walker_bringup.run import walk_feedback_text
 
     during = WalkTo.Feedback(step_index=4, step_count=5, phase=3, from_node='n3_2',
                              to_node='n4_3', tip_position_error=0.0059)

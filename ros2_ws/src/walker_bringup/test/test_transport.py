@@ -5,11 +5,9 @@ import sys
 from pathlib import Path
 
 import pytest
-from walker_bringup.transport import (
-    PROFILES_VARIABLE,
-    udp_loopback_environment,
-    udp_loopback_profile,
-)
+
+from walker_bringup.transport import (PROFILES_VARIABLE, udp_loopback_environment,
+                                      udp_loopback_profile)
 
 # A node that prints "ready" once its participant is up, then lives until its stdin closes.
 _NODE = """

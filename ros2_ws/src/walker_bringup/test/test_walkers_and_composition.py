@@ -3,25 +3,13 @@
 from pathlib import Path
 
 import pytest
+
 from walker_bringup.composition import (
-    COMPONENTS,
-    LOOP_NODES,
-    ComposedGraph,
-    CompositionError,
-    component_of,
-    composed_command,
-    graph_from_arguments,
-    parse_arguments,
-)
+    COMPONENTS, LOOP_NODES, ComposedGraph, CompositionError, component_of, composed_command,
+    graph_from_arguments, parse_arguments)
 from walker_bringup.graph import (
-    NodeSpec,
-    StartStance,
-    several_walkers,
-    start_stances,
-    walker_graph,
-    walker_namespace,
-    walker_targets,
-)
+    NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
+    walker_targets)
 from walker_bringup.run import parse_arguments as run_arguments
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 from walker_core.truss import Truss, UnknownNodeError
@@ -222,8 +210,9 @@ def test_the_loop_by_call_steps_sim_time_and_still_serves_the_plants_timers():
     from rclpy.node import Node
     from ros_test_support import isolated_domain
     from sensor_msgs.msg import JointState
-    from walker_core.qos import COMMAND_QOS, LATCHED_QOS
     from walker_msgs.msg import GripperStates
+
+    from walker_core.qos import COMMAND_QOS, LATCHED_QOS
 
     specs = [spec for spec in walker_graph(PARAMS, sim_time=True, grouped_controllers=True)
              if spec.name in LOOP_NODES]

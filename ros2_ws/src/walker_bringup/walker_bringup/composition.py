@@ -178,6 +178,7 @@ class ComposedGraph:
         """Spin every node until ``stop()`` is true or the context shuts down."""
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
+
         from walker_core.spinning import freeze_start_up_objects, make_executor
 
         # The loop by call runs in this thread between turns of the executor, holding the
@@ -344,6 +345,7 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the composed graph until SIGINT or SIGTERM; exit code 2 when a node refuses."""
     import rclpy
+
     from walker_core.spinning import init_node_process
 
     args = parse_arguments(sys.argv[1:] if argv is None else argv)

@@ -12,26 +12,21 @@ import time
 from collections.abc import Callable
 
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from walker_core.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
-from walker_core.spinning import TopicSampler, destroy_actions
 from walker_msgs.action import Step, WalkTo
+from diagnostic_msgs.msg import DiagnosticArray
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
 from walker_bringup.loop_health import (
-    PLANT_STATUS_SUFFIX,
-    SUPERVISOR_STATUS_SUFFIX,
-    LoopHealth,
-    loop_health,
-    sources_not_heard,
-)
+    PLANT_STATUS_SUFFIX, SUPERVISOR_STATUS_SUFFIX, LoopHealth, loop_health, sources_not_heard)
+from walker_core.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
+from walker_core.spinning import TopicSampler, destroy_actions
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
            'init_context']

@@ -24,20 +24,16 @@ import sys
 
 import rclpy
 from rcl_interfaces.msg import (
-    FloatingPointRange,
-    IntegerRange,
-    ParameterDescriptor,
-    SetParametersResult,
-)
+    FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from walker_core.spinning import init_node_process, spin_nodes
 
 from walker_bringup.lossy_link import LossyLink
+from walker_core.spinning import init_node_process, spin_nodes
 
 __all__ = ['LossyLinkNode', 'message_type', 'main']
 

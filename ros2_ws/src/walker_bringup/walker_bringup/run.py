@@ -31,28 +31,18 @@ import threading
 import time
 from pathlib import Path
 
+from walker_bringup.composition import LOOP_NODES, composed_command
+from walker_bringup.graph import (
+    NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
+from walker_bringup.graph_client import (
+    GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
+from walker_bringup.processes import ProcessGroup
+from walker_bringup.summary import format_table, rows_from_reports, write_json
 from walker_report.core.errors import ReportError
 from walker_report.core.report import make_report
 from walker_report.progress import ProgressLine
 from walker_report.walk_report import written_text
 from walker_teleop.core.progress import walk_progress
-
-from walker_bringup.composition import LOOP_NODES, composed_command
-from walker_bringup.graph import (
-    NodeSpec,
-    StartStance,
-    several_walkers,
-    walker_graph,
-    walker_targets,
-)
-from walker_bringup.graph_client import (
-    GraphClient,
-    GraphNotReadyError,
-    WalkInterruptedError,
-    init_context,
-)
-from walker_bringup.processes import ProcessGroup
-from walker_bringup.summary import format_table, rows_from_reports, write_json
 
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 

@@ -5,6 +5,7 @@ walk: the table lives in the report's core so that neither package imports the o
 cycle (walker_bringup -> walker_report, never back).
 """
 
-from walker_report.core.steps import PHASES, StepRow, format_table, rows_from_reports, write_json
+from walker_report.core.steps import (
+    PHASES, StepRow, format_table, rows_from_reports, write_json)
 
 __all__ = ['PHASES', 'StepRow', 'rows_from_reports', 'format_table', 'write_json']

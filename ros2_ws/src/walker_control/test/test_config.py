@@ -1,20 +1,14 @@
 """The control parameters: the file's design follows the paper, unstable sets are refused."""
 
 import pytest
-from walker_control.core.config import (
-    ControllerSettings,
-    UnstableControllerError,
-    check_controller_settings,
-    load_controller_settings,
-)
-from walker_control.core.modes import GAIN_MODES, Mode
+
 from walker_core.parameter_schema import (
-    ParameterError,
-    load_parameter_file,
-    replace_in_section,
-    section_to_flat,
-)
+    ParameterError, load_parameter_file, replace_in_section, section_to_flat)
 from walker_core.robot_parameters import default_parameter_file
+from walker_control.core.config import (
+    ControllerSettings, UnstableControllerError, check_controller_settings,
+    load_controller_settings)
+from walker_control.core.modes import GAIN_MODES, Mode
 
 DEFAULT_FLAT = load_parameter_file(default_parameter_file())
 SETTINGS = load_controller_settings()

@@ -54,9 +54,11 @@ class StandIn:
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
         from sensor_msgs.msg import JointState
-        from walker_control.joint_controller_node import COMMAND_QOS, MODE_QOS, STATE_QOS
+        from walker_msgs.msg import (
+            ControlMode, ControllerState, JointAccelerations, JointCommand)
+
         from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-        from walker_msgs.msg import ControllerState, ControlMode, JointAccelerations, JointCommand
+        from walker_control.joint_controller_node import COMMAND_QOS, MODE_QOS, STATE_QOS
 
         self.node = Node('stand_in', context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -103,8 +105,9 @@ class StandIn:
     def step(self, velocity=None):
         """Advance one period; publish the state until every namespace has answered it."""
         from sensor_msgs.msg import JointState
-        from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
         from walker_msgs.msg import JointAccelerations
+
+        from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
         self.stamp_ns += PERIOD_NS
         names = list(PHYSICAL_JOINT_NAMES)
@@ -240,12 +243,13 @@ def test_states_handed_over_by_call_take_their_setpoints_without_the_executor(rc
     the setpoints the stand-in planner sent ahead.
     """
     from rclpy.executors import SingleThreadedExecutor
-    from ros_test_support import set_stamp, spin_executor_until
     from sensor_msgs.msg import JointState
+    from walker_msgs.msg import JointAccelerations
+
+    from ros_test_support import set_stamp, spin_executor_until
     from walker_control.core.modes import Mode
     from walker_control.joint_controllers_node import JointControllersNode
     from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-    from walker_msgs.msg import JointAccelerations
 
     names = list(PHYSICAL_JOINT_NAMES)
     node = JointControllersNode(context=rclpy_context, cli_args=[

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_control.core.fastest_move import _solve, fastest_move_through_filter
 from walker_control.core.lowpass import LowPassFilter, design_lowpass_sos
 

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_control.core.friction_compensation import FrictionCompensator
 
 COMPENSATOR = FrictionCompensator(level=1.5, deadband=0.001, ramp=0.002)

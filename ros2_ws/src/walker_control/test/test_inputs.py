@@ -3,16 +3,11 @@
 import math
 
 import pytest
+
 from walker_control.core.config import load_controller_settings
 from walker_control.core.inputs import (
-    InputWatchdog,
-    Setpoint,
-    SetpointBuffer,
-    SetpointError,
-    StreamPacing,
-    carry_forward,
-    validate_setpoint,
-)
+    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StreamPacing,
+    carry_forward, validate_setpoint)
 
 DRIVE = load_controller_settings().drive(1)
 

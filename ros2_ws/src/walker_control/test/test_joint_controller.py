@@ -9,18 +9,15 @@ import math
 
 import numpy as np
 import pytest
-from walker_control.core.config import load_controller_settings
-from walker_control.core.inputs import Setpoint
-from walker_control.core.joint_controller import (
-    JointController,
-    Measurement,
-    MeasurementError,
-    RoleChangeError,
-)
-from walker_control.core.modes import Mode
+
 from walker_core.dynamics import RigidModel, diagonal_inertia
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
+from walker_control.core.config import load_controller_settings
 from walker_core.parameter_schema import ParameterError, replace_in_section
+from walker_control.core.inputs import Setpoint
+from walker_control.core.joint_controller import (
+    JointController, Measurement, MeasurementError, RoleChangeError)
+from walker_control.core.modes import Mode
 
 #: The terms of Figure 3 alone (no reference shaping, no setpoint filter, no friction
 #: feed-forward), so each term can be checked against the design; the additions are checked on

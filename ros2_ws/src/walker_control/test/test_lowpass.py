@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 from scipy import signal
+
 from walker_control.core.config import load_controller_settings
 from walker_control.core.lowpass import FilterDesignError, LowPassFilter, design_lowpass_sos
 

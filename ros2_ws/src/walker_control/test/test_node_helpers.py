@@ -1,9 +1,10 @@
 """Pieces of the node that need no running graph: naming, and modes matching the messages."""
 
 import pytest
+from walker_msgs.msg import ControllerState, ControlMode
+
 from walker_control.core.modes import Mode
 from walker_control.joint_controller_node import default_node_name
-from walker_msgs.msg import ControllerState, ControlMode
 
 
 @pytest.mark.parametrize('name', ['OFF', 'HOLD', 'COARSE', 'FINE'])

@@ -3,6 +3,7 @@
 import math
 
 import pytest
+
 from walker_control.core.pid import Pid, PidGains
 
 

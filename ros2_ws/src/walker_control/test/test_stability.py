@@ -5,20 +5,11 @@ import itertools
 import numpy as np
 import pytest
 from numpy.polynomial import polynomial as npp
+
 from walker_control.core.stability import (
-    LoopDesign,
-    UnstableLoopError,
-    check_loop,
-    discrete_closed_loop_poles,
-    eq14_poles,
-    eq14_transfer_function,
-    eq15_margin,
-    eq16_margin,
-    inertia_ratio_grid,
-    pole_damping,
-    routh_array,
-    routh_hurwitz_stable,
-)
+    LoopDesign, UnstableLoopError, check_loop, discrete_closed_loop_poles, eq14_poles,
+    eq14_transfer_function, eq15_margin, eq16_margin, inertia_ratio_grid, pole_damping,
+    routh_array, routh_hurwitz_stable)
 
 KA = [0.0, 0.25, 0.5, 1.0, 2.0, 4.0]
 RATIO = [0.1, 0.2, 0.3, 0.45, 0.55, 0.7, 0.9, 1.2, 1.6, 2.5]  # wc / wf

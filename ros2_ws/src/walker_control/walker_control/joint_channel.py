@@ -15,29 +15,18 @@ from __future__ import annotations
 
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
+from walker_msgs.msg import ControlMode, ControllerState, JointCommand
+
 from walker_core.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
 from walker_core.resubscription import Resubscription
-from walker_msgs.msg import ControllerState, ControlMode, JointCommand
 
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
-    InputWatchdog,
-    Setpoint,
-    SetpointBuffer,
-    SetpointError,
-    StaleInputs,
-    StreamPacing,
-    carry_forward,
-    validate_setpoint,
-)
+    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
+    StreamPacing, carry_forward, validate_setpoint)
 from walker_control.core.joint_controller import (
-    ControlOutput,
-    JointController,
-    Measurement,
-    MeasurementError,
-    MissingAccelerationError,
-    RoleChangeError,
-)
+    ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,
+    RoleChangeError)
 from walker_control.core.modes import Mode
 
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel',

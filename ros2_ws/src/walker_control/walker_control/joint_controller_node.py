@@ -35,24 +35,18 @@ from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
+from walker_msgs.msg import ControlMode, JointAccelerations
+
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.realtime import log_realtime_request
 from walker_core.resubscription import Resubscription
 from walker_core.spinning import init_node_process, spin_nodes
-from walker_msgs.msg import ControlMode, JointAccelerations
-
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
 from walker_control.joint_channel import (
-    COMMAND_QOS,
-    MODE_QOS,
-    RESUBSCRIBE_AFTER_TIMEOUTS,
-    STATE_QOS,
-    JointChannel,
-    seconds,
-)
+    COMMAND_QOS, MODE_QOS, RESUBSCRIBE_AFTER_TIMEOUTS, STATE_QOS, JointChannel, seconds)
 
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'ControllerNode', 'JointControllerNode',
            'default_node_name', 'run_controller_node', 'main']

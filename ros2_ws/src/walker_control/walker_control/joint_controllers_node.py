@@ -25,8 +25,8 @@ from __future__ import annotations
 import sys
 
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_control.joint_controller_node import ControllerNode, run_controller_node
 
 __all__ = ['JointControllersNode', 'DEFAULT_NODE_NAME', 'main']

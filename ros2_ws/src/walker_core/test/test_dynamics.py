@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from walker_core.dynamics import RigidModel, diagonal_inertia, mass_matrix_numerical, role_inertia
+
+from walker_core.dynamics import (
+    RigidModel, diagonal_inertia, mass_matrix_numerical, role_inertia)
 from walker_core.robot_parameters import load_walker_parameters
 
 PARAMS = load_walker_parameters()

@@ -6,14 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+
 from walker_core.kinematics import (
-    JointLimitError,
-    KinematicsError,
-    SingularConfigurationError,
-    UnreachableError,
-    WalkerKinematics,
-    invert_transform,
-)
+    JointLimitError, KinematicsError, SingularConfigurationError, UnreachableError,
+    WalkerKinematics, invert_transform)
 from walker_core.robot_parameters import load_walker_parameters
 
 PARAMS = load_walker_parameters()

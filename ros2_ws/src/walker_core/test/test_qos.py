@@ -2,7 +2,9 @@
 
 import pytest
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, ReliabilityPolicy
-from walker_core.qos import CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
+
+from walker_core.qos import (
+    CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos)
 
 
 @pytest.mark.parametrize('profile, reliability, durability, depth', [

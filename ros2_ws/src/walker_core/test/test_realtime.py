@@ -9,11 +9,9 @@ import sys
 import threading
 
 import pytest
+
 from walker_core.realtime import (
-    log_realtime_request,
-    request_realtime_priority,
-    request_thread_priority,
-)
+    log_realtime_request, request_realtime_priority, request_thread_priority)
 
 
 @pytest.mark.parametrize('priority', [-1, 100, 1.5, True, '50', None])

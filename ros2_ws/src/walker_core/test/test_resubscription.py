@@ -3,6 +3,7 @@
 import math
 
 import pytest
+
 from walker_core.resubscription import Resubscription, clock_ran_past
 
 

@@ -5,6 +5,7 @@ import threading
 
 import pytest
 from rclpy.node import Node
+
 from walker_core import spinning
 
 
@@ -151,6 +152,7 @@ def test_a_sampled_subscription_made_anew_keeps_its_topic_and_receives_again(rcl
     import time
 
     from std_msgs.msg import Int32
+
     from walker_core.qos import COMMAND_QOS
 
     context = rclpy_context

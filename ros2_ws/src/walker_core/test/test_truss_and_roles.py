@@ -2,14 +2,10 @@
 
 import numpy as np
 import pytest
+
 from walker_core.joint_roles import (
-    PHYSICAL_JOINT_NAMES,
-    joint_of_role,
-    other_gripper,
-    physical_to_roles,
-    role_of_joint,
-    roles_to_physical,
-)
+    PHYSICAL_JOINT_NAMES, joint_of_role, other_gripper, physical_to_roles, role_of_joint,
+    roles_to_physical)
 from walker_core.truss import Truss, UnknownNodeError
 
 TRUSS = Truss(spacing=0.9, columns=5, rows=4)

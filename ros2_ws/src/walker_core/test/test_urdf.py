@@ -12,17 +12,13 @@ from pathlib import Path
 import numpy as np
 import pybullet
 import pytest
+
 from walker_core.dynamics import RigidModel, diagonal_inertia
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics
 from walker_core.robot_parameters import load_walker_parameters
 from walker_core.urdf import (
-    GRIPPER_LINKS,
-    description_urdf,
-    flex_joints,
-    plant_urdf,
-    rotor_joint_name,
-)
+    GRIPPER_LINKS, description_urdf, flex_joints, plant_urdf, rotor_joint_name)
 
 PARAMS = load_walker_parameters()
 

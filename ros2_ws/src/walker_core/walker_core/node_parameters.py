@@ -10,26 +10,17 @@ refused with the reason and nothing changes.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
 from typing import Any
+from collections.abc import Callable, Mapping
 
 from rcl_interfaces.msg import (
-    FloatingPointRange,
-    IntegerRange,
-    ParameterDescriptor,
-    SetParametersResult,
-)
+    FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from walker_core.parameter_schema import (
-    ParameterError,
-    ParameterSpec,
-    leaf_specs,
-    load_parameter_file,
-    replace_in_section,
-    section_from_flat,
-)
+    ParameterError, ParameterSpec, leaf_specs, load_parameter_file, replace_in_section,
+    section_from_flat)
 from walker_core.robot_parameters import default_parameter_file
 
 __all__ = ['declare_section', 'guard_section_updates']

@@ -17,9 +17,9 @@ import array
 import dataclasses
 import math
 import typing
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+from collections.abc import Mapping
 
 import yaml
 

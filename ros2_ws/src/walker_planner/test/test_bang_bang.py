@@ -7,12 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
+
 from walker_planner.core.bang_bang import (
-    PlanarProfile,
-    integrate_dimensionless,
-    summarize_profile,
-    torque_ratio_by_root_finding,
-)
+    PlanarProfile, integrate_dimensionless, summarize_profile, torque_ratio_by_root_finding)
 from walker_planner.core.errors import NoSolutionError
 
 starts = st.floats(0.3, 0.9)

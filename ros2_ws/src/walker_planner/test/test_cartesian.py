@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from walker_core.kinematics import WalkerKinematics
 from walker_planner.core.cartesian import Branch, CartesianInJointSpace, branch_of
 from walker_planner.core.errors import WorkspaceError

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from walker_planner.core.chaining import chain
 from walker_planner.core.errors import InvalidRequestError
 from walker_planner.core.streaming import SampledTrajectory

@@ -5,9 +5,10 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_planner.core.coasting import CoastingSweep, coasting_sweep
 from walker_planner.core.node_to_node import PlanarModel
-from walker_planner.core.planning import PlanningContext, PlanRequest, plan
+from walker_planner.core.planning import PlanRequest, PlanningContext, plan
 
 H = 0.03
 ABOVE = (0.0, 0.9, H)

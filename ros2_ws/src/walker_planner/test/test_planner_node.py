@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 import pytest
+
 from ros_test_support import REPO_ROOT, NodeProcess, isolated_domain, ros_environment
 
 pytestmark = pytest.mark.integration
@@ -36,10 +37,11 @@ class Probe:
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import JointState
         from trajectory_msgs.msg import JointTrajectory
-        from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
         from walker_msgs.action import FollowTrajectory
         from walker_msgs.msg import ControlMode, JointCommand
         from walker_msgs.srv import PlanTrajectory
+
+        from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
         self.names = PHYSICAL_JOINT_NAMES
         self.context = Context()

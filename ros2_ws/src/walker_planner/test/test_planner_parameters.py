@@ -3,12 +3,9 @@
 import dataclasses
 
 import pytest
+
 from walker_core.parameter_schema import (
-    ParameterError,
-    leaf_specs,
-    load_parameter_file,
-    replace_in_section,
-)
+    ParameterError, leaf_specs, load_parameter_file, replace_in_section)
 from walker_core.robot_parameters import default_parameter_file
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 

@@ -6,14 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from walker_core.joint_roles import physical_to_roles
 from walker_planner.core.errors import (
-    InvalidRequestError,
-    LimitError,
-    NoSolutionError,
-    PlanningError,
-    WorkspaceError,
-)
+    InvalidRequestError, LimitError, NoSolutionError, PlanningError, WorkspaceError)
 from walker_planner.core.planning import PlanRequest, plan
 from walker_planner.core.registry import TRAJECTORY_TYPES
 from walker_planner.core.trajectory import CARTESIAN

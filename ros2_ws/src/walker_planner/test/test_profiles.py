@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from walker_planner.core.errors import LimitError
-from walker_planner.core.profiles import BlendProfile, ConstantVelocityProfile, MinJerkProfile
+from walker_planner.core.profiles import (
+    BlendProfile, ConstantVelocityProfile, MinJerkProfile)
 
 rates = st.floats(0.05, 5.0)
 accelerations = st.floats(0.05, 20.0)

@@ -6,15 +6,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.core.errors import InvalidRequestError, LimitError
 from walker_planner.core.planning import PlanRequest, plan
 from walker_planner.core.streaming import (
-    SampledTrajectory,
-    SetpointStream,
-    check_start,
-    stamps_due,
-)
+    SampledTrajectory, SetpointStream, check_start, stamps_due)
 
 NAMES = list(PHYSICAL_JOINT_NAMES)
 MS = 1_000_000

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.core.chaining import chain
 from walker_planner.core.streaming import SampledTrajectory
 

@@ -7,8 +7,8 @@
 * ``figure9_family_180deg.png``: tip paths of 180 deg steps in the x-y plane (in units of 2l)
   for several start radii rho(0) and midpoint radii rho_min, with the torque ratio tau found;
 * ``duration_vs_midpoint.png``: duration of a 180 deg and a 90 deg step on the default robot
-  against the midpoint radius, under the torque limits alone (the paper's family, whose
-  minimum is the family minimum, not a bound) and with the joint rate limits of nominal plans.
+  against the midpoint radius, under the torque limits alone (the time-optimal bound) and with
+  the joint rate limits of nominal plans.
 """
 
 from __future__ import annotations

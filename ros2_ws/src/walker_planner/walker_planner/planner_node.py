@@ -28,11 +28,15 @@ import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.task import Future
+from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
+from walker_msgs.action import FollowTrajectory
+from walker_msgs.msg import ControlMode, JointCommand
+from walker_msgs.srv import PlanTrajectory
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
@@ -41,20 +45,12 @@ from walker_core.realtime import log_realtime_request, request_thread_priority
 from walker_core.resubscription import Resubscription, clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
-from walker_msgs.action import FollowTrajectory
-from walker_msgs.msg import ControlMode, JointCommand
-from walker_msgs.srv import PlanTrajectory
-
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.planning import PlanningContext, PlanRequest, plan
 from walker_planner.core.streaming import (
-    SampledTrajectory,
-    SetpointStream,
-    check_start,
-    stamps_due,
-)
+    SampledTrajectory, SetpointStream, check_start, stamps_due)
 
 __all__ = ['PlannerNode', 'main']
 

@@ -7,9 +7,10 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from synthetic_walk import build_walk_bag
 from walker_report.core.animation import AnimationOptions
 from walker_report.core.report import ReportOptions, make_report
+
+from synthetic_walk import build_walk_bag
 
 #: Small, quick animation frames: 2 frames per second of the walk, 160x100 pixels.
 SMALL_ANIMATION = AnimationOptions(fps=2.0, max_frames=600, width=160, height=100)

@@ -13,6 +13,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_reader import walker_typestore
 from walker_bag.core.bag_writer import BagWriter

@@ -5,32 +5,19 @@ import shutil
 
 import numpy as np
 import pytest
-from synthetic_walk import (
-    END,
-    PHASE_CODES,
-    SAFE_HOLD_REASON,
-    STEPS,
-    build_walk_bag,
-    joint_positions,
-    phase_events,
-    tip_position,
-)
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.robot_parameters import load_walker_parameters
 from walker_report.core.analysis import (
-    EXTRACTION,
-    FINE,
-    IDLE,
-    INSERTION,
-    SAFE_HOLD,
-    joint_limits,
-    phase_intervals,
-    step_spans,
-    target_vibration,
-)
+    EXTRACTION, FINE, IDLE, INSERTION, SAFE_HOLD, joint_limits, phase_intervals, step_spans,
+    target_vibration)
 from walker_report.core.animation import AnimationOptions, plan_frames, sample_states
 from walker_report.core.errors import BagCutShortError, ReportError
 from walker_report.core.walk_data import PhaseEvent, PoseSeries, load_walk
+
+from synthetic_walk import (
+    END, PHASE_CODES, SAFE_HOLD_REASON, STEPS, build_walk_bag, joint_positions, phase_events,
+    tip_position)
 
 
 @pytest.fixture(scope='module')

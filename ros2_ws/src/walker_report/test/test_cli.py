@@ -4,9 +4,11 @@ import io
 import shutil
 
 import pytest
-from synthetic_walk import STEPS
+
 from walker_report.progress import ProgressLine
 from walker_report.walk_report import main
+
+from synthetic_walk import STEPS
 
 SMALL = ['--fps', '1', '--frame-size', '96x64']
 

@@ -7,26 +7,15 @@ import re
 import numpy as np
 import pytest
 from PIL import Image
-from synthetic_walk import (
-    CLAMPED,
-    END,
-    PEAK_FRACTION,
-    STEPS,
-    TOPICS,
-    URDF_LIMITS,
-    build_walk_bag,
-    walker_truss,
-)
+
 from walker_report.core import figures
 from walker_report.core.errors import ReportError
 from walker_report.core.report import (
-    ReportOptions,
-    default_output_dir,
-    make_report,
-    prepare_output,
-)
+    ReportOptions, default_output_dir, make_report, prepare_output)
 
 from conftest import SMALL_ANIMATION
+from synthetic_walk import (
+    CLAMPED, END, PEAK_FRACTION, STEPS, TOPICS, URDF_LIMITS, build_walk_bag, walker_truss)
 
 #: Every figure of the synthetic walk's report and its size in inches (times figures.DPI).
 FIGURES = {'timeline': None, 'tip_path': (13.0, 6.0), 'joints': (13.0, 11.0),

@@ -1,6 +1,7 @@
 """Fixtures of the plant tests: plants built from the default parameters."""
 
 import pytest
+
 from walker_core.robot_parameters import load_walker_parameters
 from walker_sim.core.config import StartConfiguration, load_sim_parameters
 from walker_sim.core.flexibility import tune_flexibility

@@ -4,14 +4,10 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_sim.core.commands import (
-    CommandError,
-    DecisionGate,
-    EffortCommands,
-    LockStep,
-    seconds_to_ns,
-)
+    CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
 
 MS = 1_000_000  # [ns]
 

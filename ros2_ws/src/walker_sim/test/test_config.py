@@ -3,6 +3,7 @@
 import dataclasses
 
 import pytest
+
 from walker_core.parameter_schema import ParameterError, load_parameter_file
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 from walker_sim.core.config import SimParameters, check_against_walker, load_sim_parameters

@@ -5,17 +5,13 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import load_walker_parameters
 from walker_sim.core.flexibility import (
-    IDENTIFIED_JOINTS,
-    JOINT_PLANES,
-    default_stance,
-    first_visible_mode,
-    linear_model,
-    tune_flexibility,
-)
+    IDENTIFIED_JOINTS, JOINT_PLANES, default_stance, first_visible_mode, linear_model,
+    tune_flexibility)
 from walker_sim.core.plant import WalkerPlant
 
 PARAMS = load_walker_parameters()

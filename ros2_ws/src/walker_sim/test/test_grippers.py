@@ -3,15 +3,11 @@
 import math
 
 import pytest
+
 from walker_core.truss import Truss
 from walker_sim.core.grippers import (
-    GripperCommandError,
-    GripperLogic,
-    GripperMode,
-    HoleAlignment,
-    InterlockError,
-    hole_alignment,
-)
+    GripperCommandError, GripperLogic, GripperMode, HoleAlignment, InterlockError,
+    hole_alignment)
 
 TRUSS = Truss(spacing=0.9, columns=5, rows=4)
 POSITION_TOLERANCE, AXIS_TOLERANCE, SCREW_TIME = 0.002, 0.035, 0.5

@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+
 from walker_sim.core.flexibility import IDENTIFIED_JOINTS
 from walker_sim.core.identification import Excitation, fit_modes, identify_modes
 from walker_sim.identify_modes import format_table, main

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_core.robot_parameters import load_walker_parameters
 from walker_sim.core.config import load_sim_parameters
 from walker_sim.core.motor import DriveModel

@@ -4,6 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics, invert_transform
 from walker_sim.core.grippers import GripperCommandError, GripperMode, InterlockError

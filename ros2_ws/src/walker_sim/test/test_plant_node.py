@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from ros_test_support import NodeProcess
 
 pytestmark = pytest.mark.integration
@@ -85,12 +86,14 @@ def wait_for_endpoints(probe, topic, publishers=True):
 
 
 def test_real_time_mode_publishes_the_five_joints_at_the_control_rate(ros_env, probe):
-    from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
+
     from walker_msgs.msg import GripperStates, JointAccelerations
     from walker_sim.messages import LATCHED_QOS, SENSOR_QOS
+
+    from diagnostic_msgs.msg import DiagnosticArray
 
     states, accelerations, descriptions, grippers, diagnostics = [], [], [], [], []
     node = probe.node
@@ -155,6 +158,7 @@ def test_sim_time_mode_is_lock_stepped_with_the_controllers(ros_env, probe):
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import JointState
+
     from walker_sim.messages import COMMAND_QOS, SENSOR_QOS
 
     period = 2_000_000  # [ns] the default control rate, 500 Hz
@@ -267,6 +271,7 @@ def test_the_node_refuses_to_start_on_invalid_parameters(ros_env, parameter, wor
 
 def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_context):
     from rclpy.parameter import Parameter
+
     from walker_sim.plant_node import PlantNode
 
     node = PlantNode(context=rclpy_context, namespace=NAMESPACE)
@@ -289,6 +294,7 @@ def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_cont
 def test_an_injected_fouled_thread_jams_screw_ins_and_the_parameter_counts_down(rclpy_context):
     from rclpy.parameter import Parameter
     from walker_msgs.srv import GripperCommand
+
     from walker_sim.plant_node import PlantNode
 
     node = PlantNode(context=rclpy_context, namespace=NAMESPACE)
@@ -349,6 +355,7 @@ def _stand_in_supervisor(probe):
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import JointState
+
     from walker_sim.messages import COMMAND_QOS, SENSOR_QOS
 
     node = probe.node

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from walker_sim.core.render import Camera, TrussScene, render_plant, save_png
 from walker_sim.render_walker import main
 

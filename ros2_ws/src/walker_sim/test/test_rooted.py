@@ -3,6 +3,7 @@
 import numpy as np
 import pybullet
 import pytest
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import flex_joints
 from walker_sim.core.flexibility import tune_flexibility

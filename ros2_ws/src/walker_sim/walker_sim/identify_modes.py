@@ -19,14 +19,9 @@ from pathlib import Path
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import load_walker_parameters
-
 from walker_sim.core.config import load_sim_parameters
 from walker_sim.core.flexibility import (
-    IDENTIFIED_JOINTS,
-    FlexTuning,
-    default_stance,
-    tune_flexibility,
-)
+    IDENTIFIED_JOINTS, FlexTuning, default_stance, tune_flexibility)
 from walker_sim.core.identification import Excitation, JointModes, identify_modes
 
 __all__ = ['main', 'format_table', 'results_document']
@@ -144,10 +139,7 @@ def _plot(params, sim, joints, excitation: Excitation, path: Path) -> None:
 
     from walker_sim.core.config import StartConfiguration
     from walker_sim.core.identification import (
-        RIG_SOLVER_ITERATIONS,
-        RIG_SOLVER_RESIDUAL,
-        strike_and_hold,
-    )
+        RIG_SOLVER_ITERATIONS, RIG_SOLVER_RESIDUAL, strike_and_hold)
     from walker_sim.core.plant import WalkerPlant
 
     figure, axes = plt.subplots(len(joints), 2, figsize=(11, 2.6 * len(joints)),

@@ -11,10 +11,10 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 from walker_core.qos import CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_msgs.msg import GripperState, GripperStates, JointAccelerations
-
 from walker_sim.core.plant import GripperReport, PlantState, Pose
 
 __all__ = [

@@ -42,40 +42,24 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
+
 from walker_core.joint_roles import GRIPPERS
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.spinning import init_node_process, spin_nodes
 from walker_core.urdf import description_urdf
+from walker_core.spinning import init_node_process, spin_nodes
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
-
 from walker_sim.core.commands import (
-    CommandError,
-    DecisionGate,
-    EffortCommands,
-    LockStep,
-    seconds_to_ns,
-)
+    CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
 from walker_sim.core.config import SimParameters
 from walker_sim.core.grippers import GripperCommandError, GripperMode
 from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_sim.messages import (
-    CLOCK_QOS,
-    COMMAND_QOS,
-    LATCHED_QOS,
-    SENSOR_QOS,
-    accelerations_msg,
-    clock_msg,
-    gripper_state_msg,
-    gripper_states_msg,
-    joint_state_msg,
-    pose_msg,
-    stamp_ns,
-    time_msg,
-)
+    CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, accelerations_msg, clock_msg,
+    gripper_state_msg, gripper_states_msg, joint_state_msg, pose_msg, stamp_ns, time_msg)
 
 __all__ = ['PlantNode', 'main']
 

@@ -12,7 +12,6 @@ from pathlib import Path
 
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import load_walker_parameters
-
 from walker_sim.core.config import load_sim_parameters
 from walker_sim.core.plant import WalkerPlant
 from walker_sim.core.render import Camera, render_plant, save_png

@@ -1,6 +1,7 @@
 """The time the supervisor has decided up to, which the sim-time plant waits for."""
 
 import pytest
+
 from walker_supervisor.core.decision_clock import DecisionClock
 
 NOW = 7_000_000_000  # [ns] ROS clock

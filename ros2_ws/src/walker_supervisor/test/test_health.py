@@ -1,15 +1,10 @@
 """The supervisor's health monitor: silence and reported trouble, on the steady clock."""
 
 import pytest
+
 from walker_supervisor.core.health import (
-    MODE_COMMAND_LATENCY,
-    HealthMonitor,
-    Level,
-    ModeRepetition,
-    SourceStatus,
-    reason_naming_silent_sources,
-    tracking_expected,
-)
+    MODE_COMMAND_LATENCY, HealthMonitor, Level, ModeRepetition, SourceStatus,
+    reason_naming_silent_sources, tracking_expected)
 
 
 def test_silence_after_the_timeout_is_a_fault_and_trouble_a_warning():

@@ -4,6 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from walker_planner.core.errors import PlanningError
 from walker_supervisor.core.sequencer import TrajectoryRequest
 from walker_supervisor.prepared_motions import PreparedMotions, plan_answer, stream_lead

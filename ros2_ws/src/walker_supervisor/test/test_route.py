@@ -3,15 +3,10 @@
 import math
 
 import pytest
+
 from walker_core.truss import Truss, UnknownNodeError
 from walker_supervisor.core.route import (
-    PlannedStep,
-    Stance,
-    UnreachableTargetError,
-    plan_route,
-    possible_steps,
-    step_sweep,
-)
+    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 
 TRUSS = Truss(spacing=0.9, columns=5, rows=4)
 START = Stance('a', 'n1_1', 'n2_1')

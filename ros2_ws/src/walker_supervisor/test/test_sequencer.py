@@ -6,26 +6,18 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import load_walker_parameters
 from walker_core.truss import Truss
 from walker_supervisor.core.route import PlannedStep, Stance, plan_route, possible_steps
 from walker_supervisor.core.sequencer import (
-    MAX_FINE_LINES,
-    STANCE_MARGIN,
-    CancelTrajectory,
-    GripperRequest,
-    Notice,
-    Phase,
-    PrepareTrajectory,
-    SequencerError,
-    SetControlMode,
-    StepSequencer,
-    SupervisorParameters,
-    TrajectoryRequest,
-)
-from walker_supervisor.core.step_geometry import BaseFrame, measure_step_targets, plan_step_targets
+    MAX_FINE_LINES, STANCE_MARGIN, CancelTrajectory, GripperRequest, Notice, Phase,
+    PrepareTrajectory, SequencerError, SetControlMode, StepSequencer, SupervisorParameters,
+    TrajectoryRequest)
+from walker_supervisor.core.step_geometry import (
+    BaseFrame, measure_step_targets, plan_step_targets)
 
 PARAMS = load_walker_parameters()
 KIN = WalkerKinematics.from_parameters(PARAMS)

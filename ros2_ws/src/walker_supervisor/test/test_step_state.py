@@ -4,11 +4,7 @@ import math
 
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.step_state import (
-    clear_step_state,
-    read_step_state,
-    step_state_path,
-    write_step_state,
-)
+    clear_step_state, read_step_state, step_state_path, write_step_state)
 
 
 def test_a_step_round_trips_and_is_forgotten(tmp_path, monkeypatch):

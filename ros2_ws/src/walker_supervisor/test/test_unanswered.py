@@ -1,6 +1,7 @@
 """A planner request unanswered is sent again, then, bounded, given up."""
 
 import pytest
+
 from walker_supervisor.core.unanswered import ASK_AGAIN, GIVE_UP, WAIT, UnansweredRequest
 
 

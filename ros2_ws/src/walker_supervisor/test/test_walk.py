@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_supervisor.core.route import PlannedStep, Stance
 from walker_supervisor.core.sequencer import StepOutcome
 from walker_supervisor.core.walk import VibrationMeter, Walk

@@ -4,16 +4,12 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.robot_parameters import load_walker_parameters
 from walker_supervisor.core.health import controller_trouble, tell_mode_again
 from walker_supervisor.core.way_back import (
-    ik_branch,
-    line_is_followable,
-    lowest_tip_height,
-    vertical_configuration,
-    vertical_ik,
-)
+    ik_branch, line_is_followable, lowest_tip_height, vertical_configuration, vertical_ik)
 
 KIN = WalkerKinematics.from_parameters(load_walker_parameters())
 ABOVE_TARGET = np.array([0.0, -0.9, 0.03])  # half a turn from (0, 0.9)

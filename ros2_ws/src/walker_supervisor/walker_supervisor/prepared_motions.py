@@ -16,7 +16,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from walker_planner.core.errors import PlanningError
-
 from walker_supervisor.core.sequencer import TrajectoryRequest
 
 __all__ = ['PreparedMotions', 'plan_answer', 'stream_lead']

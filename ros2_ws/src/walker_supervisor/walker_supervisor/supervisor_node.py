@@ -24,18 +24,23 @@ import time
 
 import numpy as np
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
-from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock as RosClock
 from sensor_msgs.msg import JointState
-from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
+from std_srvs.srv import Trigger
+from walker_msgs.action import FollowTrajectory, Step, WalkTo
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
+from walker_msgs.msg import (
+    ControllerState, ControlMode, GripperState, GripperStates, StepPhase, StepReport)
+from walker_msgs.srv import GripperCommand, PlanTrajectory
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.node_parameters import declare_section, guard_section_updates
@@ -46,66 +51,24 @@ from walker_core.resubscription import Resubscription
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_core.truss import Truss, UnknownNodeError
-from walker_msgs.action import FollowTrajectory, Step, WalkTo
-from walker_msgs.msg import (
-    ControllerState,
-    ControlMode,
-    GripperState,
-    GripperStates,
-    StepPhase,
-    StepReport,
-)
-from walker_msgs.srv import GripperCommand, PlanTrajectory
 from walker_planner.conversions import chained_message
 from walker_planner.core.errors import PlanningError
-
 from walker_supervisor.core.decision_clock import DecisionClock
 from walker_supervisor.core.health import (
-    HealthMonitor,
-    Level,
-    ModeRepetition,
-    SourceStatus,
-    controller_trouble,
-    reason_naming_silent_sources,
-    tell_mode_again,
-    tracking_expected,
-)
+    HealthMonitor, Level, ModeRepetition, SourceStatus, controller_trouble,
+    reason_naming_silent_sources, tell_mode_again, tracking_expected)
 from walker_supervisor.core.route import (
-    PlannedStep,
-    Stance,
-    UnreachableTargetError,
-    plan_route,
-    possible_steps,
-    step_sweep,
-)
+    PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
-    CancelTrajectory,
-    GripperRequest,
-    Notice,
-    Phase,
-    PrepareTrajectory,
-    SequencerError,
-    SetControlMode,
-    StepOutcome,
-    StepSequencer,
-    SupervisorParameters,
-    TrajectoryRequest,
-)
+    CancelTrajectory, GripperRequest, Notice, Phase, PrepareTrajectory, SequencerError,
+    SetControlMode, StepOutcome, StepSequencer, SupervisorParameters, TrajectoryRequest)
 from walker_supervisor.core.step_geometry import (
-    BaseFrame,
-    StepTargets,
-    measure_step_targets,
-    recovery_targets,
-)
+    BaseFrame, StepTargets, measure_step_targets, recovery_targets)
 from walker_supervisor.core.unanswered import GIVE_UP, WAIT, UnansweredRequest
 from walker_supervisor.core.walk import VibrationMeter, Walk
 from walker_supervisor.prepared_motions import PreparedMotions, plan_answer, stream_lead
 from walker_supervisor.step_state import (
-    clear_step_state,
-    read_step_state,
-    step_state_path,
-    write_step_state,
-)
+    clear_step_state, read_step_state, step_state_path, write_step_state)
 from walker_supervisor.teleop_server import TeleopServer
 from walker_supervisor.trajectory_requests import plan_request
 

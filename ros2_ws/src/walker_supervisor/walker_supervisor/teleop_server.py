@@ -30,24 +30,17 @@ from collections.abc import Callable
 import numpy as np
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-from walker_core.node_parameters import declare_section, guard_section_updates
-from walker_core.qos import LATCHED_QOS
 from walker_msgs.action import FollowTrajectory
 from walker_msgs.msg import GripperState, GripperStates
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip, PlanTrajectory
 
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_core.qos import LATCHED_QOS
 from walker_supervisor.core.sequencer import MAX_FINE_LINES, SequencerError, TrajectoryRequest
 from walker_supervisor.core.teleop import (
-    JointJog,
-    SettleDetector,
-    Situation,
-    TeleopParameters,
-    TeleopRefusedError,
-    TeleopRules,
-    TipJog,
-    busy_reason,
-)
+    JointJog, SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules,
+    TipJog, busy_reason)
 from walker_supervisor.step_state import clear_step_state
 from walker_supervisor.trajectory_requests import plan_request
 

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import math
 
-from walker_core.joint_roles import roles_to_physical
-from walker_core.kinematics import WalkerKinematics
 from walker_msgs.srv import PlanTrajectory
 
+from walker_core.joint_roles import roles_to_physical
+from walker_core.kinematics import WalkerKinematics
 from walker_supervisor.core.sequencer import TrajectoryRequest
 from walker_supervisor.core.way_back import vertical_configuration
 

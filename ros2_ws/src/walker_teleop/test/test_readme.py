@@ -6,9 +6,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from ros2_lines import build, lines_in
 from ros_test_support import REPO_ROOT
 from walker_teleop.walkerctl import build_parser
+
+from ros2_lines import build, lines_in
 
 
 def _section() -> str:

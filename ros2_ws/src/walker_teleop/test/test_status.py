@@ -4,17 +4,12 @@ import math
 
 import numpy as np
 import pytest
+
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 from walker_core.truss import Truss
 from walker_teleop.core.status import (
-    PHASE_NAMES,
-    GripperView,
-    StatusView,
-    format_status,
-    hole_offset,
-    name_of,
-    rotation_from_quaternion,
-)
+    PHASE_NAMES, GripperView, StatusView, format_status, hole_offset, name_of,
+    rotation_from_quaternion)
 
 TRUSS = Truss.from_parameters(load_walker_parameters(default_parameter_file()))
 UPRIGHT = (0.0, 0.0, 0.0, 1.0)  # quaternion (x, y, z, w): the gripper frame is the truss frame

@@ -7,9 +7,10 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from ros2_lines import build, lines_in
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_teleop.walkerctl import EXIT_USAGE, build_parser, main
+
+from ros2_lines import build, lines_in
 
 #: The supervisor's operator interfaces (walker_supervisor.supervisor_node, teleop_server).
 SERVICES = {'hold': 'Trigger', 'resume': 'Trigger', 'jog_joint': 'JogJoint',

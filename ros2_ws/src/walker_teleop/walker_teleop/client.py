@@ -24,20 +24,14 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from walker_core.qos import LATCHED_QOS
-from walker_core.spinning import destroy_actions
 from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
+from walker_core.qos import LATCHED_QOS
+from walker_core.spinning import destroy_actions
 from walker_teleop.core.status import (
-    GRIPPER_STATE_NAMES,
-    MODE_NAMES,
-    PHASE_NAMES,
-    GripperView,
-    StatusView,
-    name_of,
-)
+    GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
 
 __all__ = ['TeleopClient', 'GraphUnavailableError', 'CommandInterruptedError']
 

@@ -217,7 +217,6 @@ def _answer(response) -> int:
 def _status(client, args) -> int:
     from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
     from walker_core.truss import Truss
-
     from walker_teleop.core.status import format_status
 
     truss = Truss.from_parameters(load_walker_parameters(

@@ -22,7 +22,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 from walker_bag.core.errors import BagPathError, MessageDefinitionError, UnknownTopicError
-from walker_bag.core.message_definitions import SEPARATOR, interface_prefixes, message_definition
+from walker_bag.core.message_definitions import (
+    SEPARATOR, interface_prefixes, message_definition)
 
 __all__ = ['RecordedMessage', 'BagReader', 'read_messages', 'walker_typestore']
 

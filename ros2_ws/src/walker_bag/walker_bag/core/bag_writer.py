@@ -38,22 +38,11 @@ from mcap import __version__ as mcap_version
 from mcap.writer import CompressionType, Writer
 
 from walker_bag.core.bag_metadata import (
-    NO_MESSAGE_TIME_NS,
-    ROS_DISTRO,
-    BagMetadata,
-    FileInformation,
-    TopicInformation,
-    TopicMetadata,
-    write_metadata,
-)
+    BagMetadata, FileInformation, NO_MESSAGE_TIME_NS, ROS_DISTRO, TopicInformation,
+    TopicMetadata, write_metadata)
 from walker_bag.core.errors import (
-    BagClosedError,
-    BagError,
-    BagExistsError,
-    BagPathError,
-    TopicConflictError,
-    UnknownTopicError,
-)
+    BagClosedError, BagError, BagExistsError, BagPathError, TopicConflictError,
+    UnknownTopicError)
 from walker_bag.core.message_definitions import MessageDefinition
 from walker_bag.core.qos import qos_profiles_to_yaml
 

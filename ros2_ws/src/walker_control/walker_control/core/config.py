@@ -27,33 +27,19 @@ can never be constructed: the node refuses to start with it and refuses a runtim
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+from collections.abc import Mapping
 
 from walker_core.parameter_schema import (
-    ParameterError,
-    load_parameter_file,
-    parameter,
-    section_from_flat,
-)
+    ParameterError, load_parameter_file, parameter, section_from_flat)
 from walker_core.robot_parameters import (
-    Drive,
-    RobotParameters,
-    TimingParameters,
-    default_parameter_file,
-)
-
+    Drive, RobotParameters, TimingParameters, default_parameter_file)
 from walker_control.core.lowpass import FILTER_KINDS, FilterDesignError, design_lowpass_sos
 from walker_control.core.modes import GAIN_MODES, Mode
 from walker_control.core.relaxation import RelaxationDither
 from walker_control.core.stability import (
-    LoopDesign,
-    LoopReport,
-    UnstableLoopError,
-    check_loop,
-    inertia_ratio_grid,
-)
+    LoopDesign, LoopReport, UnstableLoopError, check_loop, inertia_ratio_grid)
 
 __all__ = [
     'ROLES', 'UnstableControllerError', 'ModeGains', 'CoarseGains', 'FilterSettings',

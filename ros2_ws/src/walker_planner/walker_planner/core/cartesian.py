@@ -23,8 +23,8 @@ import dataclasses
 import math
 
 import numpy as np
-from walker_core.kinematics import KinematicsError, WalkerKinematics
 
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_planner.core.errors import WorkspaceError
 from walker_planner.core.trajectory import JOINT, Samples, Trajectory
 

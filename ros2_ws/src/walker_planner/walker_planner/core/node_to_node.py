@@ -29,11 +29,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from walker_planner.core.bang_bang import (
-    RADIAL_MOTION_FLOOR,
-    PlanarProfile,
-    ProfileSummary,
-    summarize_profile,
-)
+    RADIAL_MOTION_FLOOR, PlanarProfile, ProfileSummary, summarize_profile)
 from walker_planner.core.errors import LimitError
 from walker_planner.core.trajectory import CARTESIAN, Samples, Trajectory
 

@@ -3,8 +3,7 @@
 :func:`plan` is everything the planner node's service does, without ROS: it refuses a malformed
 or impossible request with a :class:`~walker_planner.core.errors.PlanningError` naming what was
 wrong, builds the requested type, maps a Cartesian one to joint space, samples it every control
-period, checks the samples against the joint limits and reports a provable lower bound of the
-move's duration (:mod:`walker_planner.core.bounds`).
+period, checks the samples against the joint limits and reports the time-optimal bound.
 Joint vectors on the wire are in physical order (``a_yaw_joint`` .. ``b_yaw_joint``); inside,
 everything is in role order J1..J5 of the given base gripper (:mod:`walker_core.joint_roles`).
 """
@@ -15,15 +14,11 @@ import dataclasses
 import math
 
 import numpy as np
+
 from walker_core.joint_roles import GRIPPERS, joint_of_role, physical_to_roles, roles_to_physical
 from walker_core.kinematics import KinematicsError, WalkerKinematics
-
 from walker_planner.core.bounds import (
-    MIN_SWEEP,
-    NODE_RADIUS_TOLERANCE,
-    coarse_move_bound,
-    line_bound,
-)
+    MIN_SWEEP, NODE_RADIUS_TOLERANCE, coarse_move_bound, line_bound)
 from walker_planner.core.cartesian import CartesianInJointSpace, branch_of
 from walker_planner.core.errors import InvalidRequestError, LimitError, WorkspaceError
 from walker_planner.core.registry import TRAJECTORY_TYPES, ValidRequest

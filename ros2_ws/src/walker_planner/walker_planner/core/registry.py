@@ -14,20 +14,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from walker_planner.core.coasting import coasting_sweep
 from walker_planner.core.errors import InvalidRequestError, LimitError, NoSolutionError
+from walker_planner.core.coasting import coasting_sweep
 from walker_planner.core.node_to_node import (
-    SWEEP_TYPE_NAME,
-    NodeToNodeTrajectory,
-    PlanarModel,
-    solve_node_to_node,
-)
+    SWEEP_TYPE_NAME, NodeToNodeTrajectory, PlanarModel, solve_node_to_node)
 from walker_planner.core.profiles import (
-    BlendProfile,
-    ConstantVelocityProfile,
-    MinJerkProfile,
-    check_limit,
-)
+    BlendProfile, ConstantVelocityProfile, MinJerkProfile, check_limit)
 from walker_planner.core.segments import CartesianSegment, JointSegment
 from walker_planner.core.trajectory import CARTESIAN, JOINT, Trajectory
 

@@ -29,8 +29,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.core.errors import InvalidRequestError, LimitError
 from walker_planner.core.trajectory import Samples, as_times
 

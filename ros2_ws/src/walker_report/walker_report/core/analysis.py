@@ -12,10 +12,11 @@ import math
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.truss import Truss, UnknownNodeError
-
-from walker_report.core.walk_data import ControllerSeries, PhaseEvent, PoseSeries, StepReportRecord
+from walker_report.core.walk_data import (
+    ControllerSeries, PhaseEvent, PoseSeries, StepReportRecord)
 
 __all__ = [
     'IDLE', 'EXTRACTION', 'COARSE', 'FINE', 'INSERTION', 'SAFE_HOLD', 'PHASE_NAMES',

@@ -16,22 +16,12 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.truss import Truss, UnknownNodeError
-
 from walker_report.core.analysis import (
-    COARSE,
-    EXTRACTION,
-    FINE,
-    IDLE,
-    INSERTION,
-    SAFE_HOLD,
-    JointLimits,
-    PhaseInterval,
-    StepSpan,
-    TargetVibration,
-    phase_name,
-)
+    COARSE, EXTRACTION, FINE, IDLE, INSERTION, SAFE_HOLD, JointLimits, PhaseInterval, StepSpan,
+    TargetVibration, phase_name)
 from walker_report.core.steps import StepRow, table_cells
 from walker_report.core.walk_data import ControllerSeries, WalkData
 

@@ -33,20 +33,10 @@ from pathlib import Path
 from walker_core.parameter_schema import ParameterError, load_parameter_file, section_from_flat
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 from walker_core.truss import Truss
-
 from walker_report.core import figures
 from walker_report.core.analysis import (
-    JointLimits,
-    JointStats,
-    PhaseInterval,
-    StepSpan,
-    TargetVibration,
-    joint_limits,
-    joint_stats,
-    phase_intervals,
-    step_spans,
-    target_vibration,
-)
+    JointLimits, JointStats, PhaseInterval, StepSpan, TargetVibration, joint_limits,
+    joint_stats, phase_intervals, step_spans, target_vibration)
 from walker_report.core.animation import AnimationOptions, AnimationResult, render_animation
 from walker_report.core.errors import ReportError
 from walker_report.core.steps import StepRow, format_table, rows_from_reports, write_json

@@ -19,11 +19,11 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
 from walker_bag.core.bag_metadata import read_metadata
 from walker_bag.core.bag_reader import BagReader
 from walker_bag.core.errors import BagError, MetadataError
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-
 from walker_report.core.errors import BagCutShortError, ReportError
 
 __all__ = [

@@ -44,7 +44,6 @@ def make_plant(params_file=None, *, other_attached: bool | None = None,
     """
     from walker_core.parameter_schema import replace_in_section
     from walker_core.robot_parameters import load_walker_parameters
-
     from walker_sim.core.config import load_sim_parameters
     from walker_sim.core.plant import WalkerPlant
 

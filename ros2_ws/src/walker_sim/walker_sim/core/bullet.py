@@ -9,8 +9,8 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import tempfile
-from collections.abc import Iterator
 from pathlib import Path
+from collections.abc import Iterator
 
 import pybullet
 

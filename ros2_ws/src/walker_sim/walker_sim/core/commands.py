@@ -20,6 +20,7 @@ import math
 from collections.abc import Iterable
 
 import numpy as np
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = ['CommandError', 'EffortCommands', 'LockStep', 'seconds_to_ns']

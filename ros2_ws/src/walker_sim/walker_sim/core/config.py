@@ -9,15 +9,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
 from typing import Any
+from collections.abc import Mapping
 
 from walker_core.parameter_schema import (
-    ParameterError,
-    load_parameter_file,
-    parameter,
-    section_from_flat,
-)
+    ParameterError, load_parameter_file, parameter, section_from_flat)
 from walker_core.robot_parameters import default_parameter_file
 from walker_core.truss import Truss, UnknownNodeError
 

@@ -53,10 +53,10 @@ import math
 import numpy as np
 import pybullet
 import scipy.linalg
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics
 from walker_core.urdf import flex_joints, plant_urdf, rotor_joint_name
-
 from walker_sim.core.bullet import direct_client, index_body, load_urdf_text
 
 __all__ = ['LinearModel', 'FlexTuning', 'default_stance', 'linear_model', 'tune_flexibility',

@@ -30,8 +30,8 @@ import math
 
 import numpy as np
 import scipy.linalg
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_sim.core.config import SimParameters, StartConfiguration
 from walker_sim.core.flexibility import IDENTIFIED_JOINTS, first_visible_mode
 from walker_sim.core.plant import WalkerPlant

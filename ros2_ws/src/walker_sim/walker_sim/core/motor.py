@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = ['DriveCommand', 'DriveModel']

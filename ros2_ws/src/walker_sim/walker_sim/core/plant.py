@@ -28,23 +28,17 @@ from collections.abc import Callable
 
 import numpy as np
 import pybullet
+
 from walker_core.joint_roles import GRIPPERS, other_gripper
 from walker_core.kinematics import WalkerKinematics
 from walker_core.parameter_schema import ParameterError
 from walker_core.truss import Truss
 from walker_core.urdf import flex_joints
-
 from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
 from walker_sim.core.flexibility import FlexTuning, tune_flexibility
 from walker_sim.core.grippers import (
-    GripperCommandError,
-    GripperLogic,
-    GripperMode,
-    GripperStatus,
-    HoleAlignment,
-    ScrewOutcome,
-    hole_alignment,
-)
+    GripperCommandError, GripperLogic, GripperMode, GripperStatus, HoleAlignment,
+    ScrewOutcome, hole_alignment)
 from walker_sim.core.motor import DriveCommand, DriveModel
 from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
 

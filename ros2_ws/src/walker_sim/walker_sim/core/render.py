@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pybullet
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.truss import Truss
 from walker_core.urdf import flex_joints, plant_urdf
-
 from walker_sim.core.bullet import index_body, load_urdf_text
 
 __all__ = ['Camera', 'TrussScene', 'render_plant', 'save_png']

@@ -31,9 +31,10 @@ import dataclasses
 
 import numpy as np
 import pybullet
-from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, other_gripper
-from walker_core.urdf import GRIPPER_LINKS, FlexJoint, flex_joints, plant_urdf, rotor_joint_name
 
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, other_gripper
+from walker_core.urdf import (
+    GRIPPER_LINKS, FlexJoint, flex_joints, plant_urdf, rotor_joint_name)
 from walker_sim.core.bullet import BodyIndex, free_dynamics, index_body, load_urdf_text
 
 __all__ = ['RootedBody', 'load_rooted_body', 'carry_state']

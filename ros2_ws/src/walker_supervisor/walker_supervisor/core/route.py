@@ -21,6 +21,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+
 from walker_core.joint_roles import other_gripper, validate_gripper
 from walker_core.truss import Truss, UnknownNodeError
 

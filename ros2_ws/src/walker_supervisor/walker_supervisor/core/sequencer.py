@@ -64,17 +64,13 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
-
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.way_back import (
-    line_is_followable,
-    lowest_tip_height,
-    vertical_configuration,
-    vertical_ik,
-)
+    line_is_followable, lowest_tip_height, vertical_configuration, vertical_ik)
 
 __all__ = [
     'Phase', 'SupervisorParameters', 'SetControlMode', 'GripperRequest', 'TrajectoryRequest',

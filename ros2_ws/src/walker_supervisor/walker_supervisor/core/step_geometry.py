@@ -12,8 +12,8 @@ import dataclasses
 import math
 
 import numpy as np
-from walker_core.kinematics import KinematicsError, WalkerKinematics
 
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
 __all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'measure_step_targets',

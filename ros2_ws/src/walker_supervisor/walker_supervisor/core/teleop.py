@@ -43,17 +43,12 @@ import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+
 from walker_core.joint_roles import (
-    GRIPPERS,
-    PHYSICAL_JOINT_NAMES,
-    joint_of_role,
-    other_gripper,
-    physical_to_roles,
-    role_of_joint,
-)
+    GRIPPERS, PHYSICAL_JOINT_NAMES, joint_of_role, other_gripper, physical_to_roles,
+    role_of_joint)
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
-
 from walker_supervisor.core.sequencer import Phase
 
 __all__ = [

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 
 __all__ = ['ik_branch', 'vertical_ik', 'vertical_configuration', 'line_is_followable',

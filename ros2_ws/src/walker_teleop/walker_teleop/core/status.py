@@ -12,6 +12,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+
 from walker_core.truss import Truss
 
 __all__ = ['PHASE_NAMES', 'MODE_NAMES', 'GRIPPER_STATE_NAMES', 'GripperView', 'StatusView',
