@@ -348,7 +348,7 @@ class FaultGraph:
         """
         from std_srvs.srv import Trigger
 
-        from walker_core.spinning import STACK_DUMP_SIGNAL
+        from walker_runtime.spinning import STACK_DUMP_SIGNAL
 
         pid = self.processes[name].popen.pid
         threads = []

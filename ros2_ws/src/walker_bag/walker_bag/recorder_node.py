@@ -40,9 +40,9 @@ from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
-from walker_core.node_parameters import declare_section
+from walker_runtime.node_parameters import declare_section
 from walker_core.parameter_schema import ParameterError
-from walker_core.spinning import TopicSampler, freeze_start_up_objects, init_node_process
+from walker_runtime.spinning import TopicSampler, freeze_start_up_objects, init_node_process
 
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_writer import BagWriter

@@ -212,7 +212,7 @@ def test_the_loop_by_call_steps_sim_time_and_still_serves_the_plants_timers():
     from sensor_msgs.msg import JointState
     from walker_msgs.msg import GripperStates
 
-    from walker_core.qos import COMMAND_QOS, LATCHED_QOS
+    from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS
 
     specs = [spec for spec in walker_graph(PARAMS, sim_time=True, grouped_controllers=True)
              if spec.name in LOOP_NODES]

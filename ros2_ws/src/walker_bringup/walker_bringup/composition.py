@@ -8,7 +8,7 @@ composed_graph --sim-time`` runs it; ``run_all.py --composed`` starts it under t
 supervision as the separate processes.
 
 Executors: the plant and the five controllers share one executor, the one
-:func:`walker_core.spinning.make_executor` selects (the events executor by default), in the
+:func:`walker_runtime.spinning.make_executor` selects (the events executor by default), in the
 main thread (rclpy's ``SingleThreadedExecutor`` when they exchange by call, below). The
 supervisor and the planner keep the default ``SingleThreadedExecutor``, as in their own
 processes (their actions' executions await futures, which failed inside the
@@ -179,7 +179,7 @@ class ComposedGraph:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
 
-        from walker_core.spinning import freeze_start_up_objects, make_executor
+        from walker_runtime.spinning import freeze_start_up_objects, make_executor
 
         # The loop by call runs in this thread between turns of the executor, holding the
         # interpreter: the events executor's timers (a thread of their own) then fell behind
@@ -191,7 +191,7 @@ class ComposedGraph:
         for _, component, node in self.nodes:
             (default if component.default_executor else fast).add_node(node)
         self._default_executor = default
-        freeze_start_up_objects()  # as each node's own process does (walker_core.spinning)
+        freeze_start_up_objects()  # as each node's own process does (walker_runtime.spinning)
 
         def running() -> bool:
             return rclpy.ok(context=self.context) and not stop()
@@ -346,7 +346,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the composed graph until SIGINT or SIGTERM; exit code 2 when a node refuses."""
     import rclpy
 
-    from walker_core.spinning import init_node_process
+    from walker_runtime.spinning import init_node_process
 
     args = parse_arguments(sys.argv[1:] if argv is None else argv)
     try:

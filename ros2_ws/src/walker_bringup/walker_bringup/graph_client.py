@@ -25,8 +25,8 @@ from walker_msgs.srv import GripperCommand, PlanTrajectory
 
 from walker_bringup.loop_health import (
     PLANT_STATUS_SUFFIX, SUPERVISOR_STATUS_SUFFIX, LoopHealth, loop_health, sources_not_heard)
-from walker_core.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
-from walker_core.spinning import TopicSampler, destroy_actions
+from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
+from walker_runtime.spinning import TopicSampler, destroy_actions
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
            'init_context']

@@ -33,7 +33,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from walker_bringup.lossy_link import LossyLink
-from walker_core.spinning import init_node_process, spin_nodes
+from walker_runtime.spinning import init_node_process, spin_nodes
 
 __all__ = ['LossyLinkNode', 'message_type', 'main']
 

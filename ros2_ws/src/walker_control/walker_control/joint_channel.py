@@ -17,8 +17,8 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.node import Node
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 
-from walker_core.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
-from walker_core.resubscription import Resubscription
+from walker_runtime.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
+from walker_runtime.core.resubscription import Resubscription
 
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
@@ -32,7 +32,7 @@ from walker_control.core.modes import Mode
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel',
            'seconds']
 
-#: joint_states and joint_accelerations: best effort, newest only (walker_core.qos)
+#: joint_states and joint_accelerations: best effort, newest only (walker_runtime.qos)
 STATE_QOS = SENSOR_QOS
 # A stream silent for this many of its timeouts has its subscription made anew, and again
 # as often while the silence lasts (see Resubscription): 2 s by default, the supervisor's

@@ -38,11 +38,11 @@ from sensor_msgs.msg import JointState
 from walker_msgs.msg import ControlMode, JointAccelerations
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
-from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.realtime import log_realtime_request
-from walker_core.resubscription import Resubscription
-from walker_core.spinning import init_node_process, spin_nodes
+from walker_runtime.realtime import log_realtime_request
+from walker_runtime.core.resubscription import Resubscription
+from walker_runtime.spinning import init_node_process, spin_nodes
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
 from walker_control.joint_channel import (

@@ -38,13 +38,13 @@ from walker_msgs.msg import ControlMode, JointCommand
 from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
-from walker_core.realtime import log_realtime_request, request_thread_priority
-from walker_core.resubscription import Resubscription, clock_ran_past
+from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
+from walker_runtime.realtime import log_realtime_request, request_thread_priority
+from walker_runtime.core.resubscription import Resubscription, clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
+from walker_runtime.spinning import destroy_actions, init_node_process, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
@@ -60,7 +60,7 @@ _RESULT_TIMEOUT = 30  # [s] how long a finished follow_trajectory goal keeps its
 _RELAY_PERIOD = 0.02
 
 #: [s] steady time: joint states silent this long while the plant's clock runs on get their
-#: subscription made anew (:class:`~walker_core.resubscription.Resubscription`), and every
+#: subscription made anew (:class:`~walker_runtime.core.resubscription.Resubscription`), and every
 #: this long again while the silence lasts
 _RESUBSCRIBE_AFTER = 1.0
 

@@ -2,7 +2,7 @@
 
 No node here: plain functions that the plant node calls, so that the node's callbacks stay one
 line of conversion and one call into the core. The QoS profiles are those of
-:mod:`walker_core.qos`, the same for every node.
+:mod:`walker_runtime.qos`, the same for every node.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
-from walker_core.qos import CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
+from walker_runtime.qos import CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_msgs.msg import GripperState, GripperStates, JointAccelerations
 from walker_sim.core.plant import GripperReport, PlantState, Pose
 

@@ -44,12 +44,12 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
 from walker_core.joint_roles import GRIPPERS
-from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.realtime import log_realtime_request
+from walker_runtime.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf
-from walker_core.spinning import init_node_process, spin_nodes
+from walker_runtime.spinning import init_node_process, spin_nodes
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import (

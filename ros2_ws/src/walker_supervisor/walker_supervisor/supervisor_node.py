@@ -43,13 +43,13 @@ from walker_msgs.srv import GripperCommand, PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
-from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
-from walker_core.realtime import log_realtime_request
-from walker_core.resubscription import Resubscription
+from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
+from walker_runtime.realtime import log_realtime_request
+from walker_runtime.core.resubscription import Resubscription
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
+from walker_runtime.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
 from walker_core.truss import Truss, UnknownNodeError
 from walker_planner.conversions import chained_message
 from walker_planner.core.errors import PlanningError

@@ -35,8 +35,8 @@ from walker_msgs.msg import GripperState, GripperStates
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip, PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-from walker_core.node_parameters import declare_section, guard_section_updates
-from walker_core.qos import LATCHED_QOS
+from walker_runtime.node_parameters import declare_section, guard_section_updates
+from walker_runtime.qos import LATCHED_QOS
 from walker_supervisor.core.sequencer import MAX_FINE_LINES, SequencerError, TrajectoryRequest
 from walker_supervisor.core.teleop import (
     JointJog, SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules,

@@ -28,8 +28,8 @@ from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
-from walker_core.qos import LATCHED_QOS
-from walker_core.spinning import destroy_actions
+from walker_runtime.qos import LATCHED_QOS
+from walker_runtime.spinning import destroy_actions
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
 

@@ -2,7 +2,7 @@
 
 They live in ``walker_core/config/walker.yaml`` (section ``/**``) beside the robot's, each value
 with its source; this frozen section checks them (``ParameterError`` naming the parameter) and
-the planner node declares them with :func:`walker_core.node_parameters.declare_section`. All may
+the planner node declares them with :func:`walker_runtime.node_parameters.declare_section`. All may
 change at run time (``ros2 param set``); an invalid update is refused and changes nothing.
 """
 

@@ -6,7 +6,7 @@ import threading
 import pytest
 from rclpy.node import Node
 
-from walker_core import spinning
+from walker_runtime import spinning
 
 
 @pytest.fixture(autouse=True)
@@ -82,7 +82,7 @@ import time
 import rclpy
 from rclpy.node import Node
 from std_msgs.msg import Float64
-from walker_core import spinning
+from walker_runtime import spinning
 
 stop = spinning.init_node_process()
 node = Node('busy')
@@ -128,7 +128,7 @@ def test_a_node_process_writes_every_threads_stack_on_sigusr1_and_spins_on(ros_e
     import sys
     import time
 
-    from walker_core.spinning import STACK_DUMP_SIGNAL
+    from walker_runtime.spinning import STACK_DUMP_SIGNAL
 
     child = subprocess.Popen([sys.executable, '-c', _BUSY_NODE], env=ros_env,
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -153,7 +153,7 @@ def test_a_sampled_subscription_made_anew_keeps_its_topic_and_receives_again(rcl
 
     from std_msgs.msg import Int32
 
-    from walker_core.qos import COMMAND_QOS
+    from walker_runtime.qos import COMMAND_QOS
 
     context = rclpy_context
     publisher_node = Node('sample_source', namespace='/walker', context=context,

@@ -10,7 +10,7 @@ import threading
 
 import pytest
 
-from walker_core.realtime import (
+from walker_runtime.realtime import (
     log_realtime_request, request_realtime_priority, request_thread_priority)
 
 
@@ -32,7 +32,7 @@ def test_a_thread_priority_outside_0_to_99_is_refused_and_nothing_changes(priori
 
 _THREAD_CHILD = """
 import os, threading
-from walker_core.realtime import request_realtime_priority, request_thread_priority
+from walker_runtime.realtime import request_realtime_priority, request_thread_priority
 started, done = threading.Event(), threading.Event()
 def work():
     started.set(); done.wait(10.0)
@@ -73,7 +73,7 @@ def test_priority_0_leaves_the_scheduling_alone():
 
 _CHILD = """
 import os, threading
-from walker_core.realtime import request_realtime_priority
+from walker_runtime.realtime import request_realtime_priority
 listed = threading.Event()  # the threads live until they have been looked at, however slow
 early = threading.Thread(target=listed.wait); early.start()
 granted, report = request_realtime_priority(7)
@@ -128,7 +128,7 @@ def test_a_request_refused_part_way_puts_the_threads_it_moved_back(monkeypatch):
 
     The scheduler calls are replaced, so the test process's own scheduling is not touched.
     """
-    import walker_core.realtime as realtime
+    import walker_runtime.realtime as realtime
 
     policies = {1: (os.SCHED_OTHER, 0), 2: (os.SCHED_OTHER, 0), 3: (os.SCHED_BATCH, 0)}
 

@@ -3,7 +3,7 @@
 import pytest
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, ReliabilityPolicy
 
-from walker_core.qos import (
+from walker_runtime.qos import (
     CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos)
 
 

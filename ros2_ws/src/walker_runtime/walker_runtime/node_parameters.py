@@ -1,11 +1,11 @@
 """ROS layer of the parameter schema: declare a section on an rclpy node and guard updates.
 
-This is the only module of ``walker_core`` that imports rclpy. Every leaf of a section is
-declared with its description, unit and range (``ros2 param describe`` shows them) and with the
-default from the package's ``config/walker.yaml``, so a node started without a parameter file
-still gets the documented values; ``--params-file`` overrides them as usual. Runtime updates
-(``ros2 param set``) are validated by building the whole section again: an invalid update is
-refused with the reason and nothing changes.
+The model's sections (``walker_core``) know nothing of ROS; here they meet a node. Every leaf
+of a section is declared with its description, unit and range (``ros2 param describe`` shows
+them) and with the default from the package's ``config/walker.yaml``, so a node started without
+a parameter file still gets the documented values; ``--params-file`` overrides them as usual.
+Runtime updates (``ros2 param set``) are validated by building the whole section again: an
+invalid update is refused with the reason and nothing changes.
 """
 
 from __future__ import annotations

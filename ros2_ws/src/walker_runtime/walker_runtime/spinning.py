@@ -11,8 +11,6 @@ comparison, or should the events executor misbehave).
 The events executor registers a node's entities when the node is added: a node that creates
 subscriptions later (the recorder, which subscribes to topics as they appear) must keep the
 default executor.
-
-This module imports rclpy; the rest of ``walker_core`` does not.
 """
 
 from __future__ import annotations
@@ -242,7 +240,7 @@ class TopicSampler:
         """Destroy ``subscription`` and make it anew; return the new handle.
 
         Messages not yet taken are lost. Use it for a stream silent for long while its
-        publisher may live on (see :class:`walker_core.resubscription.Resubscription`).
+        publisher may live on (see :class:`walker_runtime.core.resubscription.Resubscription`).
         """
         message_type, qos, raw = self._made.pop(subscription)
         topic = subscription.topic_name

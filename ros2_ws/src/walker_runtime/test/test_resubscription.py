@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from walker_core.resubscription import Resubscription, clock_ran_past
+from walker_runtime.core.resubscription import Resubscription, clock_ran_past
 
 
 def test_a_silent_stream_is_resubscribed_after_the_interval_then_every_interval():

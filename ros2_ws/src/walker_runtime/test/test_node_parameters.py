@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 from rclpy.parameter import Parameter
 
-from walker_core.node_parameters import declare_section, guard_section_updates
+from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError, parameter
 from walker_core.robot_parameters import WalkerParameters, load_walker_parameters
 

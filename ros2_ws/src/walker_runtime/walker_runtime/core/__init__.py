@@ -1,0 +1,1 @@
+"""The runtime's ROS-free rules (plain Python, tested with plain pytest)."""
