@@ -33,20 +33,19 @@ from typing import Any
 
 import rclpy
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from walker_runtime.node_parameters import declare_section
-from walker_core.parameter_schema import ParameterError
-from walker_runtime.spinning import TopicSampler, freeze_start_up_objects, init_node_process
+from walker_runtime.node_main import run_node
+from walker_runtime.spinning import TopicSampler, freeze_start_up_objects
 
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_writer import BagWriter
-from walker_bag.core.errors import BagError, MessageDefinitionError
+from walker_bag.core.errors import MessageDefinitionError
 from walker_bag.core.message_definitions import message_definition, type_description_hash
 from walker_bag.core.qos import QosProfile, subscription_policies
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
@@ -230,32 +229,27 @@ class RecorderNode(Node):
             f'{len(metadata.topics_with_message_count)} topics')
 
 
-def main(args: list[str] | None = None) -> int:
-    """Run the recorder until SIGINT or SIGTERM, then close the bag; return the exit code.
+def _spin_then_drain(node: RecorderNode, stop) -> None:
+    """Spin until a stop is asked, then take and write what was received meanwhile.
 
     A signal sets a flag the spin loop checks (no exception in the middle of a write).
     """
-    stop = init_node_process(args)
-    node = None
-    try:
-        node = RecorderNode()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        freeze_start_up_objects()
-        while not stop.requested and rclpy.ok():
-            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
-        node.drain(executor)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ParameterError, ParameterException, BagError) as error:
-        print(f'[recorder] refused to start: {error}', file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.close_bag()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    freeze_start_up_objects()
+    while not stop.requested and rclpy.ok():
+        executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
+    node.drain(executor)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the recorder until SIGINT or SIGTERM, then close the bag; return the exit code.
+
+    Exit codes of :mod:`walker_runtime.node_main`: a bag that cannot be created is a refusal
+    to start (2), as invalid parameters are.
+    """
+    return run_node(RecorderNode, 'recorder', args, spin=_spin_then_drain,
+                    before_destroy=RecorderNode.close_bag)
 
 
 if __name__ == '__main__':

@@ -343,9 +343,14 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the composed graph until SIGINT or SIGTERM; exit code 2 when a node refuses."""
+    """Run the composed graph until SIGINT or SIGTERM; return the exit code.
+
+    The exit codes of every node process (:mod:`walker_runtime.node_main`): 2 when a node
+    refuses to start.
+    """
     import rclpy
 
+    from walker_runtime.node_main import EXIT_OK, EXIT_REFUSED
     from walker_runtime.spinning import init_node_process
 
     args = parse_arguments(sys.argv[1:] if argv is None else argv)
@@ -353,11 +358,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         specs = graph_from_arguments(args)
     except CompositionError as error:
         print(f'[composed_graph] {error}', file=sys.stderr, flush=True)
-        return 2
+        return EXIT_REFUSED
     context = rclpy.context.Context()
     stop = init_node_process(context=context)
     graph = None
-    code = 0
+    code = EXIT_OK
     try:
         graph = ComposedGraph(specs, context)
         print(f'[composed_graph] {len(graph.nodes)} nodes in one process: '
@@ -371,7 +376,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         graph.spin(stop)
     except CompositionError as error:
         print(f'[composed_graph] {error}', file=sys.stderr, flush=True)
-        code = 2
+        code = EXIT_REFUSED
     finally:
         if graph is not None:
             graph.destroy()

@@ -22,18 +22,16 @@ from __future__ import annotations
 import importlib
 import sys
 
-import rclpy
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from walker_bringup.lossy_link import LossyLink
-from walker_runtime.spinning import init_node_process, spin_nodes
+from walker_runtime.node_main import run_node
 
 __all__ = ['LossyLinkNode', 'message_type', 'main']
 
@@ -115,7 +113,7 @@ class LossyLinkNode(Node):
         self._publisher = self.create_publisher(kind, output_topic, qos)
         self.create_subscription(kind, input_topic, self._on_message, qos, raw=True)
         self.create_timer(_DELIVERY_PERIOD, self._deliver, clock=self._steady)
-        self.create_timer(_REPORT_PERIOD, self._report, clock=self._steady)
+        self.create_timer(_REPORT_PERIOD, self.report, clock=self._steady)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.get_logger().info(f'relaying {resolved_in} -> {resolved_out} ({type_name}), seed '
                                f'{seed}: {self._settings()}')
@@ -151,7 +149,8 @@ class LossyLinkNode(Node):
         for serialized in self.link.due(self._now() if now is None else now):
             self._publisher.publish(serialized)
 
-    def _report(self) -> None:
+    def report(self) -> None:
+        """Log what the link received, dropped and delivered."""
         counts = self.link.counts
         self.get_logger().info(
             f'{counts.received} received, {counts.dropped} dropped (at most '
@@ -159,28 +158,15 @@ class LossyLinkNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the link until interrupted; exit code 2 when it refuses to start."""
-    stop = init_node_process(args)
-    node = None
-    code = 0
-    try:
-        node = LossyLinkNode()
-        # The default executor: a test tool needs no speed. (Chosen when the link was seen to
-        # end in SIGABRT as it stopped under the events executor, then taken for a race with
-        # that executor's callbacks; it was a hang in the middleware's teardown that the stop
-        # escalation ended: README, Known limits.)
-        spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ValueError, ParameterException) as error:
-        print(f'[lossy_link] refusing to start: {error}', file=sys.stderr, flush=True)
-        code = 2
-    finally:
-        if node is not None:
-            node._report()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    """Run the link until interrupted; exit codes of :mod:`walker_runtime.node_main`.
+
+    The default executor: a test tool needs no speed. (Chosen when the link was seen to end in
+    SIGABRT as it stopped under the events executor, then taken for a race with that
+    executor's callbacks; it was a hang in the middleware's teardown that the stop escalation
+    ended: README, Known limits.)
+    """
+    return run_node(LossyLinkNode, 'lossy_link', args, executor=SingleThreadedExecutor,
+                    before_destroy=LossyLinkNode.report)
 
 
 if __name__ == '__main__':

@@ -27,22 +27,19 @@ from __future__ import annotations
 import math
 import sys
 
-import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from walker_msgs.msg import ControlMode, JointAccelerations
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
 from walker_runtime.node_parameters import declare_section, guard_section_updates
-from walker_core.parameter_schema import ParameterError
 from walker_runtime.realtime import log_realtime_request
 from walker_runtime.core.resubscription import Resubscription
-from walker_runtime.spinning import init_node_process, spin_nodes
+from walker_runtime.node_main import run_node
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
 from walker_control.joint_channel import (
@@ -429,25 +426,10 @@ class JointControllerNode(ControllerNode):
 
 
 def run_controller_node(node_class, node_name: str, args: list[str] | None = None) -> int:
-    """Run a controller node until interrupted; exit code 2 when it refuses to start."""
-    argv = sys.argv if args is None else args
-    stop = init_node_process(argv)
-    node = None
-    code = 0
-    try:
-        node = node_class(node_name)
-        node.request_realtime_scheduling()
-        spin_nodes(node, stop=stop)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ParameterError, ValueError) as error:
-        print(f'[{node_name}] refusing to start: {error}', file=sys.stderr, flush=True)
-        code = 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    """Run a controller node until interrupted; exit codes of :mod:`walker_runtime.node_main`."""
+    return run_node(lambda: node_class(node_name), node_name,
+                    sys.argv if args is None else args,
+                    start=ControllerNode.request_realtime_scheduling)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -548,5 +548,6 @@ def test_the_node_refuses_to_start_with_invalid_parameters():
         args = [str(NODE), '--ros-args', '-r', '__ns:=/walker', '-p',
                 'planner.joint.max_acceleration:=9.0']
         with NodeProcess(args, ros_environment(domain), 'planner') as planner:
-            assert planner.process.wait(timeout=WAIT) == 1
+            assert planner.process.wait(timeout=WAIT) == 2  # node_main.EXIT_REFUSED
             assert 'must not exceed planner.joint.acceleration_limit' in planner.output
+            assert 'refusing to start' in planner.output and 'Traceback' not in planner.output

@@ -27,7 +27,7 @@ import numpy as np
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.task import Future
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -39,12 +39,12 @@ from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_runtime.node_parameters import declare_section, guard_section_updates
-from walker_core.parameter_schema import ParameterError
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_runtime.realtime import log_realtime_request, request_thread_priority
 from walker_runtime.core.resubscription import Resubscription, clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
-from walker_runtime.spinning import destroy_actions, init_node_process, spin_nodes
+from walker_runtime.node_main import run_node
+from walker_runtime.spinning import destroy_actions, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
@@ -510,28 +510,20 @@ def _plan_request(request) -> PlanRequest:
         sweep_direction=int(request.sweep_direction))
 
 
+def _start(node: PlannerNode) -> None:
+    node.start_streaming()
+    node.request_realtime_scheduling()
+
+
 def main(args=None) -> int:
-    """Run the planner node until interrupted."""
-    stop = init_node_process(args)
-    node = None
-    try:
-        node = PlannerNode()
-        node.start_streaming()
-        node.request_realtime_scheduling()
-        # The default executor: a goal's execution awaits its stream's end, and under the
-        # events executor an awaited future makes every spin return at once (a core burnt for
-        # the whole stream). The stream node, the busy one, keeps the events executor.
-        spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
-    except ParameterError as error:
-        print(f'planner: invalid parameters, not starting: {error}', flush=True)
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Run the planner node until interrupted; exit codes of :mod:`walker_runtime.node_main`.
+
+    The default executor: a goal's execution awaits its stream's end, and under the events
+    executor an awaited future makes every spin return at once (a core burnt for the whole
+    stream). The stream node, the busy one, keeps the events executor.
+    """
+    return run_node(PlannerNode, 'planner', args, start=_start,
+                    executor=SingleThreadedExecutor)
 
 
 if __name__ == '__main__':

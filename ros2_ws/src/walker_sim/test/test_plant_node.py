@@ -265,8 +265,9 @@ def test_the_gripper_service_releases_one_gripper_and_refuses_the_other(ros_env,
 def test_the_node_refuses_to_start_on_invalid_parameters(ros_env, parameter, words):
     with start_plant(ros_env, parameter) as plant:
         plant.process.wait(timeout=START_TIMEOUT)
-        assert plant.process.returncode == 1
+        assert plant.process.returncode == 2  # walker_runtime.node_main.EXIT_REFUSED
         assert 'refusing to start' in plant.output and words in plant.output
+        assert 'Traceback' not in plant.output
 
 
 def test_runtime_updates_are_validated_and_read_only_settings_refused(rclpy_context):

@@ -30,13 +30,9 @@ from __future__ import annotations
 import math
 import sys
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
-from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock as ClockMsg
@@ -45,11 +41,10 @@ from std_msgs.msg import String
 
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.node_parameters import declare_section, guard_section_updates
-from walker_core.parameter_schema import ParameterError
 from walker_runtime.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf
-from walker_runtime.spinning import init_node_process, spin_nodes
+from walker_runtime.node_main import run_node
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import (
@@ -447,23 +442,8 @@ class PlantNode(Node):
 
 
 def main(args=None) -> int:
-    """Run the plant node until shut down; exit code 1 when it refuses to start."""
-    stop = init_node_process(args)
-    node = None
-    try:
-        node = PlantNode()
-        node.request_realtime_scheduling()
-        spin_nodes(node, stop=stop)
-    except (ParameterError, ParameterException) as error:
-        get_logger('plant').fatal(f'refusing to start: {error}')
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Run the plant node until shut down; exit codes of :mod:`walker_runtime.node_main`."""
+    return run_node(PlantNode, 'plant', args, start=PlantNode.request_realtime_scheduling)
 
 
 if __name__ == '__main__':

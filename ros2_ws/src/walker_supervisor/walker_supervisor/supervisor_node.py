@@ -26,7 +26,7 @@ import numpy as np
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -49,7 +49,8 @@ from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, l
 from walker_runtime.realtime import log_realtime_request
 from walker_runtime.core.resubscription import Resubscription
 from walker_core.robot_parameters import WalkerParameters
-from walker_runtime.spinning import TopicSampler, destroy_actions, init_node_process, spin_nodes
+from walker_runtime.node_main import run_node
+from walker_runtime.spinning import TopicSampler, destroy_actions
 from walker_core.truss import Truss, UnknownNodeError
 from walker_planner.conversions import chained_message
 from walker_planner.core.errors import PlanningError
@@ -1288,28 +1289,18 @@ def _join(first, second, lead: float) -> JointTrajectory:
                            stream_lead(first, second, lead))
 
 
-def main(args: list[str] | None = None) -> None:
-    """Run the supervisor node."""
-    stop = init_node_process(args)
-    node = None
-    try:
-        node = SupervisorNode()
-        node.request_realtime_scheduling()
-        # The default executor: the supervisor's asynchronous service and action calls have
-        # shown a failure inside the events executor, and it handles few messages (its high-rate
-        # inputs are sampled).
-        spin_nodes(node, stop=stop, executor=SingleThreadedExecutor())
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterError as error:
-        rclpy.logging.get_logger('supervisor').fatal(f'invalid parameters: {error}')
-        raise SystemExit(2) from None
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+def main(args: list[str] | None = None) -> int:
+    """Run the supervisor node; exit codes of :mod:`walker_runtime.node_main`.
+
+    The default executor: the supervisor's asynchronous service and action calls have shown a
+    failure inside the events executor, and it handles few messages (its high-rate inputs are
+    sampled).
+    """
+    return run_node(SupervisorNode, 'supervisor', args,
+                    start=SupervisorNode.request_realtime_scheduling,
+                    executor=SingleThreadedExecutor)
 
 
 if __name__ == '__main__':
-    main()
+    raise SystemExit(main())
 
