@@ -399,7 +399,7 @@ def test_a_state_stream_silent_for_long_is_subscribed_anew_and_followed_again(ro
         plant.command(ControlMode.COARSE, 'a')
         plant.step_until(lambda s: s.mode == ControlMode.COARSE)
         # two state timeouts of silence: the subscription is made anew, once per interval
-        assert controller.wait_for_output('no joint_states for', WAIT), controller.output
+        assert controller.wait_for_output('joint_states: silent for', WAIT), controller.output
         assert plant.spin_until(
             lambda: len(_subscriptions_of_controller(plant, '/walker/joint_states')) == 1)
         # the new subscription is answered, and the controller reports fresh inputs again

@@ -13,12 +13,12 @@ No control math here: the channel converts messages and calls the core.
 
 from __future__ import annotations
 
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 
 from walker_runtime.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
-from walker_runtime.core.resubscription import Resubscription
+from walker_runtime.watched_subscription import WatchedSubscription
 
 from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import (
@@ -35,7 +35,7 @@ __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS',
 #: joint_states and joint_accelerations: best effort, newest only (walker_runtime.qos)
 STATE_QOS = SENSOR_QOS
 # A stream silent for this many of its timeouts has its subscription made anew, and again
-# as often while the silence lasts (see Resubscription): 2 s by default, the supervisor's
+# as often while the silence lasts (see WatchedSubscription): 2 s by default, the supervisor's
 # watchdog, so that a publisher merely stalled by a loaded machine is not matched anew
 # (re-matching would lengthen the stall) while a walker held on a silent input has a fresh
 # subscription by the time it is resumed.
@@ -90,8 +90,6 @@ class JointChannel:
         control = settings.control
         self.watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout,
                                       CLOCK_SLACK_PERIODS * settings.sample_time)
-        self._setpoint_resubscription = Resubscription(
-            RESUBSCRIBE_AFTER_TIMEOUTS * control.setpoint_timeout)
         self.stale = StaleInputs()
         self.setpoint_lagging = False
         self.last_stamp: float | None = None  # [s] stamp of the last state answered
@@ -101,22 +99,14 @@ class JointChannel:
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
         self._state_pub = node.create_publisher(ControllerState, f'controllers/{joint}/state',
                                                 COMMAND_QOS, event_callbacks=quiet)
-        self._setpoint_sub = self.subscribe_setpoints()
+        #: ``controllers/<joint>/setpoint``, made anew when silent while tracking (the node
+        #: calls its ``check`` and keeps the order of its subscriptions)
+        self.setpoint_subscription = WatchedSubscription(
+            node, JointCommand, f'controllers/{joint}/setpoint', self._on_setpoint_message,
+            COMMAND_QOS, after=RESUBSCRIBE_AFTER_TIMEOUTS * control.setpoint_timeout,
+            last_heard=lambda: self.watchdog.last_setpoint, steady_now=steady_now)
 
     # ------------------------------------------------------------------------- settings
-    def subscribe_setpoints(self):
-        """Subscribe to ``controllers/<joint>/setpoint`` (the node keeps the order).
-
-        Without QoS event handlers: the subscription is made anew while the node spins (see
-        :meth:`setpoint_resubscription_due`), and destroying one that has handlers under the
-        events executor is an open crash report (ros2/rclpy#1644). A publisher of incompatible
-        QoS is still warned of on its own side.
-        """
-        self._setpoint_sub = self._node.create_subscription(
-            JointCommand, f'controllers/{self.joint}/setpoint', self._on_setpoint_message,
-            COMMAND_QOS,
-            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
-        return self._setpoint_sub
 
     def take_setpoints(self) -> None:
         """Take the setpoints already received that no callback has had yet.
@@ -126,21 +116,13 @@ class JointChannel:
         costs a take from the middleware, not a turn of the executor and a callback; the
         executor then finds nothing left to take for them.
         """
-        subscription = self._setpoint_sub
+        subscription = self.setpoint_subscription.subscription
         while True:
             with subscription.handle:
                 taken = subscription.handle.take_message(JointCommand, False)
             if taken is None:
                 return
             self.on_setpoint(taken[0])
-
-    def setpoint_resubscription_due(self, now: float) -> bool:
-        """Say whether the setpoint stream has been silent long enough to subscribe anew."""
-        return self._setpoint_resubscription.due(now, self.watchdog.last_setpoint)
-
-    def destroy_setpoint_subscription(self) -> None:
-        """Destroy the setpoint subscription (before :meth:`subscribe_setpoints`)."""
-        self._node.destroy_subscription(self._setpoint_sub)
 
     def apply_settings(self, settings: ControllerSettings) -> None:
         """Take validated new settings (the node's parameters changed)."""
@@ -149,7 +131,7 @@ class JointChannel:
         self.watchdog.state_timeout = settings.control.state_timeout
         self.watchdog.setpoint_timeout = settings.control.setpoint_timeout
         self.watchdog.clock_slack = CLOCK_SLACK_PERIODS * settings.sample_time
-        self._setpoint_resubscription.after = \
+        self.setpoint_subscription.after = \
             RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.setpoint_timeout
 
     # -------------------------------------------------------------------------- inputs

@@ -38,8 +38,8 @@ from walker_msgs.msg import ControlMode, JointAccelerations
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_runtime.realtime import log_realtime_request
-from walker_runtime.core.resubscription import Resubscription
 from walker_runtime.node_main import run_node
+from walker_runtime.watched_subscription import WatchedSubscription
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
 from walker_control.joint_channel import (
@@ -107,8 +107,6 @@ class ControllerNode(Node):
                                        self._sim_clock_now, f'{joint}: ' if several else '',
                                        after_setpoint=self._answer_waiting_state)
                           for joint in self._joints]
-        self._state_resubscription = Resubscription(
-            RESUBSCRIBE_AFTER_TIMEOUTS * self._settings.control.state_timeout)
         self._names: tuple[str, ...] = ()
         self._indices: list[int] = []  # joint_states index of each physical joint
         self._own_indices: list[int] = []  # physical index of each joint of the node
@@ -132,7 +130,11 @@ class ControllerNode(Node):
         self._effort_sink = None
         self._acceleration_sub = None
         self._update_acceleration_subscription()
-        self._state_sub = self._subscribe_states()
+        # joint_states, made anew when silent (None while the plant hands states over by call)
+        self._states: WatchedSubscription | None = WatchedSubscription(
+            self, JointState, 'joint_states', self._on_joint_state, STATE_QOS,
+            after=RESUBSCRIBE_AFTER_TIMEOUTS * self._settings.control.state_timeout,
+            last_heard=self._last_state_heard, steady_now=self._steady_now)
         self._watchdog_timer = self._create_watchdog_timer()
         roles = ', '.join(f'{joint} (J{channel.controller.role})'
                           for joint, channel in zip(self._joints, self._channels, strict=True))
@@ -183,8 +185,8 @@ class ControllerNode(Node):
         modes, the watchdogs and the controller states are as before.
         """
         self._effort_sink = effort_sink
-        self.destroy_subscription(self._state_sub)
-        self._state_sub = None
+        self._states.destroy()
+        self._states = None
         if self._acceleration_sub is not None:
             self.destroy_subscription(self._acceleration_sub)
             self._acceleration_sub = None
@@ -217,36 +219,20 @@ class ControllerNode(Node):
                      control.sim_time_setpoint_wait or math.inf) / _WATCHDOG_CHECKS_PER_TIMEOUT
         return self.create_timer(period, self._on_watchdog, clock=self._steady)
 
-    def _subscribe_states(self):
-        return self.create_subscription(
-            JointState, 'joint_states', self._on_joint_state, STATE_QOS,
-            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+    def _last_state_heard(self) -> float | None:
+        """[s] steady time of the newest joint state any joint's watchdog has had."""
+        return max((c.watchdog.last_state for c in self._channels
+                    if c.watchdog.last_state is not None), default=None)
 
     def _resubscribe_silent_streams(self, now: float) -> None:
-        """Make anew the subscription of a stream silent for long (see Resubscription)."""
-        last_state = max((c.watchdog.last_state for c in self._channels
-                          if c.watchdog.last_state is not None), default=None)
-        if self._effort_sink is None and self._state_resubscription.due(now, last_state):
-            self.destroy_subscription(self._state_sub)
-            self._state_sub = self._subscribe_states()
-            self.get_logger().warning(
-                f'no joint_states for {now - last_state:.1f} s: subscription '
-                'made anew (a restarted or resumed plant is matched again)')
-        silent = [c for c in self._channels if c.setpoint_resubscription_due(now)]
-        if silent:
+        """Make anew the subscription of a stream silent for long (see WatchedSubscription)."""
+        if self._states is not None:
+            self._states.check(now)
+        renewed = [channel.setpoint_subscription.check(now) for channel in self._channels]
+        if any(renewed) and self._states is not None:
             # the state's subscription is made after them again: it stays last in the
             # executor's order (a setpoint that arrived with a state is taken first)
-            if self._state_sub is not None:
-                self.destroy_subscription(self._state_sub)
-            for channel in silent:
-                channel.destroy_setpoint_subscription()
-                channel.subscribe_setpoints()
-                self.get_logger().warning(
-                    f'{channel.joint}: no setpoint for '
-                    f'{now - channel.watchdog.last_setpoint:.1f} s while tracking: '
-                    'subscription made anew')
-            if self._effort_sink is None:
-                self._state_sub = self._subscribe_states()
+            self._states.renew()
 
     def _update_acceleration_subscription(self) -> None:
         """Subscribe to joint_accelerations only while a role of a joint feeds it back."""
@@ -268,8 +254,8 @@ class ControllerNode(Node):
         for channel in self._channels:
             channel.apply_settings(settings)
         self._update_acceleration_subscription()
-        self._state_resubscription.after = \
-            RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.state_timeout
+        if self._states is not None:
+            self._states.after = RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.state_timeout
         self.destroy_timer(self._watchdog_timer)
         self._watchdog_timer = self._create_watchdog_timer()
         self.get_logger().info('controller parameters updated (stability check passed)')

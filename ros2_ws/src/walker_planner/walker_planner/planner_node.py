@@ -21,7 +21,6 @@ stamped from them, in real time and in sim time alike, as the controllers are.
 from __future__ import annotations
 
 import threading
-import time
 
 import numpy as np
 import rclpy
@@ -41,9 +40,10 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_runtime.realtime import log_realtime_request, request_thread_priority
-from walker_runtime.core.resubscription import Resubscription, clock_ran_past
+from walker_runtime.core.resubscription import clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
 from walker_runtime.node_main import run_node
+from walker_runtime.watched_subscription import WatchedSubscription
 from walker_runtime.spinning import destroy_actions, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
@@ -60,8 +60,8 @@ _RESULT_TIMEOUT = 30  # [s] how long a finished follow_trajectory goal keeps its
 _RELAY_PERIOD = 0.02
 
 #: [s] steady time: joint states silent this long while the plant's clock runs on get their
-#: subscription made anew (:class:`~walker_runtime.core.resubscription.Resubscription`), and every
-#: this long again while the silence lasts
+#: subscription made anew (:class:`~walker_runtime.watched_subscription.WatchedSubscription`),
+#: and every this long again while the silence lasts
 _RESUBSCRIBE_AFTER = 1.0
 
 #: control periods the ROS clock must have run past the newest joint state (or, none heard
@@ -133,10 +133,12 @@ class PlannerNode(Node):
             for name in PHYSICAL_JOINT_NAMES}
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
-        self._state_subscription = self._subscribe_states()
-        self._started_wall = time.monotonic()  # [s] steady
-        self._last_state_wall: float | None = None  # [s] steady time of the newest joint state
-        self._state_resubscription = Resubscription(_RESUBSCRIBE_AFTER)
+        # on the stream node, whose thread it paces; a silence counts from the start (a plant
+        # whose clock runs unheard), and only while the clock runs past the newest state
+        self._states = WatchedSubscription(
+            self._stream_node, JointState, 'joint_states', self._on_joint_state, SENSOR_QOS,
+            after=_RESUBSCRIBE_AFTER, counts=self._clock_ran_past_the_states,
+            count_from_start=True, logger=self.get_logger())
         self._stream_spinning = threading.Event()  # the stream thread has run a timer
         self._stream_node.create_timer(_RESUBSCRIBE_AFTER / 4, self._resubscribe_if_silent,
                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -227,10 +229,6 @@ class PlannerNode(Node):
         self._planning = PlanningContext.from_parameters(self._robot, section)
 
     # ------------------------------------------------------------------ subscriptions
-    def _subscribe_states(self):
-        return self._stream_node.create_subscription(JointState, 'joint_states',
-                                                     self._on_joint_state, SENSOR_QOS)
-
     def _resubscribe_if_silent(self) -> None:
         """Make the joint states' subscription anew when it stopped receiving (stream thread).
 
@@ -241,25 +239,16 @@ class PlannerNode(Node):
         In real time the clock always runs, and a plant gone costs a new subscription a second.
         """
         self._stream_spinning.set()
-        now = time.monotonic()
+        self._states.check()
+
+    def _clock_ran_past_the_states(self) -> bool:
+        """Say whether the ROS clock ran well past the newest joint state (clock_ran_past)."""
         newest = self._measured[0] if self._measured is not None else None
-        clock = self.get_clock().now().nanoseconds
-        if not clock_ran_past(clock, newest, _CLOCK_AHEAD_PERIODS * self._period_ns,
-                              self.get_parameter('use_sim_time').value):
-            return
-        ahead = clock - (newest or 0)
-        last_heard = self._last_state_wall if self._last_state_wall is not None \
-            else self._started_wall
-        if not self._state_resubscription.due(now, last_heard):
-            return
-        self._stream_node.destroy_subscription(self._state_subscription)
-        self._state_subscription = self._subscribe_states()
-        self.get_logger().warning(
-            f'no joint_states for {now - last_heard:.1f} s while the clock ran '
-            f'{ahead * 1e-9:.3f} s past the newest: subscription made anew')
+        return clock_ran_past(self.get_clock().now().nanoseconds, newest,
+                              _CLOCK_AHEAD_PERIODS * self._period_ns,
+                              self.get_parameter('use_sim_time').value)
 
     def _on_joint_state(self, message: JointState) -> None:
-        self._last_state_wall = time.monotonic()
         names = tuple(message.name)
         if names != self._state_names:  # the plant's order, looked up once
             try:

@@ -1,9 +1,10 @@
 """When a subscription silent for long is made anew.
 
-A ROS-free rule shared by every node that watches its inputs on a steady clock: the joint
-controllers (their state and setpoint streams), the supervisor (the plant's and the
-controllers' reports) and the planner (the joint states its stream is paced by, which
-:func:`clock_ran_past` tells from a plant that stopped).
+A ROS-free rule shared by every node that watches its inputs on a steady clock (through
+:class:`walker_runtime.watched_subscription.WatchedSubscription`): the joint controllers (their
+state and setpoint streams), the supervisor (the plant's and the controllers' reports) and the
+planner (the joint states its stream is paced by, which :func:`clock_ran_past` tells from a
+plant that stopped).
 """
 
 from __future__ import annotations
@@ -30,11 +31,21 @@ class Resubscription:
     """
 
     def __init__(self, after: float) -> None:
-        if not (math.isfinite(after) and after > 0.0):
-            raise ValueError(f'resubscription interval must be positive and finite, got {after!r}')
-        self.after = float(after)
+        self.after = after
         self._last_attempt: float | None = None
         self.attempts = 0
+
+    @property
+    def after(self) -> float:
+        """[s] steady time of silence before an attempt, and between attempts."""
+        return self._after
+
+    @after.setter
+    def after(self, value: float) -> None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f'resubscription interval must be positive and finite, got {value!r}')
+        self._after = float(value)
 
     def due(self, now: float, last_heard: float | None) -> bool:
         """Return True, and count an attempt, when the subscription should be made anew.

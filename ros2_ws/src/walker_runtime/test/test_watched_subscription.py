@@ -1,0 +1,132 @@
+"""WatchedSubscription on a real rclpy node: silence, renewal, and a stream that still flows."""
+
+import math
+
+import pytest
+from ros_test_support import spin_executor_until
+from std_msgs.msg import Int32
+
+from walker_runtime.qos import COMMAND_QOS
+from walker_runtime.watched_subscription import WatchedSubscription
+
+SPIN = 5.0  # [s] wall clock, for a message to come through on a loaded machine
+
+
+class _Logger:
+    def __init__(self):
+        self.warnings = []
+
+    def warning(self, text):
+        self.warnings.append(text)
+
+
+class _Steady:
+    """A steady clock the test sets by hand [s]."""
+
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+@pytest.fixture
+def node(rclpy_context):
+    from rclpy.node import Node
+
+    node = Node('watched', context=rclpy_context)
+    yield node
+    node.destroy_node()
+
+
+def _deliver(node, publisher, received, value):
+    """Publish ``value`` and spin until the callback has it."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    try:
+        publisher.publish(Int32(data=value))
+        return spin_executor_until(executor, lambda: value in received, SPIN)
+    finally:
+        executor.remove_node(node)
+        executor.shutdown(timeout_sec=0.0)
+
+
+def _watched(node, received, steady, logger, **watch):
+    return WatchedSubscription(node, Int32, 'numbers', lambda m: received.append(m.data),
+                               COMMAND_QOS, after=1.0, steady_now=steady, logger=logger, **watch)
+
+
+def test_a_silent_subscription_is_made_anew_and_the_stream_flows_again(node):
+    steady, logger, received = _Steady(), _Logger(), []
+    publisher = node.create_publisher(Int32, 'numbers', COMMAND_QOS)
+    watched = _watched(node, received, steady, logger)
+    assert _deliver(node, publisher, received, 1)
+    assert watched.last_heard == steady.now
+    first = watched.subscription
+    steady.now += 0.9
+    assert not watched.check() and watched.subscription is first
+    steady.now += 0.1
+    assert watched.check()
+    assert watched.subscription is not first
+    assert list(node.subscriptions) == [watched.subscription]
+    assert watched.renewals == 1
+    assert logger.warnings == ['numbers: silent for 1.0 s, subscription made anew (a restarted '
+                               'or resumed publisher is matched again)']
+    steady.now += 0.5
+    assert not watched.check(), 'once per interval while the silence lasts'
+    steady.now += 0.5
+    assert watched.check() and watched.renewals == 2
+    assert _deliver(node, publisher, received, 2), 'the new subscription receives'
+    assert watched.last_heard == steady.now
+
+
+def test_a_stream_never_heard_from_is_left_alone_unless_counted_from_the_start(node):
+    steady, logger = _Steady(), _Logger()
+    alone = _watched(node, [], steady, logger)
+    counted = _watched(node, [], steady, logger, count_from_start=True)
+    steady.now += 5.0
+    assert not alone.check() and alone.last_heard is None
+    assert counted.check() and counted.last_heard == steady.now - 5.0
+
+
+def test_a_silence_counts_only_while_the_condition_holds(node):
+    steady, logger, heard = _Steady(), _Logger(), {'at': 100.0}
+    running = {'clock': False}
+    watched = _watched(node, [], steady, logger, last_heard=lambda: heard['at'],
+                       counts=lambda: running['clock'])
+    steady.now += 3.0
+    assert not watched.check(), "the clock stands still: the silence is the publisher's"
+    running['clock'] = True
+    assert watched.check()
+    heard['at'] = steady.now  # the caller's own watchdog heard the stream
+    steady.now += 0.5
+    assert not watched.check()
+
+
+def test_the_interval_follows_a_parameter_change_and_refuses_nonsense(node):
+    steady, logger, received = _Steady(), _Logger(), []
+    watched = _watched(node, received, steady, logger)
+    watched.heard()
+    watched.after = 4.0
+    steady.now += 3.9
+    assert not watched.check()
+    steady.now += 0.1
+    assert watched.check()
+    for bad in (0.0, -1.0, math.nan, math.inf, True):
+        with pytest.raises(ValueError, match='positive and finite'):
+            watched.after = bad
+    assert watched.after == 4.0
+
+
+def test_renew_and_destroy_act_at_once_and_log_nothing(node):
+    steady, logger = _Steady(), _Logger()
+    watched = _watched(node, [], steady, logger)
+    first = watched.subscription
+    watched.renew()
+    assert watched.subscription is not first and list(node.subscriptions) == [
+        watched.subscription]
+    watched.destroy()
+    assert watched.subscription is None and list(node.subscriptions) == []
+    assert logger.warnings == [] and watched.renewals == 0
