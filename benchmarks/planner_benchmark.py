@@ -36,8 +36,8 @@ import walker_env  # noqa: E402
 def _cases():
     import math
 
-    from walker_core.parameter_schema import load_parameter_file, section_from_flat
-    from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+    from walker_core.parameter_file import ParameterFile
+    from walker_core.robot_parameters import WalkerParameters
     from walker_planner.core.bounds import family_minimum_solution, move_problem
     from walker_planner.core.direct_method import solve_minimum_time
     from walker_planner.core.minimum_time import lower_bound
@@ -45,9 +45,9 @@ def _cases():
     from walker_planner.core.parameters import PREFIX, PlannerParameters
     from walker_planner.core.planning import PlanningContext, PlanRequest, plan
 
-    robot = load_walker_parameters()
-    planner = section_from_flat(PlannerParameters, load_parameter_file(default_parameter_file()),
-                                PREFIX)
+    defaults = ParameterFile.read()
+    robot = defaults.section(WalkerParameters)
+    planner = defaults.section(PlannerParameters, PREFIX)
     context = PlanningContext.from_parameters(robot, planner)
     nominal = PlanarModel.from_parameters(robot, planner.bang_bang.torque_fraction,
                                           planner.bang_bang.velocity_fraction)

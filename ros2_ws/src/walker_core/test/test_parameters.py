@@ -157,10 +157,10 @@ def test_the_parameter_file_is_found_without_ament_prefix_path():
 
 
 def test_no_parameter_file_anywhere_is_a_clear_error(monkeypatch, tmp_path):
-    from walker_core import robot_parameters
+    from walker_core import parameter_file
 
     monkeypatch.delenv('AMENT_PREFIX_PATH', raising=False)
-    monkeypatch.setattr(robot_parameters, '_source_parameter_file',
+    monkeypatch.setattr(parameter_file, '_source_parameter_file',
                         lambda: tmp_path / 'missing' / 'walker.yaml')
     with pytest.raises(FileNotFoundError, match='AMENT_PREFIX_PATH.*pass the parameter file'):
-        robot_parameters.default_parameter_file()
+        parameter_file.default_parameter_file()

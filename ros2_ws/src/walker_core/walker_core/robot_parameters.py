@@ -7,19 +7,14 @@ frozen, validated dataclasses. Units are SI (m, kg, s, rad, N*m; REP 103).
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from walker_core.parameter_schema import (
-    ParameterError,
-    load_parameter_file,
-    parameter,
-    section_from_flat,
-)
+from walker_core.parameter_file import ParameterFile, default_parameter_file
+from walker_core.parameter_schema import ParameterError, parameter, section_from_flat
 
 __all__ = [
     'Geometry', 'Masses', 'Drive', 'Drives', 'Flexibility', 'RobotParameters',
@@ -238,39 +233,6 @@ class WalkerParameters:
         return section_from_flat(cls, flat)
 
 
-def default_parameter_file() -> Path:
-    """Path of the installed ``walker.yaml``, or of the source one next to this package.
-
-    The ament index is asked first; without it (no ``AMENT_PREFIX_PATH``, or the package not
-    in it) the file beside the package's source (a source checkout or a symlink install) is
-    used.
-
-    Raises
-    ------
-    FileNotFoundError
-        When neither exists, saying how to point at the file.
-    """
-    try:
-        from ament_index_python.packages import get_package_share_directory
-        candidate = Path(get_package_share_directory('walker_core')) / 'config' / 'walker.yaml'
-        if candidate.exists():
-            return candidate
-    except (ImportError, LookupError, ValueError, OSError):  # OSError: no AMENT_PREFIX_PATH
-        pass
-    source = _source_parameter_file()
-    if source.exists():
-        return source
-    raise FileNotFoundError(
-        f'walker_core/config/walker.yaml was found neither through the ament index '
-        f'(AMENT_PREFIX_PATH={os.environ.get("AMENT_PREFIX_PATH", "")!r}) nor beside the '
-        f'package source ({source}): source the workspace install/setup.bash, or pass '
-        f'the parameter file explicitly')
-
-
-def _source_parameter_file() -> Path:
-    return Path(__file__).resolve().parents[1] / 'config' / 'walker.yaml'
-
-
 def load_walker_parameters(path: str | Path | None = None) -> WalkerParameters:
     """Load and validate the shared parameters from a ``ros__parameters`` YAML file.
 
@@ -284,4 +246,4 @@ def load_walker_parameters(path: str | Path | None = None) -> WalkerParameters:
     ParameterError
         Naming the missing or invalid parameter.
     """
-    return WalkerParameters.from_flat(load_parameter_file(path or default_parameter_file()))
+    return ParameterFile.read(path).section(WalkerParameters)

@@ -103,15 +103,14 @@ def figure9(path: Path) -> Path:
 
 def duration_figure(path: Path, params=None, nominal=None) -> Path:
     """Step duration against the midpoint radius, for the default robot and planner."""
-    from walker_core.parameter_schema import load_parameter_file, section_from_flat
-    from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-
+    from walker_core.parameter_file import ParameterFile
+    from walker_core.robot_parameters import WalkerParameters
     from walker_planner.core.parameters import PREFIX, PlannerParameters
 
     plt = _pyplot()
-    params = params or load_walker_parameters()
-    nominal = nominal or section_from_flat(
-        PlannerParameters, load_parameter_file(default_parameter_file()), PREFIX).bang_bang
+    defaults = ParameterFile.read()
+    params = params or defaults.section(WalkerParameters)
+    nominal = nominal or defaults.section(PlannerParameters, PREFIX).bang_bang
     rho_start = params.truss.spacing / (2.0 * params.robot.geometry.l2)
     torques_alone = PlanarModel.from_parameters(params)
     planned = PlanarModel.from_parameters(params, nominal.torque_fraction,

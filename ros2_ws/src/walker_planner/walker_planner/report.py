@@ -17,9 +17,8 @@ from __future__ import annotations
 import math
 import sys
 
-from walker_core.parameter_schema import load_parameter_file, section_from_flat
-from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-
+from walker_core.parameter_file import ParameterFile
+from walker_core.robot_parameters import WalkerParameters
 from walker_planner.core.bounds import family_minimum_solution, minimum_time_found, move_problem
 from walker_planner.core.minimum_time import lower_bound
 from walker_planner.core.node_to_node import PlanarModel, solve_node_to_node
@@ -35,9 +34,9 @@ __all__ = ['solutions', 'main']
 
 def solutions(robot=None, planner=None) -> dict:
     """Nominal and family-minimum bang-bang solutions of 90 and 180 deg steps, by name."""
-    robot = robot or load_walker_parameters()
-    planner = planner or section_from_flat(
-        PlannerParameters, load_parameter_file(default_parameter_file()), PREFIX)
+    defaults = ParameterFile.read()
+    robot = robot or defaults.section(WalkerParameters)
+    planner = planner or defaults.section(PlannerParameters, PREFIX)
     l2 = robot.robot.geometry.l2
     rho = robot.truss.spacing / (2.0 * l2)
     rho_min = min(planner.bang_bang.min_radius / (2.0 * l2), rho)
@@ -60,9 +59,9 @@ def bound_rows(robot=None, planner=None, direct: bool = True) -> list[dict]:
     same limits: at the full torque and, with rate limits, the full velocity limits) and
     ``solve_time`` of the direct method.
     """
-    robot = robot or load_walker_parameters()
-    planner = planner or section_from_flat(
-        PlannerParameters, load_parameter_file(default_parameter_file()), PREFIX)
+    defaults = ParameterFile.read()
+    robot = robot or defaults.section(WalkerParameters)
+    planner = planner or defaults.section(PlannerParameters, PREFIX)
     radius, min_radius = robot.truss.spacing, planner.bang_bang.min_radius
     l2 = robot.robot.geometry.l2
     rows = []
@@ -86,7 +85,7 @@ def bound_rows(robot=None, planner=None, direct: bool = True) -> list[dict]:
 def main(argv: list[str] | None = None) -> int:
     """Print the tables (Markdown); ``--no-direct`` skips the direct method."""
     argv = sys.argv[1:] if argv is None else argv
-    robot = load_walker_parameters()
+    robot = ParameterFile.read().section(WalkerParameters)
     found = solutions(robot)
     print('| step | rho(0) | rho(phi2) | phi1 | phi2 | tau = tau1/tau3 | tau1 [N m] | '
           'tau3 [N m] | duration [s] | set by |')

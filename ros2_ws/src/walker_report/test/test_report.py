@@ -212,3 +212,18 @@ def test_invalid_options_are_refused():
         ReportOptions(settle_time=-1.0)
     with pytest.raises(ReportError, match='settling window'):
         ReportOptions(settle_time=math.nan)
+
+
+def test_the_settling_window_is_the_parameter_files(tmp_path, walk_bag):
+    """Without an option the window is the file's ``supervisor.settle_time``."""
+    import yaml
+
+    from walker_core.parameter_file import default_parameter_file
+
+    document = yaml.safe_load(default_parameter_file().read_text())
+    document['/**']['ros__parameters']['supervisor']['settle_time'] = 1.0
+    params_file = tmp_path / 'walker.yaml'
+    params_file.write_text(yaml.safe_dump(document))
+    result = make_report(walk_bag, tmp_path / 'out', params_file,
+                         options=ReportOptions(animation=False))
+    assert result.content.settle_time == 1.0

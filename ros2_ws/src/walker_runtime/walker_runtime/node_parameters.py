@@ -18,10 +18,9 @@ from rcl_interfaces.msg import (
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
+from walker_core.parameter_file import default_values
 from walker_core.parameter_schema import (
-    ParameterError, ParameterSpec, leaf_specs, load_parameter_file, replace_in_section,
-    section_from_flat)
-from walker_core.robot_parameters import default_parameter_file
+    ParameterError, ParameterSpec, leaf_specs, replace_in_section, section_from_flat)
 
 __all__ = ['declare_section', 'guard_section_updates']
 
@@ -68,7 +67,8 @@ def declare_section(node: Node, section_type: type, prefix: str = '',
         Dotted prefix of the section in the parameter file, e.g. ``'control.'``; ``''`` for
         a top-level section type such as ``WalkerParameters``.
     defaults : mapping, optional
-        Flat default values; the default is the package's ``config/walker.yaml``.
+        Flat default values; the default is the installed ``config/walker.yaml``, parsed
+        once per process (:func:`walker_core.parameter_file.default_values`).
 
     Raises
     ------
@@ -77,7 +77,7 @@ def declare_section(node: Node, section_type: type, prefix: str = '',
         should refuse to start.
     """
     if defaults is None:
-        defaults = load_parameter_file(default_parameter_file())
+        defaults = default_values()
     specs = leaf_specs(section_type, prefix)
     for spec in specs:
         if spec.name not in defaults:

@@ -11,8 +11,9 @@ import sys
 from pathlib import Path
 
 from walker_core.parameter_schema import ParameterError
-from walker_core.robot_parameters import load_walker_parameters
-from walker_sim.core.config import load_sim_parameters
+from walker_core.parameter_file import ParameterFile
+from walker_core.robot_parameters import WalkerParameters
+from walker_sim.core.config import SimParameters
 from walker_sim.core.plant import WalkerPlant
 from walker_sim.core.render import Camera, render_plant, save_png
 
@@ -31,8 +32,9 @@ def main(argv=None) -> int:
                         help='frame the robot rather than the whole truss')
     args = parser.parse_args(argv)
     try:
-        params = load_walker_parameters(args.params_file)
-        sim = load_sim_parameters(args.params_file)
+        file = ParameterFile.read(args.params_file)
+        params = file.section(WalkerParameters)
+        sim = file.section(SimParameters, 'sim.')
         with WalkerPlant(params, sim) as plant:
             camera = None
             if args.close_up:

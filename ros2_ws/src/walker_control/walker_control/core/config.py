@@ -31,10 +31,9 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Mapping
 
-from walker_core.parameter_schema import (
-    ParameterError, load_parameter_file, parameter, section_from_flat)
-from walker_core.robot_parameters import (
-    Drive, RobotParameters, TimingParameters, default_parameter_file)
+from walker_core.parameter_file import ParameterFile
+from walker_core.parameter_schema import ParameterError, parameter, section_from_flat
+from walker_core.robot_parameters import Drive, RobotParameters, TimingParameters
 from walker_control.core.lowpass import FILTER_KINDS, FilterDesignError, design_lowpass_sos
 from walker_control.core.modes import GAIN_MODES, Mode
 from walker_control.core.relaxation import RelaxationDither
@@ -365,4 +364,4 @@ def load_controller_settings(path: str | Path | None = None) -> ControllerSettin
     ParameterError
         Naming the missing or invalid parameter, or the loop that fails the stability check.
     """
-    return ControllerSettings.from_flat(load_parameter_file(path or default_parameter_file()))
+    return ParameterFile.read(path).section(ControllerSettings)

@@ -30,8 +30,10 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from walker_core.parameter_schema import ParameterError, load_parameter_file, section_from_flat
-from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+from walker_core.parameter_file import ParameterFile, default_parameter_file
+from walker_core.parameter_schema import ParameterError
+from walker_core.robot_parameters import WalkerParameters
+from walker_core.settling import SETTLING_PREFIX, SettlingWindow
 from walker_core.truss import Truss
 from walker_report.core import figures
 from walker_report.core.analysis import (
@@ -140,15 +142,6 @@ def default_output_dir(bag_dir: str | Path) -> Path:
     return bag_dir.with_name(bag_dir.name + '_report')
 
 
-def _settle_time(params_file: Path) -> float:
-    """``supervisor.settle_time`` of the file, over the installed file's (as nodes default)."""
-    from walker_supervisor.core.sequencer import SupervisorParameters
-
-    flat = load_parameter_file(default_parameter_file())
-    flat.update(load_parameter_file(params_file))
-    return section_from_flat(SupervisorParameters, flat, 'supervisor.').settle_time
-
-
 def prepare_output(out: Path) -> Path:
     """Create the output directory, or clear the files of a former report out of it."""
     out = Path(out)
@@ -233,8 +226,10 @@ def make_report(bag: str | Path, out: str | Path | None = None,
         raise ReportError(f'options must be ReportOptions, got {type(options).__name__}')
     params_file = Path(params_file or default_parameter_file())
     try:
-        params = load_walker_parameters(params_file)
-        settle_time = options.settle_time or _settle_time(params_file)
+        file = ParameterFile.read(params_file)  # once, for every section the report needs
+        params = file.section(WalkerParameters)
+        settle_time = options.settle_time or file.section(SettlingWindow,
+                                                          SETTLING_PREFIX).settle_time
     except ParameterError as error:
         raise ReportError(f'the parameter file {params_file}: {error}') from None
     say = progress or (lambda *_: None)

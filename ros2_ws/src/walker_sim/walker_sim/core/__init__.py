@@ -42,13 +42,15 @@ def make_plant(params_file=None, *, other_attached: bool | None = None,
     ParameterError
         If the file or the overrides are invalid.
     """
+    from walker_core.parameter_file import ParameterFile
     from walker_core.parameter_schema import replace_in_section
-    from walker_core.robot_parameters import load_walker_parameters
-    from walker_sim.core.config import load_sim_parameters
+    from walker_core.robot_parameters import WalkerParameters
+    from walker_sim.core.config import SimParameters
     from walker_sim.core.plant import WalkerPlant
 
-    params = load_walker_parameters(params_file)
-    sim = load_sim_parameters(params_file)
+    file = ParameterFile.read(params_file)
+    params = file.section(WalkerParameters)
+    sim = file.section(SimParameters, 'sim.')
     changes = {f'sim.start.{name}': value
                for name, value in (('other_attached', other_attached),
                                    ('other_height', other_height)) if value is not None}

@@ -12,9 +12,8 @@ import math
 from typing import Any
 from collections.abc import Mapping
 
-from walker_core.parameter_schema import (
-    ParameterError, load_parameter_file, parameter, section_from_flat)
-from walker_core.robot_parameters import default_parameter_file
+from walker_core.parameter_file import ParameterFile
+from walker_core.parameter_schema import ParameterError, parameter, section_from_flat
 from walker_core.truss import Truss, UnknownNodeError
 
 __all__ = ['CLOCK_MODES', 'StartConfiguration', 'SimParameters', 'load_sim_parameters',
@@ -121,4 +120,4 @@ def check_against_walker(sim: SimParameters, params) -> None:
 
 def load_sim_parameters(path=None) -> SimParameters:
     """Load ``sim.*`` from a parameter file (default: the installed ``walker.yaml``)."""
-    return SimParameters.from_flat(load_parameter_file(path or default_parameter_file()))
+    return ParameterFile.read(path).section(SimParameters, 'sim.')

@@ -67,6 +67,7 @@ import numpy as np
 
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
+from walker_core.settling import settle_time_parameter
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.way_back import (
@@ -119,11 +120,7 @@ class SupervisorParameters:
         'joints slower than this count as still: the descent starts with every joint below '
         'it, the screw-in after mouth_settle_time below it',
         'rad/s', 1e-4, 1.0, read_only=False)
-    settle_time: float = parameter(
-        'time the joints must stay still before the tip is judged where it came to rest '
-        'after a motion that moved joint 1: a coarse motion or fine line that ended short of '
-        'the point above the hole, before a correction line; a line at the mouth, before the '
-        'screw-in', 's', 0.0, 10.0, read_only=False)
+    settle_time: float = settle_time_parameter()  # declared in the model: the report uses it
     phase_timeout: float = parameter(
         'time a phase may overrun its planned duration before the step is aborted', 's',
         0.1, 600.0, read_only=False)
