@@ -96,12 +96,13 @@ class GraphRun:
         from walker_bringup.graph import NodeSpec, several_walkers
         from walker_bringup.graph_client import GraphClient, init_context
         from walker_bringup.processes import ProcessGroup
-        from walker_core.robot_parameters import default_parameter_file
+        from walker_bringup.core.configuration import load_configuration
 
         self.scratch.mkdir(parents=True, exist_ok=True)
         domain = self._stack.enter_context(isolated_domain())
-        params_file = Path(default_parameter_file()).resolve()
-        self.graphs = several_walkers(params_file, self.count, self.sim_time, self.record,
+        configuration = load_configuration()
+        params_file = configuration.path
+        self.graphs = several_walkers(configuration, self.count, self.sim_time, self.record,
                                       self.scratch, self.parameters, self.grouped)
         for namespace, start, nodes in self.graphs:
             label = namespace.strip('/')

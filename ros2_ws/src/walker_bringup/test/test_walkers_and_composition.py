@@ -10,11 +10,17 @@ from walker_bringup.composition import (
 from walker_bringup.graph import (
     NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
     walker_targets)
+from walker_bringup.core.configuration import load_configuration
 from walker_bringup.run import parse_arguments as run_arguments
-from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+from walker_core.robot_parameters import default_parameter_file
 from walker_core.truss import Truss, UnknownNodeError
 
 PARAMS = Path(default_parameter_file()).resolve()
+
+
+@pytest.fixture(scope='module')
+def configuration():
+    return load_configuration(PARAMS)
 
 
 def test_walker_namespaces():
@@ -25,9 +31,9 @@ def test_walker_namespaces():
 
 
 @pytest.mark.parametrize('count', [1, 2, 4, 8])
-def test_start_stances_are_distinct_neighbouring_nodes_on_the_truss(count):
-    truss = Truss.from_parameters(load_walker_parameters(PARAMS))
-    stances = start_stances(PARAMS, count)
+def test_start_stances_are_distinct_neighbouring_nodes_on_the_truss(configuration, count):
+    truss = Truss.from_parameters(configuration.walker)
+    stances = start_stances(configuration, count)
     assert len(stances) == count
     # the first walker starts where the parameter file says
     assert stances[0] == StartStance('a', 'n1_1', 'n2_1')
@@ -37,16 +43,16 @@ def test_start_stances_are_distinct_neighbouring_nodes_on_the_truss(count):
         assert stance.other_node in truss.neighbors(stance.base_node)
 
 
-def test_more_walkers_than_the_truss_holds_or_no_walker_is_refused():
+def test_more_walkers_than_the_truss_holds_or_no_walker_is_refused(configuration):
     with pytest.raises(ValueError, match='room for 8 walkers'):
-        start_stances(PARAMS, 9)
+        start_stances(configuration, 9)
     for bad in (0, -2, 2.5, True):
         with pytest.raises(ValueError, match='positive integer'):
-            start_stances(PARAMS, bad)
+            start_stances(configuration, bad)
 
 
-def test_several_walkers_get_their_namespace_start_and_clock():
-    graphs = several_walkers(PARAMS, 3, sim_time=True)
+def test_several_walkers_get_their_namespace_start_and_clock(configuration):
+    graphs = several_walkers(configuration, 3, sim_time=True)
     assert [ns for ns, _, _ in graphs] == ['/walker', '/walker_2', '/walker_3']
     # the first walker's graph is exactly the single walker's
     assert graphs[0][2] == walker_graph(PARAMS, '/walker', sim_time=True)
@@ -65,13 +71,13 @@ def test_several_walkers_get_their_namespace_start_and_clock():
                        for arg in n.command('/bin/true'))
 
 
-def test_each_walker_walks_the_same_route_moved_with_its_start():
-    stances = start_stances(PARAMS, 4)  # rows 1, 2, 3, 0 from column 1
-    assert walker_targets(PARAMS, 'n3_1', stances) == ['n3_1', 'n3_2', 'n3_3', 'n3_0']
+def test_each_walker_walks_the_same_route_moved_with_its_start(configuration):
+    stances = start_stances(configuration, 4)  # rows 1, 2, 3, 0 from column 1
+    assert walker_targets(configuration, 'n3_1', stances) == ['n3_1', 'n3_2', 'n3_3', 'n3_0']
     # where the moved target is off the truss, the target itself
-    assert walker_targets(PARAMS, 'n4_3', stances) == ['n4_3', 'n4_3', 'n4_3', 'n4_2']
+    assert walker_targets(configuration, 'n4_3', stances) == ['n4_3', 'n4_3', 'n4_3', 'n4_2']
     with pytest.raises(UnknownNodeError):
-        walker_targets(PARAMS, 'n9_9', stances)
+        walker_targets(configuration, 'n9_9', stances)
 
 
 def test_parameters_given_to_the_graph_reach_every_node():

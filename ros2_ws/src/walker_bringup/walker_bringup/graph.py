@@ -196,10 +196,11 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     return nodes
 
 
-def start_stances(params_file: str | Path, count: int) -> list[StartStance]:
-    """Distinct start stances for ``count`` walkers on the truss of a parameter file.
+def start_stances(configuration, count: int) -> list[StartStance]:
+    """Distinct start stances for ``count`` walkers on the truss of a configuration.
 
-    The first is the file's own ``sim.start.*``; the others are the same pair of neighbouring
+    ``configuration`` is a :class:`~walker_bringup.core.configuration.WalkerConfiguration`.
+    The first stance is its own ``sim.start.*``; the others are the same pair of neighbouring
     nodes moved to other rows (and then by two columns at a time), so that no two walkers
     start on a common node. The walkers' plants are separate physics worlds: walkers on one
     truss layout do not collide, however close they come.
@@ -210,16 +211,13 @@ def start_stances(params_file: str | Path, count: int) -> list[StartStance]:
         If ``count`` is not a positive integer, the file's start is not two neighbouring
         nodes, or the truss has too few nodes for ``count`` distinct stances.
     """
-    from walker_core.parameter_schema import load_parameter_file
-    from walker_core.robot_parameters import load_walker_parameters
     from walker_core.truss import Truss
 
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise ValueError(f'the number of walkers must be a positive integer, got {count!r}')
-    flat = load_parameter_file(params_file)
-    truss = Truss.from_parameters(load_walker_parameters(params_file))
-    gripper = flat.get('sim.start.base_gripper', 'a')
-    base, other = flat.get('sim.start.base_node'), flat.get('sim.start.other_node')
+    truss = Truss.from_parameters(configuration.walker)
+    start = configuration.sim.start
+    gripper, base, other = start.base_gripper, start.base_node, start.other_node
     if other not in truss.neighbors(base):
         raise ValueError(f'sim.start.base_node {base!r} and other_node {other!r} are not '
                          'neighbouring truss nodes')
@@ -244,7 +242,7 @@ def start_stances(params_file: str | Path, count: int) -> list[StartStance]:
                      f'{len(stances)} walkers starting on distinct nodes, not {count}')
 
 
-def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
+def several_walkers(configuration, count: int, sim_time: bool = False,
                     record: bool = False, bag_dir: str | Path | None = None,
                     parameters: tuple[tuple[str, str], ...] = (),
                     grouped_controllers: bool = False
@@ -252,29 +250,28 @@ def several_walkers(params_file: str | Path, count: int, sim_time: bool = False,
     """List the graphs of ``count`` walkers on one truss: ``(namespace, start, nodes)`` each.
 
     Walker ``i`` runs in the namespace :func:`walker_namespace` ``(i)`` from its own start
-    (:func:`start_stances`). Each has its own plant, so in sim time each has its own clock:
-    ``/clock`` is remapped into the walker's namespace (``/walker_2/clock``), except for the
-    first walker, whose graph is exactly the single walker's. With ``record``, each walker's
-    recorder writes ``<bag_dir>/bag`` (the first) or ``<bag_dir>/bag_walker_<i>``;
-    ``parameters`` go to every node and ``grouped_controllers`` is each graph's (see
-    :func:`walker_graph`).
+    (:func:`start_stances` of ``configuration``, whose file every node takes). Each has its
+    own plant, so in sim time each has its own clock: ``/clock`` is remapped into the walker's
+    namespace (``/walker_2/clock``), except for the first walker, whose graph is exactly the
+    single walker's. With ``record``, each walker's recorder writes ``<bag_dir>/bag`` (the
+    first) or ``<bag_dir>/bag_walker_<i>``; ``parameters`` go to every node and
+    ``grouped_controllers`` is each graph's (see :func:`walker_graph`).
     """
     graphs = []
-    for index, start in enumerate(start_stances(params_file, count), start=1):
+    for index, start in enumerate(start_stances(configuration, count), start=1):
         namespace = walker_namespace(index)
         clock = f'{namespace}/clock' if index > 1 else None
         bag = None
         if record and bag_dir is not None:
             bag = Path(bag_dir) / ('bag' if index == 1 else f'bag_{namespace.strip("/")}')
         graphs.append((namespace, start, walker_graph(
-            params_file, namespace, sim_time, record=record, bag_path=bag,
+            configuration.path, namespace, sim_time, record=record, bag_path=bag,
             start=start if index > 1 else None, clock_topic=clock, parameters=parameters,
             grouped_controllers=grouped_controllers)))
     return graphs
 
 
-def walker_targets(params_file: str | Path, target: str, stances: list[StartStance]
-                   ) -> list[str]:
+def walker_targets(configuration, target: str, stances: list[StartStance]) -> list[str]:
     """Return the node each walker walks to: ``target`` moved as its start is moved.
 
     The first walker walks to ``target``; walker ``i`` to the node as far from its start as
@@ -286,10 +283,9 @@ def walker_targets(params_file: str | Path, target: str, stances: list[StartStan
     walker_core.truss.UnknownNodeError
         If ``target`` is not a node of the truss.
     """
-    from walker_core.robot_parameters import load_walker_parameters
     from walker_core.truss import Truss
 
-    truss = Truss.from_parameters(load_walker_parameters(params_file))
+    truss = Truss.from_parameters(configuration.walker)
     column, row = truss.index(target)
     first_column, first_row = truss.index(stances[0].base_node)
     targets = []

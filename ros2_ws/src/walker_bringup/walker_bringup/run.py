@@ -175,7 +175,7 @@ class _Walker:
         return self.namespace.strip('/')
 
 
-def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Walker]:
+def _describe_walkers(args, configuration, out: Path, env: dict) -> list[_Walker]:
     """Each walker's graph and process group (nothing started yet).
 
     Raises
@@ -184,16 +184,16 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
         If the truss has no room for that many walkers, or the target is not a node.
     """
     if args.walkers == 1:
-        nodes = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
+        nodes = walker_graph(configuration.path, args.namespace, sim_time=args.sim_time,
                              record=args.record, bag_path=out / 'bag',
                              parameters=_graph_parameters(args),
                              grouped_controllers=args.grouped_controllers)
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
-    graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out,
+    graphs = several_walkers(configuration, args.walkers, args.sim_time, args.record, out,
                              _graph_parameters(args),
                              grouped_controllers=args.grouped_controllers)
-    targets = walker_targets(params_file, args.target, [start for _, start, _ in graphs])
+    targets = walker_targets(configuration, args.target, [start for _, start, _ in graphs])
     walkers = []
     for index, ((namespace, start, nodes), target) in enumerate(zip(graphs, targets,
                                                                      strict=True)):
@@ -250,13 +250,20 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the main job; return the exit code (0 when every walk reached its target)."""
     args = parse_arguments(argv)
-    from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+    from walker_bringup.core.configuration import load_configuration
+    from walker_core.parameter_schema import ParameterError
 
-    params_file = Path(args.params_file or default_parameter_file()).resolve()
+    progress = _Progress(args.quiet)
+    try:  # every section and every rule between them, before anything is started or written
+        configuration = load_configuration(args.params_file)
+    except ParameterError as error:
+        progress.error(f'[walker] error: {args.params_file or "the installed walker.yaml"}: '
+                       f'{error}')
+        return 2
+    params_file = configuration.path
     stamp = datetime.datetime.now().strftime('%Y%m%d-%H%M%S')
     out = Path(args.out or Path('runs') / stamp).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    progress = _Progress(args.quiet)
     env = dict(os.environ)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     if args.walkers > 1 and args.namespace != '/walker':
@@ -268,8 +275,8 @@ def main(argv: list[str] | None = None) -> int:
                        '--walkers out')
         return 2
     try:
-        walkers = _describe_walkers(args, params_file, out, env)
-        args.control_rate = load_walker_parameters(params_file).timing.control_rate
+        walkers = _describe_walkers(args, configuration, out, env)
+        args.control_rate = configuration.walker.timing.control_rate
     except ValueError as error:
         progress.error(f'[walker] error: {error}')
         return 2

@@ -44,7 +44,6 @@ from walker_msgs.srv import GripperCommand, PlanTrajectory
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_runtime.node_parameters import declare_section, guard_section_updates
-from walker_core.parameter_schema import ParameterError
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
 from walker_runtime.realtime import log_realtime_request
 from walker_runtime.core.resubscription import Resubscription
@@ -58,6 +57,7 @@ from walker_supervisor.core.decision_clock import DecisionClock
 from walker_supervisor.core.health import (
     HealthMonitor, Level, ModeRepetition, SourceStatus, controller_trouble,
     reason_naming_silent_sources, tell_mode_again, tracking_expected)
+from walker_supervisor.core.parameter_rules import check_against_walker
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route, possible_steps, step_sweep)
 from walker_supervisor.core.sequencer import (
@@ -249,16 +249,7 @@ class SupervisorNode(TeleopServer, Node):
                                     self.params.timing.decision_scheduling_priority)
 
     def _check_alignment(self, settings: SupervisorParameters) -> None:
-        tolerance = self.params.gripper.insertion_position_tolerance
-        if settings.insertion_alignment >= tolerance:
-            raise ParameterError(
-                f'supervisor.insertion_alignment ({settings.insertion_alignment} m) must be '
-                f'smaller than gripper.insertion_position_tolerance ({tolerance} m)')
-        if settings.descent_region > tolerance:
-            raise ParameterError(
-                f'supervisor.descent_region ({settings.descent_region} m) must not exceed '
-                f'gripper.insertion_position_tolerance ({tolerance} m): the descent starts '
-                f'only with the tip inside it')
+        check_against_walker(settings, self.params)
 
     def _apply_settings(self, settings: SupervisorParameters) -> None:
         self.settings = settings

@@ -1,0 +1,124 @@
+"""The walker's configuration: the parameter file read once into every typed section.
+
+:func:`load_configuration` is the one entry point for whoever runs the whole walker (the graph
+of ``run_all.py``, the benchmarks): it reads the file once
+(:class:`walker_core.parameter_file.ParameterFile`), builds each package's section, and runs
+every rule that ties sections together, here and nowhere else. A bad file is refused with a
+:class:`~walker_core.parameter_schema.ParameterError` naming the parameter and the rule,
+before anything starts.
+
+The sections stay with the packages that own them, and so do the rules between sections
+(each node checks its own at start and on every runtime update); this module, in the package
+that may depend on all of them, only gathers them (docs/architecture.md, Configuration).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
+from walker_control.core.config import ControllerSettings
+from walker_core.parameter_file import ParameterFile
+from walker_core.robot_parameters import WalkerParameters
+from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
+from walker_planner.core.parameters import PlannerParameters
+from walker_sim.core.config import SimParameters
+from walker_sim.core.config import check_against_walker as check_sim_against_walker
+from walker_supervisor.core.parameter_rules import (
+    check_against_walker as check_supervisor_against_walker)
+from walker_supervisor.core.sequencer import SupervisorParameters
+from walker_supervisor.core.teleop import TeleopParameters
+
+__all__ = ['WalkerConfiguration', 'load_configuration', 'check_cross_section_rules']
+
+
+@dataclasses.dataclass(frozen=True)
+class WalkerConfiguration:
+    """Every section of one parameter file, each validated, and the rules between them.
+
+    Attributes
+    ----------
+    path : Path
+        The file read (resolved): what every node of the graph gets as ``--params-file``.
+    walker : WalkerParameters
+        ``robot.*``, ``truss.*``, ``gripper.*``, ``timing.*`` (every node's).
+    sim : SimParameters
+        ``sim.*`` (the plant's).
+    controllers : ControllerSettings
+        ``control.*`` with the robot and timing, stability check passed (the controllers').
+    planner : PlannerParameters
+        ``planner.*``.
+    supervisor : SupervisorParameters
+        ``supervisor.*``.
+    teleop : TeleopParameters
+        ``teleop.*`` (the supervisor's operator commands).
+    recorder : RecorderParameters
+        ``recorder.*``.
+    values : mapping
+        The flat values all sections were built from (the file's, then the overrides).
+    """
+
+    path: Path
+    walker: WalkerParameters
+    sim: SimParameters
+    controllers: ControllerSettings
+    planner: PlannerParameters
+    supervisor: SupervisorParameters
+    teleop: TeleopParameters
+    recorder: RecorderParameters
+    values: Mapping[str, Any]
+
+
+def check_cross_section_rules(configuration: WalkerConfiguration) -> None:
+    """Run every rule that ties one section to another.
+
+    Within each section its own rules ran as it was built; the controllers' stability check,
+    which ties ``control.*`` to the robot and the control rate, runs as
+    :class:`~walker_control.core.config.ControllerSettings` is built.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameters and the rule: start nodes off the truss or a physics rate that
+        is not a multiple of the control rate (``sim.*``), insertion regions wider than the
+        gripper's tolerance (``supervisor.*``).
+    """
+    check_sim_against_walker(configuration.sim, configuration.walker)
+    check_supervisor_against_walker(configuration.supervisor, configuration.walker)
+
+
+def load_configuration(path: str | Path | None = None,
+                       overrides: Mapping[str, Any] | None = None) -> WalkerConfiguration:
+    """Read a parameter file once into every section and check every rule between them.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        The ``ros__parameters`` file, naming every parameter (default: the installed
+        ``walker.yaml``).
+    overrides : mapping, optional
+        Flat values over the file's, ``{'sim.clock_mode': 'sim_time'}`` (as ``-p`` over
+        ``--params-file``).
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read or parsed, or a value or rule is broken: the message names
+        the parameter. Nothing is half-built.
+    """
+    file = ParameterFile.read(path, overrides)
+    configuration = WalkerConfiguration(
+        path=file.path,
+        walker=file.section(WalkerParameters),
+        sim=file.section(SimParameters, 'sim.'),
+        controllers=file.section(ControllerSettings),
+        planner=file.section(PlannerParameters, PLANNER_PREFIX),
+        supervisor=file.section(SupervisorParameters, 'supervisor.'),
+        teleop=file.section(TeleopParameters, 'teleop.'),
+        recorder=file.section(RecorderParameters, RECORDER_PREFIX),
+        values=file.values)
+    check_cross_section_rules(configuration)
+    return configuration
