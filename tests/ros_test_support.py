@@ -22,7 +22,7 @@ from collections.abc import Iterator
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
            'processes_with', 'running_graph', 'realtime_permitted', 'thread_policies',
-           'spin_executor_until', 'set_stamp']
+           'spin_executor_until', 'set_stamp', 'write_parameter_file']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 # Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
@@ -224,6 +224,21 @@ class SharedMemoryGuard:
             with contextlib.suppress(OSError):
                 os.link(self._SHM / name, self._dir / name)
                 self._links[name] = ((self._dir / name).stat().st_ino, owners)
+
+
+def write_parameter_file(path: Path, values: dict) -> Path:
+    """Write flat ``{dotted name: value}`` values as a ``/**`` ``ros__parameters`` file."""
+    import yaml
+
+    nested: dict = {}
+    for name, value in values.items():
+        *parents, leaf = name.split('.')
+        node = nested
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': nested}}))
+    return path
 
 
 def spin_executor_until(executor, predicate, timeout: float) -> bool:

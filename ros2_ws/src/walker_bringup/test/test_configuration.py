@@ -3,7 +3,7 @@
 import math
 
 import pytest
-import yaml
+from ros_test_support import write_parameter_file
 
 import walker_core.parameter_file as parameter_file
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
@@ -24,16 +24,7 @@ def _file(tmp_path, changes=None, remove=()):
     """Write the installed file with some flat values changed or left out."""
     flat = {k: v for k, v in default_values().items() if k not in remove}
     flat.update(changes or {})
-    nested: dict = {}
-    for name, value in flat.items():
-        *parents, leaf = name.split('.')
-        node = nested
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = value
-    path = tmp_path / 'walker.yaml'
-    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': nested}}))
-    return path
+    return write_parameter_file(tmp_path / 'walker.yaml', flat)
 
 
 @pytest.fixture(scope='module')

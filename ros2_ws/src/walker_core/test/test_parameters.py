@@ -6,19 +6,12 @@ import subprocess
 import sys
 
 import pytest
-import yaml
+from ros_test_support import write_parameter_file
+
 from walker_core.parameter_schema import (
-    ParameterError,
-    leaf_specs,
-    load_parameter_file,
-    replace_in_section,
-    section_to_flat,
-)
+    ParameterError, leaf_specs, load_parameter_file, replace_in_section, section_to_flat)
 from walker_core.robot_parameters import (
-    WalkerParameters,
-    default_parameter_file,
-    load_walker_parameters,
-)
+    WalkerParameters, default_parameter_file, load_walker_parameters)
 
 DEFAULT_FLAT = load_parameter_file(default_parameter_file())
 LEAVES = [spec.name for spec in leaf_specs(WalkerParameters)]
@@ -31,15 +24,7 @@ def write_params(tmp_path, flat_overrides=None, remove=(), text=None):
         return path
     flat = {k: v for k, v in DEFAULT_FLAT.items() if k not in remove}
     flat.update(flat_overrides or {})
-    nested: dict = {}
-    for name, value in flat.items():
-        node = nested
-        *parents, leaf = name.split('.')
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = value
-    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': nested}}))
-    return path
+    return write_parameter_file(path, flat)
 
 
 def test_default_file_is_valid_and_complete():
