@@ -36,8 +36,8 @@ import time
 from pathlib import Path
 
 __all__ = [
-    'REPO_ROOT', 'VENV_DIR', 'WORKSPACE_DIR', 'SetupError',
-    'ensure_environment', 'reexec_in_environment',
+    'REPO_ROOT', 'VENV_DIR', 'WORKSPACE_DIR', 'STAND_IN_PACKAGES', 'SetupError',
+    'ensure_environment', 'reexec_in_environment', 'underlay_provides', 'sync_stand_ins',
 ]
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -53,6 +53,11 @@ _ENV_CACHE = WORKSPACE_DIR / 'install' / '.walker-env.json'
 _BUILD_LOG = WORKSPACE_DIR / 'log' / 'walker-build.log'
 _WHEEL_BUILD_PREFIX = '/opt/python/cp311-cp311'
 _READY_MARKER = 'WALKER_ENV_READY'
+#: Workspace packages that stand in for a ROS install's own (same name, same definitions):
+#: built only where no prefix of the underlay provides the package already.
+STAND_IN_PACKAGES = ('tf2_msgs',)
+_STAND_IN_IGNORE = ("COLCON_IGNORE: this package stands in for the underlay's own, which "
+                    'provides it here (scripts/walker_env.py writes and removes this file)\n')
 # Path-like variables that sourcing the workspace extends.
 _PATH_VARIABLES = ('PATH', 'PYTHONPATH', 'AMENT_PREFIX_PATH', 'CMAKE_PREFIX_PATH',
                    'LD_LIBRARY_PATH', 'COLCON_PREFIX_PATH', 'PKG_CONFIG_PATH')
@@ -201,7 +206,40 @@ def _base_environment() -> dict[str, str]:
     return env
 
 
+def underlay_provides(package: str, prefixes: list[str] | tuple[str, ...]) -> bool:
+    """Tell whether an install prefix registers ``package`` in its ament index."""
+    return any((Path(prefix) / 'share' / 'ament_index' / 'resource_index' / 'packages'
+                / package).is_file() for prefix in prefixes)
+
+
+def sync_stand_ins(prefixes: list[str] | tuple[str, ...], workspace: Path = WORKSPACE_DIR,
+                   quiet: bool = True) -> dict[str, bool]:
+    """Skip each stand-in package the underlay provides, build it where it does not.
+
+    A ``COLCON_IGNORE`` file in the package's source directory makes colcon skip it; where
+    the file is written, what an earlier build installed of the package is removed too, so
+    that the overlay does not shadow the underlay's own. Returns, per stand-in package,
+    whether the workspace builds it.
+    """
+    built = {}
+    for package in STAND_IN_PACKAGES:
+        source = workspace / 'src' / package
+        ignore = source / 'COLCON_IGNORE'
+        provided = underlay_provides(package, prefixes)
+        if provided and source.is_dir() and not ignore.exists():
+            ignore.write_text(_STAND_IN_IGNORE)
+            for stale in (workspace / 'build' / package, workspace / 'install' / package):
+                shutil.rmtree(stale, ignore_errors=True)
+            _say(f'{package}: the underlay provides it; the workspace copy is skipped', quiet)
+        elif not provided and ignore.exists():
+            ignore.unlink()
+            _say(f'{package}: not in the underlay; building the workspace copy', quiet)
+        built[package] = source.is_dir() and not provided
+    return built
+
+
 def _build_workspace(force: bool, quiet: bool, requirements_digest: str) -> bool:
+    sync_stand_ins(_base_environment()['AMENT_PREFIX_PATH'].split(os.pathsep), quiet=quiet)
     digest = _workspace_digest(requirements_digest)
     if (not force and _BUILD_STAMP.exists() and _ENV_CACHE.exists()
             and _BUILD_STAMP.read_text().strip() == digest):
