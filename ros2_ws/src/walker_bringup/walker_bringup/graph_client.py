@@ -14,7 +14,6 @@ from collections.abc import Callable
 import rclpy
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -26,7 +25,8 @@ from walker_msgs.srv import GripperCommand, PlanTrajectory
 from walker_bringup.loop_health import (
     PLANT_STATUS_SUFFIX, SUPERVISOR_STATUS_SUFFIX, LoopHealth, loop_health, sources_not_heard)
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
-from walker_runtime.spinning import TopicSampler, destroy_actions
+from walker_runtime.spinning import (
+    TopicSampler, destroy_actions, helper_node, hidden_name)
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
            'init_context']
@@ -69,7 +69,7 @@ class GraphClient:
 
     def __init__(self, namespace: str = '/walker', context=None) -> None:
         self.namespace = namespace
-        self.node = Node('walker_graph_client', namespace=namespace, context=context)
+        self.node = helper_node('walker_graph_client', namespace, context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.walk_client = ActionClient(self.node, WalkTo, 'walk_to')
@@ -181,12 +181,12 @@ class GraphClient:
         all for one of them to speak: a graph running flat out in sim time on a loaded
         machine matched the probe's subscriptions later than 1.5 s, and was taken for dead.
         """
-        own = {self.node.get_name(), f'{self.node.get_name()}_sampler'}
         start = time.monotonic()
         while True:
             self.spin_for(_POLL)
             names = sorted(name for name, ns in self.node.get_node_names_and_namespaces()
-                           if ns.rstrip('/') == self.namespace.rstrip('/') and name not in own)
+                           if ns.rstrip('/') == self.namespace.rstrip('/')
+                           and name != hidden_name(name))  # a tool's or helper's node
             live = self.phase is not None or self.grippers is not None \
                 or bool(self._sampler.take(self._joint_states))
             if names and live:

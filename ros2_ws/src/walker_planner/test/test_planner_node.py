@@ -513,7 +513,7 @@ def test_joint_states_silent_while_the_clock_runs_are_subscribed_anew_and_follow
     assert 'joint_states: silent for' in planner.output
     assert probe.spin_until(lambda: [
         info.node_name for info in probe.node.get_subscriptions_info_by_topic(
-            '/walker/joint_states')] == ['planner_stream'])
+            '/walker/joint_states')] == ['_planner_stream'])
     # the new subscription is heard: tracking with no stream, each state is answered
     _assert_held_while_tracking(probe, stance, period)
     assert planner.output.count('subscription made anew') == before + 1, planner.output

@@ -44,7 +44,7 @@ from walker_runtime.core.resubscription import clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
 from walker_runtime.node_main import run_node
 from walker_runtime.watched_subscription import WatchedSubscription
-from walker_runtime.spinning import destroy_actions, spin_nodes
+from walker_runtime.spinning import destroy_actions, helper_node, spin_nodes
 from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
@@ -120,9 +120,8 @@ class PlannerNode(Node):
         self._measured: tuple[int, np.ndarray] | None = None
         self._lock = threading.Lock()  # the state shared by the stream thread and this one
         self._ended: list[_ActiveStream] = []
-        self._stream_node = Node(f'{self.get_name()}_stream', namespace=self.get_namespace(),
-                                 context=self.context, use_global_arguments=False,
-                                 start_parameter_services=False)
+        self._stream_node = helper_node(f'{self.get_name()}_stream', self.get_namespace(),
+                                        self.context, use_global_arguments=False)
         self._stream_thread: threading.Thread | None = None
         self._setpoint_messages = [JointCommand(joint_name=name) for name in PHYSICAL_JOINT_NAMES]
         self._state_names: tuple[str, ...] = ()

@@ -27,11 +27,13 @@ import rclpy
 from rclpy.action import ActionClient, ActionServer
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
+from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 
 __all__ = ['make_executor', 'spin_nodes', 'freeze_start_up_objects', 'destroy_actions',
-           'StopSignals', 'init_node_process', 'TopicSampler', 'EXECUTOR_VARIABLE',
-           'STACK_DUMP_SIGNAL']
+           'StopSignals', 'init_node_process', 'TopicSampler', 'helper_node', 'hidden_name',
+           'EXECUTOR_VARIABLE', 'STACK_DUMP_SIGNAL']
 
 #: Environment variable choosing the executor: ``events`` (default) or ``single``.
 EXECUTOR_VARIABLE = 'WALKER_EXECUTOR'
@@ -183,6 +185,26 @@ def spin_nodes(nodes: Node | Iterable[Node], stop: Callable[[], bool] | None = N
         executor.shutdown(timeout_sec=0.0)
 
 
+def hidden_name(name: str) -> str:
+    """``name`` as a hidden node name: with a leading underscore (``ros2 node list`` skips it)."""
+    return name if name.startswith('_') else '_' + name
+
+
+def helper_node(name: str, namespace: str | None = None, context=None,
+                use_global_arguments: bool = True) -> Node:
+    """Create a node that serves another one, or a tool, and is no part of the graph's design.
+
+    Hidden, as the ROS 2 command-line tools make their own: its name starts with an underscore,
+    so ``ros2 node list`` (without ``--all``) shows only the nodes docs/architecture.md
+    describes; it starts no parameter services, no type description service and no
+    ``/rosout`` logger, so ``ros2 service list`` shows none of its services either.
+    """
+    overrides = [Parameter(START_TYPE_DESCRIPTION_SERVICE_PARAM, value=False)]
+    return Node(hidden_name(name), namespace=namespace, context=context,
+                use_global_arguments=use_global_arguments, start_parameter_services=False,
+                enable_rosout=False, parameter_overrides=overrides)
+
+
 class TopicSampler:
     """Subscriptions read on demand, for high-rate topics a node needs only now and then.
 
@@ -195,7 +217,7 @@ class TopicSampler:
     Parameters
     ----------
     name : str
-        Name of the helper node (shown in the ROS graph).
+        Name of the helper node: hidden (:func:`helper_node`), so ``_`` is prefixed.
     namespace : str
         Its namespace: the namespace of the node it serves. Command-line remaps are not applied
         to it, so topic names are taken literally (relative to ``namespace``).
@@ -203,8 +225,7 @@ class TopicSampler:
     """
 
     def __init__(self, name: str, namespace: str, context=None) -> None:
-        self.node = Node(name, namespace=namespace, context=context, use_global_arguments=False,
-                         start_parameter_services=False, enable_rosout=False)
+        self.node = helper_node(name, namespace, context, use_global_arguments=False)
         # per subscription: (message type, QoS, raw)
         self._made: dict[object, tuple[type, object, bool]] = {}
 

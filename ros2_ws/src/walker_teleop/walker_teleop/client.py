@@ -20,7 +20,6 @@ import numpy as np
 from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -29,7 +28,7 @@ from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
 from walker_runtime.qos import LATCHED_QOS
-from walker_runtime.spinning import destroy_actions
+from walker_runtime.spinning import destroy_actions, helper_node
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
 
@@ -64,7 +63,7 @@ class TeleopClient:
     def __init__(self, namespace: str, context, timeout: float) -> None:
         self.namespace = namespace
         self.timeout = timeout
-        self.node = Node(f'walkerctl_{os.getpid()}', namespace=namespace, context=context)
+        self.node = helper_node(f'walkerctl_{os.getpid()}', namespace, context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         create = self.node.create_client
