@@ -54,7 +54,7 @@ def controller_state(node, i):
 
 
 def gripper_states(node, i):
-    msg = GripperStates(base_gripper='a', grippers=[
+    msg = GripperStates(grippers=[
         GripperState(name='a', state=GripperState.ATTACHED, node='n0_0'),
         GripperState(name='b', state=GripperState.FREE, position_error=float(i))])
     msg.header.stamp = node.get_clock().now().to_msg()

@@ -251,12 +251,12 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
                         base_heading=0.0, phase_progress=progress,
                         reason=reason))
                 messages.append((at, 1, phase))
-        for time_, states, base in gripper_events(safe_hold):
-            def grippers(time_=time_, states=states, base=base):
+        for time_, states in gripper_events(safe_hold):
+            def grippers(time_=time_, states=states):
                 gripper = t_['walker_msgs/msg/GripperState']
                 w.write('gripper_states', time_, t_['walker_msgs/msg/GripperStates'](
                     w.header(time_), [gripper(n, s, node, 0.0, 0.0, '')
-                                      for n, (s, node) in states.items()], base))
+                                      for n, (s, node) in states.items()]))
             messages.append((time_, 2, grippers))
         for time_, mode, base in (MODES if not safe_hold else MODES[:6]):
             messages.append((time_, 3, lambda time_=time_, mode=mode, base=base: w.write(
@@ -313,20 +313,20 @@ def _states(w: _Writer, t: float, k: int, controllers: bool) -> None:
             stale=False, **efforts))
 
 
-# (time, {gripper: (state, node)}, base): the grippers of the walk
+# (time, {gripper: (state, node)}): the grippers of the walk
 def gripper_events(safe_hold: bool = False):
     events = [
-        (0.0, {'a': (2, 'n1_1'), 'b': (2, 'n2_1')}, 'a'),
-        (0.5, {'a': (2, 'n1_1'), 'b': (3, 'n2_1')}, 'a'),
-        (1.0, {'a': (2, 'n1_1'), 'b': (0, '')}, 'a'),
-        (5.5, {'a': (2, 'n1_1'), 'b': (1, 'n1_2')}, 'a'),
-        (6.0, {'a': (2, 'n1_1'), 'b': (2, 'n1_2')}, 'b'),
-        (6.5, {'a': (3, 'n1_1'), 'b': (2, 'n1_2')}, 'b'),
-        (7.0, {'a': (0, ''), 'b': (2, 'n1_2')}, 'b'),
+        (0.0, {'a': (2, 'n1_1'), 'b': (2, 'n2_1')}),
+        (0.5, {'a': (2, 'n1_1'), 'b': (3, 'n2_1')}),
+        (1.0, {'a': (2, 'n1_1'), 'b': (0, '')}),
+        (5.5, {'a': (2, 'n1_1'), 'b': (1, 'n1_2')}),
+        (6.0, {'a': (2, 'n1_1'), 'b': (2, 'n1_2')}),
+        (6.5, {'a': (3, 'n1_1'), 'b': (2, 'n1_2')}),
+        (7.0, {'a': (0, ''), 'b': (2, 'n1_2')}),
     ]
     if not safe_hold:
-        events += [(11.5, {'a': (1, 'n2_2'), 'b': (2, 'n1_2')}, 'b'),
-                   (12.0, {'a': (2, 'n2_2'), 'b': (2, 'n1_2')}, 'a')]
+        events += [(11.5, {'a': (1, 'n2_2'), 'b': (2, 'n1_2')}),
+                   (12.0, {'a': (2, 'n2_2'), 'b': (2, 'n1_2')})]
     return events
 
 

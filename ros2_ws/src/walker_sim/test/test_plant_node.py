@@ -149,7 +149,9 @@ def test_real_time_mode_publishes_the_five_joints_at_the_control_rate(ros_env, p
     moving = [j.get('name') for j in urdf.findall('joint') if j.get('type') != 'fixed']
     assert moving == JOINTS
     assert [g.name for g in grippers[-1].grippers] == ['a', 'b']
-    assert grippers[-1].base_gripper == 'a'
+    # which gripper is the base is the supervisor's to say (phase, control_mode), never
+    # the plant's: a second source disagreed with the supervisor after every step
+    assert 'base_gripper' not in grippers[-1].get_fields_and_field_types()
 
 
 def test_sim_time_mode_is_lock_stepped_with_the_controllers(ros_env, probe):
@@ -249,7 +251,6 @@ def test_the_gripper_service_releases_one_gripper_and_refuses_the_other(ros_env,
         assert not refused.success and 'interlock' in refused.message
         assert refused.state.state == GripperState.ATTACHED
         assert probe.spin_until(lambda: mode_of('b') == GripperState.FREE, 10.0)
-        assert grippers[-1].base_gripper == 'a'
         unknown = call('c', GripperCommand.Request.SCREW_IN)
         assert not unknown.success and "unknown gripper 'c'" in unknown.message
         again = call('b', GripperCommand.Request.SCREW_IN)

@@ -81,11 +81,14 @@ def gripper_state_msg(report: GripperReport) -> GripperState:
 
 
 def gripper_states_msg(state: PlantState, stamp: int) -> GripperStates:
-    """``walker_msgs/GripperStates``: both grippers (a, b) and the base."""
+    """``walker_msgs/GripperStates``: both grippers (a, b).
+
+    Not which of them is the base: the supervisor decides that (``phase``, ``control_mode``);
+    the body the plant roots its physics at (``PlantState.base``) is the simulator's own.
+    """
     message = GripperStates()
     message.header.stamp = time_msg(stamp)
     message.grippers = [gripper_state_msg(state.grippers[g]) for g in GRIPPERS]
-    message.base_gripper = state.base
     return message
 
 

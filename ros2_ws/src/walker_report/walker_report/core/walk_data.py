@@ -187,7 +187,6 @@ class GripperEvent:
 
     time: float
     states: dict[str, tuple[int, str]]
-    base_gripper: str
 
 
 @dataclasses.dataclass(frozen=True)
@@ -435,8 +434,8 @@ def _read(reader: BagReader, wanted, by_topic, controller_topics, summary, names
         elif kind == 'gripper_states':
             states = {g.name: (int(g.state), g.node) for g in msg.grippers}
             last = gripper_events[-1] if gripper_events else None
-            if last is None or last.states != states or last.base_gripper != msg.base_gripper:
-                gripper_events.append(GripperEvent(t, states, msg.base_gripper))
+            if last is None or last.states != states:
+                gripper_events.append(GripperEvent(t, states))
         elif kind == 'control_mode':
             modes.append(ModeEvent(t, int(msg.mode), msg.base_gripper))
         elif kind == 'step_reports':
