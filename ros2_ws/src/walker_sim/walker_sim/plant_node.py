@@ -45,6 +45,7 @@ from walker_runtime.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf
 from walker_runtime.node_main import run_node
+from walker_core.text import unknown_choice
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import (
@@ -65,6 +66,9 @@ _WATCH_PERIOD = 0.005
 _REPORT_PERIOD = 1.0
 # Most control periods a late real-time tick steps at once to catch up with the wall clock
 _MAX_CATCH_UP = 10
+#: The commands of gripper_command, by name (how an unknown one is refused)
+_GRIPPER_COMMANDS = {'SCREW_IN': GripperCommand.Request.SCREW_IN,
+                     'UNSCREW': GripperCommand.Request.UNSCREW}
 
 
 class PlantNode(Node):
@@ -348,7 +352,7 @@ class PlantNode(Node):
             self._handover = (accelerations, joint_states)
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
-        key = (state.base, *((s.mode, s.node, s.message) for s in state.statuses.values()))
+        key = tuple((s.mode, s.node, s.message) for s in state.statuses.values())
         if force or key != self._gripper_key:
             self._grippers.publish(gripper_states_msg(state, self._stamp))
             self._gripper_key = key
@@ -423,10 +427,8 @@ class PlantNode(Node):
                 self.plant.unscrew(gripper)
                 response.success = True
             else:
-                raise GripperCommandError(
-                    f'unknown gripper command {request.command}: expected SCREW_IN '
-                    f'({GripperCommand.Request.SCREW_IN}) or UNSCREW '
-                    f'({GripperCommand.Request.UNSCREW})')
+                raise GripperCommandError(unknown_choice('gripper command', request.command,
+                                                         _GRIPPER_COMMANDS))
         except GripperCommandError as error:
             response.success = False
             response.message = str(error)

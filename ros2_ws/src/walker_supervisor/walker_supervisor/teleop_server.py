@@ -37,6 +37,7 @@ from walker_msgs.srv import GripperCommand, JogJoint, JogTip, PlanTrajectory
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_runtime.qos import LATCHED_QOS
+from walker_core.text import unknown_choice
 from walker_supervisor.core.sequencer import MAX_FINE_LINES, SequencerError, TrajectoryRequest
 from walker_supervisor.core.teleop import (
     JointJog, SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules,
@@ -45,6 +46,10 @@ from walker_supervisor.step_state import clear_step_state
 from walker_supervisor.trajectory_requests import plan_request
 
 __all__ = ['TeleopServer']
+
+#: The commands of operate_gripper, by name (how an unknown one is refused)
+_GRIPPER_COMMANDS = {'SCREW_IN': GripperCommand.Request.SCREW_IN,
+                     'UNSCREW': GripperCommand.Request.UNSCREW}
 
 _STATE_NAMES = {'free': GripperState.FREE, 'screwing': GripperState.SCREWING,
                 'attached': GripperState.ATTACHED, 'unscrewing': GripperState.UNSCREWING,
@@ -336,9 +341,11 @@ class TeleopServer:
     async def _on_operate_gripper(self, request: GripperCommand.Request,
                                   response: GripperCommand.Response):
         action = {GripperCommand.Request.SCREW_IN: 'screw_in',
-                  GripperCommand.Request.UNSCREW: 'unscrew'}.get(
-                      request.command, f'command {request.command} (expected SCREW_IN = 1 or '
-                                       f'UNSCREW = 2)')
+                  GripperCommand.Request.UNSCREW: 'unscrew'}.get(request.command)
+        if action is None:  # refused in the interface's words, as the plant does
+            self._teleop_fill_state(response, request.gripper)
+            return self._teleop_answer(response, _Outcome(False, unknown_choice(
+                'gripper command', request.command, _GRIPPER_COMMANDS)), 'operate_gripper')
         try:
             operation = self.teleop.gripper_operation(self._teleop_situation(),
                                                       request.gripper, action)

@@ -49,6 +49,7 @@ from walker_core.joint_roles import (
     role_of_joint)
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
+from walker_core.text import millimetres, unknown_choice, value_text
 from walker_supervisor.core.sequencer import Phase
 
 __all__ = [
@@ -200,7 +201,7 @@ class TipJog:
 
     def describe(self) -> str:
         """Say what the jog does, for logs and answers."""
-        mm = ', '.join(f'{v * 1e3:+.1f}' for v in self.delta)
+        mm = millimetres(self.delta, signed=True)
         return f'tip jog of gripper {self.free_gripper} by ({mm}) mm in its frame'
 
 
@@ -288,7 +289,8 @@ def tip_heading(kinematics: WalkerKinematics, theta_roles: Sequence[float]) -> f
 def _finite(value: float, what: str, unit: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
             or not math.isfinite(value):
-        raise TeleopRefusedError(f'{what} must be a finite number, got {value!r} {unit}')
+        raise TeleopRefusedError(f'{what} must be a finite number, got {value_text(value)} '
+                                 f'{unit}')
     return float(value)
 
 
@@ -431,7 +433,8 @@ class TeleopRules:
         """
         p = self.parameters
         if isinstance(delta, (str, bytes)) or len(delta) != 3:
-            raise TeleopRefusedError(f'delta must have 3 values (x, y, z in m), got {delta!r}')
+            raise TeleopRefusedError(f'delta must have 3 values (x, y, z in m), got '
+                                     f'{value_text(delta)}')
         delta = np.array([_finite(v, 'delta', 'm') for v in delta])
         speed = self._speed(max_velocity, p.tip_speed, p.max_tip_speed, 'teleop.max_tip_speed',
                             'm/s')
@@ -558,8 +561,9 @@ class TeleopRules:
         if gripper not in GRIPPERS:
             raise TeleopRefusedError(f'unknown gripper {gripper!r}: expected "a" or "b"')
         if action not in ('screw_in', 'unscrew'):
-            raise TeleopRefusedError(f'unknown gripper action {action!r}: expected screw_in or '
-                                     f'unscrew')
+            raise TeleopRefusedError(unknown_choice('gripper action', action,
+                                                    {'screw_in': 'screw_in',
+                                                     'unscrew': 'unscrew'}))
         self.check_free(situation)
         states = self._states(situation)
         other = other_gripper(gripper)
@@ -603,15 +607,15 @@ class TeleopRules:
         lowest = int(np.argmin(points[:, 2]))
         if points[lowest, 2] < -tolerance:
             raise TeleopRefusedError(
-                f'{what} would take gripper {free} {-points[lowest, 2] * 1e3:.1f} mm below the '
+                f'{what} would take gripper {free} {millimetres(-points[lowest, 2])} mm below the '
                 f'truss surface')
         sideways = np.hypot(*(points[:, :2] - points[0, :2]).T)
         low = (sideways > tolerance) & (points[:, 2] < clearance)
         if np.any(low):
             index = int(np.flatnonzero(low)[0])
             raise TeleopRefusedError(
-                f'{what} would move gripper {free} {sideways[index] * 1e3:.1f} mm sideways '
-                f'while it is {points[index, 2] * 1e3:.1f} mm above the truss surface: it must '
+                f'{what} would move gripper {free} {millimetres(sideways[index])} mm sideways '
+                f'while it is {millimetres(points[index, 2])} mm above the truss surface: it must '
                 f'be at least teleop.clearance = {clearance * 1e3:g} mm above it to move '
                 f'sideways; lift it straight up first')
 

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from walker_core.text import millimetres
 from walker_core.truss import Truss
 
 __all__ = ['PHASE_NAMES', 'MODE_NAMES', 'GRIPPER_STATE_NAMES', 'GripperView', 'StatusView',
@@ -133,7 +134,7 @@ def _gripper_line(gripper: GripperView, truss: Truss | None) -> str:
         offset = hole_offset(gripper.position, gripper.orientation, truss.position(node))
         axis = rotation_from_quaternion(gripper.orientation)[:, 2]
         tilt = math.degrees(math.acos(min(1.0, max(-1.0, float(axis[2])))))
-        mm = ', '.join(f'{v * 1e3:+.1f}' for v in offset)
+        mm = millimetres(offset, signed=True)
         text += (f'; the hole of {node} is at ({mm}) mm in its frame; tilted {tilt:.1f} deg '
                  f'from vertical')
     return text
