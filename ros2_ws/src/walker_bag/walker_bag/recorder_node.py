@@ -51,7 +51,7 @@ from walker_bag.core.qos import QosProfile, subscription_policies
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
 from walker_bag.core.topic_selection import TopicSelection
 
-__all__ = ['RecorderNode', 'offered_qos', 'main']
+__all__ = ['RecorderNode', 'offered_qos', 'message_class', 'main']
 
 #: Longest time spent taking already-received messages when asked to stop [s].
 DRAIN_LIMIT = 1.0
@@ -75,7 +75,7 @@ def offered_qos(endpoint: TopicEndpointInfo) -> QosProfile:
         avoid_ros_namespace_conventions=bool(profile.avoid_ros_namespace_conventions))
 
 
-def _message_class(type_name: str) -> Any:
+def message_class(type_name: str) -> Any:
     """Import the Python class of ``pkg/msg/Type`` (rclpy needs it for the type support)."""
     package, _, name = type_name.split('/')
     return getattr(importlib.import_module(f'{package}.msg'), name)
@@ -155,7 +155,7 @@ class RecorderNode(Node):
     def _subscribe(self, topic: str, type_name: str,
                    publishers: list[TopicEndpointInfo]) -> None:
         try:
-            message_class = _message_class(type_name)
+            type_class = message_class(type_name)
         except (ImportError, AttributeError, ValueError):
             self._skip(topic, f'its type {type_name} is not installed here')
             return
@@ -176,7 +176,7 @@ class RecorderNode(Node):
                          reliability=ReliabilityPolicy[reliability.upper()],
                          durability=DurabilityPolicy[durability.upper()])
         self._writer.add_topic(TopicMetadata(topic, type_name, offers, type_hash), definition)
-        self._subscriptions_by_topic[topic] = self._sampler.subscribe(message_class, topic,
+        self._subscriptions_by_topic[topic] = self._sampler.subscribe(type_class, topic,
                                                                       qos, raw=True)
         self.get_logger().info(f'recording {topic} [{type_name}] ({reliability}, {durability}, '
                                f'{len(offers)} publisher(s))')

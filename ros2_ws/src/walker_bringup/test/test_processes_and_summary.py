@@ -28,7 +28,7 @@ def test_the_graph_has_every_node_with_its_arguments():
     assert names[0] == 'recorder' and names[1] == 'plant'
     assert names[2:7] == ['controller_a_yaw', 'controller_a_pitch', 'controller_vertex',
                           'controller_b_pitch', 'controller_b_yaw']
-    assert names[-2:] == ['planner', 'supervisor']
+    assert names[-3:] == ['planner', 'supervisor', 'viz']
     command = graph[2].command(executable='/bin/true')
     assert command[:6] == ['/bin/true', '--ros-args', '-r', '__node:=controller_a_yaw',
                            '-r', '__ns:=/walker']
@@ -49,7 +49,7 @@ def test_grouped_controllers_are_one_node_with_the_same_arguments():
     grouped = walker_graph('/tmp/walker.yaml', sim_time=True, record=True,
                            grouped_controllers=True)
     assert [n.name for n in grouped] == ['recorder', 'plant', 'controllers', 'planner',
-                                         'supervisor']
+                                         'supervisor', 'viz']
     controllers = grouped[2]
     assert (controllers.package, controllers.executable) == ('walker_control',
                                                              'joint_controllers_node')

@@ -96,6 +96,9 @@ COMPONENTS: dict[tuple[str, str], Component] = {
         'walker_supervisor.supervisor_node', 'SupervisorNode', default_executor=True),
     ('walker_bag', 'recorder_node'): Component(
         'walker_bag.recorder_node', 'RecorderNode', default_executor=True),
+    ('walker_viz', 'viz_node'): Component('walker_viz.viz_node', 'VizNode'),
+    ('walker_viz', 'foxglove_bridge'): Component('walker_viz.foxglove_bridge',
+                                                 'FoxgloveBridge'),
 }
 
 

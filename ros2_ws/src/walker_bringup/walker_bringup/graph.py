@@ -14,10 +14,14 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = ['NodeSpec', 'StartStance', 'walker_graph', 'walker_namespace', 'start_stances',
            'several_walkers', 'walker_targets', 'executable_path', 'controller_node_name',
-           'GROUPED_CONTROLLERS_NODE', 'RECORDED_TOPICS']
+           'GROUPED_CONTROLLERS_NODE', 'VIZ_NODE', 'FOXGLOVE_NODE', 'RECORDED_TOPICS', 'tf_remaps']
 
 #: Name of the one node of the five joint controllers in a graph with ``grouped_controllers``.
 GROUPED_CONTROLLERS_NODE = 'controllers'
+#: Name of the node that publishes TF and markers (walker_viz).
+VIZ_NODE = 'viz'
+#: Name of the node that serves the graph to Foxglove (``run_all.py --foxglove``).
+FOXGLOVE_NODE = 'foxglove_bridge'
 
 #: What a walk's bag holds (relative to the robot's namespace): everything the walk report
 #: uses. The high-rate inner-loop topics (effort_commands, joint_accelerations, the setpoint
@@ -27,7 +31,7 @@ GROUPED_CONTROLLERS_NODE = 'controllers'
 RECORDED_TOPICS = ('joint_states', 'tip_pose', 'gripper_a_pose', 'gripper_b_pose',
                    'gripper_states', 'phase', 'step_reports', 'control_mode',
                    'controllers/*/state', 'planned_trajectory', 'robot_description',
-                   '/diagnostics', '/clock')
+                   'markers', '/tf', '/tf_static', '/diagnostics', '/clock')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,8 +134,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                  record: bool = False, bag_path: str | Path | None = None,
                  start: StartStance | None = None, clock_topic: str | None = None,
                  parameters: tuple[tuple[str, str], ...] = (),
-                 grouped_controllers: bool = False) -> list[NodeSpec]:
-    """List the walker's nodes in start order: plant, five controllers, planner, supervisor.
+                 grouped_controllers: bool = False,
+                 foxglove_port: int | None = None) -> list[NodeSpec]:
+    """List the walker's nodes in start order: plant, controllers, planner, supervisor, viz.
 
     Parameters
     ----------
@@ -150,7 +155,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         Where the plant starts (the parameter file's ``sim.start.*`` when omitted).
     clock_topic : str, optional
         Remap ``/clock`` to this topic in every node of the graph: each walker of several has
-        a plant, and so a simulated clock, of its own.
+        a plant, and so a simulated clock, of its own. ``/tf`` and ``/tf_static`` are then
+        remapped into the walker's namespace too (``<namespace>/tf``), as multi-robot ROS
+        graphs do: each walker's links have the same names, and its stamps its own clock.
     parameters : tuple of (str, str)
         Overrides given to every node, after its own (e.g. ``('timing.control_rate',
         '1000.0')``); values in ROS YAML syntax.
@@ -158,17 +165,24 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         Run the five joint controllers in one node (``joint_controllers_node``, named
         ``controllers``: one state in, one effort message out per period) instead of one
         ``joint_controller_node`` each.
+    foxglove_port : int, optional
+        Also serve the graph's topics to Foxglove (``walker_viz foxglove_bridge``) on this
+        port of 127.0.0.1.
     """
     params_file = str(params_file)
     parameters = tuple(parameters)
     common = (('use_sim_time', 'true' if sim_time else 'false'),)
-    remaps = (('/clock', clock_topic),) if clock_topic else ()
+    remaps = ()
+    recorded = RECORDED_TOPICS
+    if clock_topic:
+        remaps = (('/clock', clock_topic), *tf_remaps(namespace))
+        recorded = tuple(dict(tf_remaps(namespace)).get(t, t) for t in RECORDED_TOPICS)
     nodes = []
     if record:
         bag = Path(bag_path) if bag_path else None
         extra = ((('recorder.directory', str(bag.parent)), ('recorder.bag_name', bag.name))
                  if bag else ())
-        topics = '[' + ', '.join(f"'{t}'" for t in RECORDED_TOPICS) + ']'
+        topics = '[' + ', '.join(f"'{t}'" for t in recorded) + ']'
         extra += (('recorder.topics', topics),)
         nodes.append(NodeSpec('walker_bag', 'recorder_node', 'recorder', namespace,
                               params_file, common + extra + parameters, remaps))
@@ -193,7 +207,18 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                           common + parameters, remaps))
     nodes.append(NodeSpec('walker_supervisor', 'supervisor_node', 'supervisor', namespace,
                           params_file, common + parameters, remaps))
+    nodes.append(NodeSpec('walker_viz', 'viz_node', VIZ_NODE, namespace, params_file,
+                          common + parameters, remaps))
+    if foxglove_port is not None:
+        nodes.append(NodeSpec('walker_viz', 'foxglove_bridge', FOXGLOVE_NODE, namespace,
+                              params_file, common + (('port', str(foxglove_port)),), remaps))
     return nodes
+
+
+def tf_remaps(namespace: str) -> tuple[tuple[str, str], ...]:
+    """Remaps of ``/tf`` and ``/tf_static`` into a walker's namespace (``/walker_2/tf``)."""
+    prefix = namespace.rstrip('/')
+    return (('/tf', f'{prefix}/tf'), ('/tf_static', f'{prefix}/tf_static'))
 
 
 def start_stances(configuration, count: int) -> list[StartStance]:

@@ -33,7 +33,7 @@ from pathlib import Path
 
 from walker_bringup.composition import LOOP_NODES, composed_command
 from walker_bringup.graph import (
-    NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
+    FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
     GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.processes import ProcessGroup
@@ -47,6 +47,10 @@ from walker_teleop.core.progress import walk_progress
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 
 SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
+#: SCHED_FIFO priority of the control loop with --realtime (ros2_control's thread_priority).
+REALTIME_PRIORITY = 50
+#: Port of the Foxglove WebSocket server with --foxglove (foxglove_bridge's default).
+FOXGLOVE_PORT = 8765
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -92,6 +96,22 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='run the five joint controllers as one node and process '
                              '(joint_controllers_node: one state in, one effort message out '
                              'per period) instead of one each')
+    parser.add_argument('--realtime', nargs='?', type=_priority, const=REALTIME_PRIORITY,
+                        default=0, metavar='PRIORITY',
+                        help='on the wall clock, run the control loop (plant, controllers) '
+                             'under SCHED_FIFO at PRIORITY (default %(const)s, as ros2_control) '
+                             'and the supervisor and planner below it, when permitted (root, '
+                             'CAP_SYS_NICE or an rtprio limit). Off by default: a real-time '
+                             'graph outranks every ordinary process and on a small machine '
+                             'starves its own tools (the ros2 CLI, an editor); ignored in sim '
+                             'time')
+    parser.add_argument('--foxglove', action='store_true',
+                        help="serve the graph's topics to Foxglove over its WebSocket protocol "
+                             'on 127.0.0.1 (open ws://127.0.0.1:PORT in the Foxglove app, with '
+                             'the layout walker_viz/config/walker.foxglove.json)')
+    parser.add_argument('--foxglove-port', type=_port, default=FOXGLOVE_PORT, metavar='N',
+                        help='port of the Foxglove server (default: %(default)s, as '
+                             'foxglove_bridge)')
     parser.add_argument('--walkers', type=_walker_count, default=1, metavar='N',
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
                              'each from its own start, walking the same route moved with it '
@@ -102,6 +122,27 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                      'choose one')
     args.grouped_controllers = args.grouped_controllers or args.composed_loop
     return args
+
+
+def _priority(text: str) -> int:
+    try:
+        priority = int(text)
+    except ValueError:
+        priority = 0
+    if not 1 <= priority <= 99:
+        raise argparse.ArgumentTypeError(f'expected a SCHED_FIFO priority 1..99, got {text!r}')
+    return priority
+
+
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f'expected a TCP port 0..65535 (0: any free one), got '
+                                         f'{text!r}')
+    return port
 
 
 def _walker_count(text: str) -> int:
@@ -187,7 +228,8 @@ def _describe_walkers(args, configuration, out: Path, env: dict) -> list[_Walker
         nodes = walker_graph(configuration.path, args.namespace, sim_time=args.sim_time,
                              record=args.record, bag_path=out / 'bag',
                              parameters=_graph_parameters(args),
-                             grouped_controllers=args.grouped_controllers)
+                             grouped_controllers=args.grouped_controllers,
+                             foxglove_port=args.foxglove_port if args.foxglove else None)
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
     graphs = several_walkers(configuration, args.walkers, args.sim_time, args.record, out,
@@ -215,14 +257,18 @@ def _bag_paths(walkers: list[_Walker]) -> list[Path]:
 
 
 def _graph_parameters(args) -> tuple[tuple[str, str], ...]:
-    """Return the overrides for every node: with the loop composed in sim time, the gate.
+    """Return the overrides for every node: the real-time priority asked for, and the gate.
 
-    At two to three times real time the supervisor, outside the lock-step, decides late in
-    simulated time; the plant then waits for its release (``sim.wait_for_decisions``).
+    With the loop composed in sim time: at two to three times real time the supervisor,
+    outside the lock-step, decides late in simulated time; the plant then waits for its
+    release (``sim.wait_for_decisions``).
     """
+    overrides = ()
+    if args.realtime and not args.sim_time:
+        overrides += (('timing.realtime_priority', str(args.realtime)),)
     if args.composed_loop and args.sim_time:
-        return (('sim.wait_for_decisions', 'true'),)
-    return ()
+        overrides += (('sim.wait_for_decisions', 'true'),)
+    return overrides
 
 
 def _launch(walker: _Walker, args, params_file: Path) -> None:
@@ -242,8 +288,8 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
                                 'graph' if loop is None else 'loop', walker.namespace,
                                 str(params_file)), command)
-    for spec in walker.nodes:
-        if loop is not None and spec.name not in loop:
+    for spec in walker.nodes:  # beside the composed process: the bridge serves any graph
+        if (spec.name not in loop) if loop is not None else spec.name == FOXGLOVE_NODE:
             walker.group.start(spec)
 
 
@@ -274,9 +320,17 @@ def main(argv: list[str] | None = None) -> int:
         progress.error('[walker] error: --serve keeps one walker up for walkerctl: leave '
                        '--walkers out')
         return 2
+    if args.walkers > 1 and args.foxglove:
+        progress.error('[walker] error: --foxglove serves one walker: leave --walkers out')
+        return 2
     try:
         walkers = _describe_walkers(args, configuration, out, env)
-        args.control_rate = configuration.walker.timing.control_rate
+        timing = configuration.walker.timing
+        args.control_rate = timing.control_rate
+        if args.realtime and args.realtime <= timing.decision_priority:
+            raise ValueError(f"--realtime {args.realtime} must be above the supervisor's and "
+                             f"planner's timing.decision_priority ({timing.decision_priority})"
+                             ' in the parameter file, which it runs them at')
     except ValueError as error:
         progress.error(f'[walker] error: {error}')
         return 2
@@ -335,6 +389,9 @@ def main(argv: list[str] | None = None) -> int:
                 should_stop=should_stop)
         progress.say(f'[walker] graph{"s" if len(walkers) > 1 else ""} ready in '
                      f'{time.monotonic() - started:.1f} s')
+        if args.foxglove:
+            progress.say(f'[walker] live view: open ws://127.0.0.1:{args.foxglove_port} in '
+                         f'Foxglove with the layout {_foxglove_layout()}')
         if args.serve:
             return _serve(walkers[0].client, args, should_stop, deaths)
         if not args.walk:
@@ -374,6 +431,13 @@ def main(argv: list[str] | None = None) -> int:
         if not write_report(out / 'bag', out / 'report', params_file, args.quiet):
             code = code or 6
     return code
+
+
+def _foxglove_layout() -> Path:
+    """Return the installed Foxglove layout of walker_viz."""
+    from ament_index_python.packages import get_package_share_directory
+
+    return Path(get_package_share_directory('walker_viz')) / 'config' / 'walker.foxglove.json'
 
 
 def _namespaces_in_use(walkers: list[_Walker], context) -> str:

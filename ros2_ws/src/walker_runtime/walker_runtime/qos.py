@@ -15,13 +15,18 @@ offer. So every node takes its profiles from here:
   next step's mode follow each other within milliseconds and each must reach every controller.
 * :data:`CLOCK_QOS`: ``/clock``: reliable, keep last 1.
 * :func:`latched_qos`: latched with a history (the phase, the step reports).
+* :data:`TF_QOS` and :data:`TF_STATIC_QOS`: ``/tf`` and ``/tf_static`` as tf2_ros offers them
+  (``DynamicBroadcasterQoS``: reliable, keep last 100; ``StaticBroadcasterQoS``: reliable,
+  transient local, keep last 1, every static transform in one message), so that RViz, tf2
+  listeners and ``ros2 bag`` match them unchanged.
 """
 
 from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'CLOCK_QOS', 'latched_qos']
+__all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'CLOCK_QOS', 'TF_QOS',
+           'TF_STATIC_QOS', 'latched_qos']
 
 
 def latched_qos(depth: int) -> QoSProfile:
@@ -50,3 +55,7 @@ MODE_QOS = latched_qos(10)
 CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                        reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
+TF_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                    reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.VOLATILE)
+TF_STATIC_QOS = latched_qos(1)

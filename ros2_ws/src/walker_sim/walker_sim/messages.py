@@ -19,8 +19,8 @@ from walker_sim.core.plant import GripperReport, PlantState, Pose
 
 __all__ = [
     'SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'CLOCK_QOS', 'TRUSS_FRAME', 'time_msg',
-    'stamp_ns', 'joint_state_msg', 'accelerations_msg', 'pose_msg', 'gripper_state_msg',
-    'gripper_states_msg', 'clock_msg',
+    'stamp_ns', 'joint_state_msg', 'flexible_joint_state_msg', 'accelerations_msg', 'pose_msg',
+    'gripper_state_msg', 'gripper_states_msg', 'clock_msg',
 ]
 
 #: Frame of every pose the plant publishes: the truss (world) frame.
@@ -48,6 +48,21 @@ def joint_state_msg(state: PlantState, stamp: int) -> JointState:
     message.position = state.position.tolist()
     message.velocity = state.velocity.tolist()
     message.effort = state.effort.tolist()
+    return message
+
+
+def flexible_joint_state_msg(state: PlantState, bend_names: list[str], bending,
+                             stamp: int) -> JointState:
+    """``sensor_msgs/JointState`` of every joint the plant simulates, angles [rad] only.
+
+    The five actuated joints, then the passive bending joints (``bending``, named
+    ``bend_names``), named and signed as the plant view of :mod:`walker_core.urdf` rooted at
+    gripper a (:func:`walker_core.urdf.flex_joints`), whichever body the physics is rooted at.
+    """
+    message = JointState()
+    message.header.stamp = time_msg(stamp)
+    message.name = [*PHYSICAL_JOINT_NAMES, *bend_names]
+    message.position = [*state.position.tolist(), *(float(a) for a in bending)]
     return message
 
 

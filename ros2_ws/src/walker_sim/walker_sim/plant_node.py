@@ -5,7 +5,9 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
 ``/walker``), as docs/architecture.md specifies:
 
 * publishes ``joint_accelerations`` then ``joint_states`` every control period; ``tip_pose``,
-  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame) at ``sim.pose_rate``;
+  ``gripper_a_pose``, ``gripper_b_pose`` (truss frame) and ``flexible_joint_states`` (every
+  joint the plant simulates: the five and the links' passive bending joints, as a simulator
+  publishes them) at ``sim.pose_rate``, with the joint state's stamp;
   ``gripper_states`` (on change, and at ``sim.gripper_state_rate`` on the steady clock: a
   liveness heartbeat); ``robot_description`` (once, latched);
   ``/clock`` (sim time, at ``sim.clock_rate``);
@@ -43,7 +45,7 @@ from walker_core.joint_roles import GRIPPERS
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_runtime.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.urdf import description_urdf
+from walker_core.urdf import description_urdf, flex_joints
 from walker_runtime.node_main import run_node
 from walker_core.text import unknown_choice
 from walker_msgs.msg import GripperStates, JointAccelerations
@@ -55,6 +57,7 @@ from walker_sim.core.grippers import GripperCommandError, GripperMode
 from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_sim.messages import (
     CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, accelerations_msg, clock_msg,
+    flexible_joint_state_msg,
     gripper_state_msg, gripper_states_msg, joint_state_msg, pose_msg, stamp_ns, time_msg)
 
 __all__ = ['PlantNode', 'main']
@@ -99,6 +102,10 @@ class PlantNode(Node):
         self._joint_states = self.create_publisher(JointState, 'joint_states', SENSOR_QOS)
         self._last_clock_stamp: int | None = None  # [ns]
         self._last_pose_stamp: int | None = None  # [ns]
+        self._flexible = self.create_publisher(JointState, 'flexible_joint_states',
+                                               SENSOR_QOS)
+        self._bend_names = [joint.name for joint in flex_joints(
+            self.params.robot.flexibility.segments_per_link)]
         self._poses = {name: self.create_publisher(PoseStamped, name, SENSOR_QOS)
                        for name in ('tip_pose', 'gripper_a_pose', 'gripper_b_pose')}
         self._grippers = self.create_publisher(GripperStates, 'gripper_states', LATCHED_QOS)
@@ -340,6 +347,8 @@ class PlantNode(Node):
                 0 <= stamp - self._last_pose_stamp < 1e9 / self.sim.pose_rate - 1:
             self._last_pose_stamp = stamp
             self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
+            self._flexible.publish(flexible_joint_state_msg(state, self._bend_names,
+                                                            self.plant.bending(), stamp))
             for gripper in GRIPPERS:
                 self._poses[f'gripper_{gripper}_pose'].publish(
                     pose_msg(state.poses[gripper], stamp))

@@ -1,0 +1,141 @@
+"""The Foxglove bridge serves the graph live: a client decodes TF and joint states.
+
+A WebSocket client subscribes and decodes TF and joint states from the advertised ros2msg
+schemas alone, as the Foxglove app does.
+
+The graph is the viz node (a real process) fed with a recorded-style stream from the test: the
+plant's joint states (the five, and with the links' bends) and its gripper states. The client
+speaks the Foxglove WebSocket protocol with the ``websockets`` package: server info, advertised
+channels, subscribe, binary message data (opcode 1: subscription id, log time, the CDR bytes),
+decoded with ``mcap_ros2``'s decoder from the schema text the server advertised.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import struct
+import time
+
+import pytest
+
+from ros_test_support import REPO_ROOT, NodeProcess
+from walker_core.robot_parameters import load_walker_parameters
+from walker_core.truss import Truss
+from walker_core.urdf import flex_joints
+
+pytestmark = pytest.mark.integration
+
+INSTALL = REPO_ROOT / 'ros2_ws' / 'install' / 'walker_viz' / 'lib' / 'walker_viz'
+WAIT = 60.0  # [s] for the nodes to start and the channels to appear, on a loaded machine
+_MESSAGE_DATA = 1  # binary opcode of the Foxglove protocol's message data
+
+
+def _publish_stream(context):
+    """Publish joint states at 100 Hz and the gripper states: a recorded-style stream."""
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from sensor_msgs.msg import JointState
+
+    from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+    from walker_runtime.qos import LATCHED_QOS, SENSOR_QOS
+    from walker_msgs.msg import GripperState, GripperStates
+
+    node = Node('fake_plant', namespace='/walker', context=context)
+    states = node.create_publisher(JointState, 'joint_states', SENSOR_QOS)
+    flexible = node.create_publisher(JointState, 'flexible_joint_states', SENSOR_QOS)
+    bends = [j.name for j in flex_joints(
+        load_walker_parameters().robot.flexibility.segments_per_link)]
+    grippers = node.create_publisher(GripperStates, 'gripper_states', LATCHED_QOS)
+    grippers.publish(GripperStates(grippers=[
+        GripperState(name='a', state=GripperState.ATTACHED, node='n1_1'),
+        GripperState(name='b', state=GripperState.FREE)]))
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+
+    def tick():
+        message = JointState(name=list(PHYSICAL_JOINT_NAMES),
+                             position=[-1.57, 0.6, 1.5, 0.6, 0.3])
+        message.header.stamp = node.get_clock().now().to_msg()
+        states.publish(message)
+        flexible.publish(JointState(header=message.header,
+                                    name=[*message.name, *bends],
+                                    position=[*message.position, *[0.001] * len(bends)]))
+
+    node.create_timer(0.01, tick)
+    return node, executor
+
+
+async def _receive(port: int, wanted: dict[str, int], deadline: float) -> dict[str, list]:
+    """Subscribe to the ``wanted`` topics; decode until each has its count of messages."""
+    import websockets
+    from mcap_ros2._dynamic import generate_dynamic
+
+    decoded: dict[str, list] = {topic: [] for topic in wanted}
+    async with websockets.connect(f'ws://127.0.0.1:{port}',
+                                  subprotocols=['foxglove.sdk.v1', 'foxglove.websocket.v1'],
+                                  max_size=None) as socket:
+        channels, decoders, subscribed = {}, {}, {}
+        while time.monotonic() < deadline and not all(
+                len(decoded[t]) >= n for t, n in wanted.items()):
+            try:
+                frame = await asyncio.wait_for(socket.recv(), 1.0)
+            except TimeoutError:
+                continue
+            if isinstance(frame, str):
+                message = json.loads(frame)
+                if message.get('op') != 'advertise':
+                    continue
+                for channel in message['channels']:
+                    channels[channel['id']] = channel
+                    if channel['topic'] in wanted and channel['topic'] not in subscribed.values():
+                        assert channel['encoding'] == 'cdr'
+                        assert channel['schemaEncoding'] == 'ros2msg'
+                        schema_name = channel['schemaName']
+                        decoders[channel['id']] = generate_dynamic(
+                            schema_name, channel['schema'])[schema_name]
+                        subscription = len(subscribed) + 1
+                        subscribed[subscription] = channel['topic']
+                        await socket.send(json.dumps({'op': 'subscribe', 'subscriptions': [
+                            {'id': subscription, 'channelId': channel['id']}]}))
+                continue
+            if frame[0] != _MESSAGE_DATA:
+                continue
+            subscription, _log_time = struct.unpack_from('<IQ', frame, 1)
+            topic = subscribed[subscription]
+            channel_id = next(c for c, info in channels.items() if info['topic'] == topic)
+            decoded[topic].append(decoders[channel_id](frame[13:]))
+    return decoded
+
+
+def test_a_websocket_client_decodes_tf_and_joint_states(rclpy_context, ros_env):
+    viz = NodeProcess([str(INSTALL / 'viz_node'), '--ros-args', '-r', '__ns:=/walker'],
+                      ros_env, 'viz')
+    bridge = NodeProcess([str(INSTALL / 'foxglove_bridge'), '--ros-args', '-r',
+                          '__ns:=/walker', '-p', 'port:=0'], ros_env, 'foxglove_bridge')
+    node, executor = _publish_stream(rclpy_context)
+    with viz, bridge:
+        assert bridge.wait_for_output('to Foxglove at ws://127.0.0.1:', WAIT), bridge.output
+        port = int(bridge.output.split('to Foxglove at ws://127.0.0.1:')[1].split()[0])
+        assert viz.wait_for_output('publishing TF', WAIT), viz.output
+        loop = asyncio.new_event_loop()
+        deadline = time.monotonic() + WAIT
+        task = loop.create_task(_receive(
+            port, {'/tf': 50, '/walker/joint_states': 3}, deadline))  # half a second
+        while not task.done():
+            executor.spin_once(timeout_sec=0.01)
+            loop.run_until_complete(asyncio.sleep(0.01))
+        decoded = task.result()
+        loop.close()
+    node.destroy_node()
+    assert all(decoded.values()), {t: len(v) for t, v in decoded.items()}
+    joints = decoded['/walker/joint_states'][-1]
+    assert list(joints.name)[0] == 'a_yaw_joint' and joints.position[2] == pytest.approx(1.5)
+    moving = {t.child_frame_id: t for m in decoded['/tf'] for t in m.transforms}
+    assert {'a_wrist', 'link_a_0', 'link_b_0', 'b_wrist', 'gripper_b'} <= set(moving)
+    anchor = moving['gripper_a']  # gripper a screwed into n1_1 holds the tree in the truss
+    assert anchor.header.frame_id == 'truss'
+    seat = Truss.from_parameters(load_walker_parameters()).position('n1_1')
+    t = anchor.transform.translation
+    assert (t.x, t.y, t.z) == pytest.approx(tuple(seat), abs=1e-9)
+    assert 'link_a_1' in moving  # a segment of the flexible link, beyond a bend

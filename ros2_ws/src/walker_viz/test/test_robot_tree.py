@@ -1,0 +1,77 @@
+"""The TF tree from the URDF: the frames the kinematics and the plant's model agree on."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.kinematics import WalkerKinematics, invert_transform
+from walker_core.robot_parameters import load_walker_parameters
+from walker_core.urdf import GRIPPER_LINKS, description_urdf
+from walker_viz.core.robot_tree import (
+    RobotTree, matrix_from_quaternion, quaternion_from_matrix)
+
+PARAMS = load_walker_parameters()
+KIN = WalkerKinematics.from_parameters(PARAMS)
+TREE = RobotTree(description_urdf(PARAMS))
+angle = st.floats(-1.5, 1.5)
+#: The URDF writes its numbers with 9 significant digits (pi as 3.14159265).
+URDF_PRECISION = 1e-8
+
+
+def angles_of(theta):
+    return dict(zip(PHYSICAL_JOINT_NAMES, theta, strict=True))
+
+
+def test_the_tree_is_the_description_urdf_rooted_at_gripper_a():
+    assert TREE.root == 'gripper_a'
+    assert TREE.joint_names == PHYSICAL_JOINT_NAMES
+    static = TREE.static_transforms()
+    assert static, 'the bending joints of the description view are fixed'
+    children = {t.child for t in static} | {j.child for j in TREE.moving_joints}
+    assert children == set(TREE.links) - {'gripper_a'}  # every link reached once
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.tuples(angle, angle, angle, angle, angle))
+def test_gripper_b_in_gripper_a_is_the_forward_kinematics(theta):
+    """Eq (1)'s chain, from the URDF alone: no length of the kinematics is used."""
+    pose = TREE.link_in_root(GRIPPER_LINKS['b'], angles_of(theta))
+    assert np.allclose(pose, KIN.forward_transform(theta), atol=URDF_PRECISION)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.tuples(angle, angle, angle, angle, angle))
+def test_seen_from_gripper_b_the_chain_is_mirrored(theta):
+    """Either gripper as base: the roles reverse (walker_core.joint_roles)."""
+    a_in_b = invert_transform(TREE.link_in_root(GRIPPER_LINKS['b'], angles_of(theta)))
+    assert np.allclose(a_in_b, KIN.forward_transform(theta[::-1]), atol=URDF_PRECISION)
+
+
+def test_root_pose_puts_the_holding_gripper_where_it_is_held():
+    theta = [0.2, 0.4, 1.2, 0.5, -0.3]
+    held = np.eye(4)
+    held[:3, 3] = [0.3, 0.2, 0.0]
+    root = TREE.root_pose(GRIPPER_LINKS['b'], held, angles_of(theta))
+    assert np.allclose(root @ TREE.link_in_root('gripper_b', angles_of(theta)), held)
+
+
+@pytest.mark.parametrize('bad, text', [
+    ({'a_yaw_joint': 0.0}, "no angle for joint 'a_pitch_joint'"),
+    ({**angles_of([0.0] * 5), 'vertex_joint': math.nan}, "'vertex_joint' has a non-finite"),
+])
+def test_a_bad_joint_state_is_refused_with_the_joint_named(bad, text):
+    with pytest.raises(ValueError, match=text):
+        TREE.moving_transforms(bad)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.tuples(angle, angle, angle, angle, angle))
+def test_quaternions_round_trip(theta):
+    pose = TREE.link_in_root('gripper_b', angles_of(theta))
+    q = quaternion_from_matrix(pose)
+    assert q[3] >= 0.0 and math.isclose(np.linalg.norm(q), 1.0)
+    assert np.allclose(matrix_from_quaternion(pose[:3, 3], q), pose, atol=1e-12)

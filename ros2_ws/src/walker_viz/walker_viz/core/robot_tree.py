@@ -1,0 +1,237 @@
+"""The walker's TF tree from its URDF and joint angles, as robot_state_publisher computes it.
+
+The tree is the description view of :func:`walker_core.urdf.description_urdf` (what the plant
+publishes on ``robot_description``), read from the URDF text itself, so no length is copied:
+each joint is ``parent -> child`` with the transform ``origin * rotation(axis, angle)`` (URDF's
+convention; a fixed joint has no rotation). Its root link is ``gripper_a``, whichever gripper
+holds the truss. What the base changes is only where that root sits in the world frame
+``truss`` (:meth:`RobotTree.root_pose`): the robot's own links keep one parent each forever, so
+no frame changes its parent or moves between ``/tf_static`` and ``/tf`` when the grippers
+swap roles (see :mod:`walker_viz.core.base_anchor`).
+
+Transforms are 4x4 homogeneous matrices (numpy), lengths in m, angles in rad.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Mapping
+
+import numpy as np
+
+from walker_core.kinematics import invert_transform
+
+__all__ = ['WORLD_FRAME', 'JointTransform', 'UrdfJoint', 'RobotTree', 'rpy_matrix',
+           'axis_rotation', 'quaternion_from_matrix', 'matrix_from_quaternion']
+
+#: The world-fixed frame: the truss face (z up out of it, node n0_0 at the origin).
+WORLD_FRAME = 'truss'
+
+
+def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rotation (3x3) of URDF's fixed-axis roll, pitch, yaw: ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array([
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr]])
+
+
+def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation (3x3) by ``angle`` rad about the unit vector ``axis`` (Rodrigues)."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    skew = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return c * np.eye(3) + s * skew + (1.0 - c) * np.outer(axis, axis)
+
+
+def quaternion_from_matrix(transform: np.ndarray) -> tuple[float, float, float, float]:
+    """Return the unit quaternion ``(x, y, z, w)`` of a transform's rotation, ``w >= 0``."""
+    m = np.asarray(transform, dtype=float)[:3, :3]
+    trace = float(m[0, 0] + m[1, 1] + m[2, 2])
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
+    q = np.array(q) / np.linalg.norm(q)
+    if q[3] < 0.0:
+        q = -q
+    return tuple(float(v) for v in q)
+
+
+def matrix_from_quaternion(translation, quaternion) -> np.ndarray:
+    """Transform (4x4) of a translation [m] and a quaternion ``(x, y, z, w)``."""
+    x, y, z, w = (float(v) for v in quaternion)
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if not norm > 0.0:
+        raise ValueError('a rotation quaternion must not be zero')
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    transform = np.eye(4)
+    transform[:3, :3] = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    transform[:3, 3] = [float(v) for v in translation]
+    return transform
+
+
+@dataclasses.dataclass(frozen=True)
+class JointTransform:
+    """One edge of the TF tree: the pose [4x4] of ``child`` in ``parent``."""
+
+    parent: str
+    child: str
+    matrix: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class UrdfJoint:
+    """A joint of the URDF: its frames, its fixed origin and, when it moves, its axis."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    origin: np.ndarray
+    axis: np.ndarray | None
+
+    @property
+    def moves(self) -> bool:
+        """True for a joint whose angle comes from ``joint_states``."""
+        return self.kind in ('revolute', 'continuous')
+
+    def transform(self, angle: float = 0.0) -> np.ndarray:
+        """Pose of the child link in the parent link at ``angle`` [rad]."""
+        if not self.moves:
+            return self.origin
+        motion = np.eye(4)
+        motion[:3, :3] = axis_rotation(self.axis, angle)
+        return self.origin @ motion
+
+
+def _vector(element, attribute: str, default: str) -> np.ndarray:
+    text = default if element is None else element.get(attribute, default)
+    return np.array([float(v) for v in text.split()])
+
+
+def _parse_joint(element) -> UrdfJoint:
+    origin_element = element.find('origin')
+    origin = np.eye(4)
+    origin[:3, :3] = rpy_matrix(*_vector(origin_element, 'rpy', '0 0 0'))
+    origin[:3, 3] = _vector(origin_element, 'xyz', '0 0 0')
+    kind = element.get('type')
+    axis = None
+    if kind in ('revolute', 'continuous'):
+        axis = _vector(element.find('axis'), 'xyz', '1 0 0')
+        axis = axis / np.linalg.norm(axis)
+    return UrdfJoint(element.get('name'), kind, element.find('parent').get('link'),
+                     element.find('child').get('link'), origin, axis)
+
+
+class RobotTree:
+    """Forward kinematics of every link of a URDF, rooted at its root link.
+
+    Parameters
+    ----------
+    urdf : str
+        The robot description (the description view of :mod:`walker_core.urdf`).
+
+    Raises
+    ------
+    ValueError
+        If the URDF is not a tree (no single root, a link with two parents) or a joint type
+        is one TF cannot express here (prismatic, floating, planar).
+    """
+
+    def __init__(self, urdf: str) -> None:
+        root = ElementTree.fromstring(urdf)
+        self.joints = tuple(_parse_joint(j) for j in root.findall('joint'))
+        unsupported = [j.name for j in self.joints
+                       if j.kind not in ('fixed', 'revolute', 'continuous')]
+        if unsupported:
+            raise ValueError(f'joints of unsupported types: {", ".join(unsupported)}')
+        links = [link.get('name') for link in root.findall('link')]
+        children = [j.child for j in self.joints]
+        if len(set(children)) != len(children):
+            raise ValueError('the URDF is not a tree: a link has two parent joints')
+        roots = [link for link in links if link not in children]
+        if len(roots) != 1:
+            raise ValueError(f'the URDF needs exactly one root link, found {roots}')
+        self.root = roots[0]
+        self.links = tuple(links)
+        self.moving_joints = tuple(j for j in self.joints if j.moves)
+        self._by_child = {j.child: j for j in self.joints}
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Names of the moving joints, in URDF order."""
+        return tuple(j.name for j in self.moving_joints)
+
+    def static_transforms(self) -> list[JointTransform]:
+        """Return the fixed joints' transforms: what ``/tf_static`` carries for the robot."""
+        return [JointTransform(j.parent, j.child, j.transform())
+                for j in self.joints if not j.moves]
+
+    def moving_transforms(self, angles: Mapping[str, float]) -> list[JointTransform]:
+        """Return the moving joints' transforms at ``angles`` [rad] (joint name -> angle).
+
+        Raises
+        ------
+        ValueError
+            If an angle is missing or not finite.
+        """
+        return [JointTransform(j.parent, j.child, j.transform(self._angle(angles, j.name)))
+                for j in self.moving_joints]
+
+    @staticmethod
+    def _angle(angles: Mapping[str, float], name: str) -> float:
+        try:
+            angle = float(angles[name])
+        except KeyError:
+            raise ValueError(f'no angle for joint {name!r}') from None
+        if not math.isfinite(angle):
+            raise ValueError(f'joint {name!r} has a non-finite angle ({angle})')
+        return angle
+
+    def link_in_root(self, link: str, angles: Mapping[str, float]) -> np.ndarray:
+        """Pose [4x4] of ``link`` in the root link at ``angles``.
+
+        Raises
+        ------
+        ValueError
+            If ``link`` is not a link of the tree, or an angle on its chain is missing.
+        """
+        if link not in self.links:
+            raise ValueError(f'unknown link {link!r}')
+        chain = []
+        while link != self.root:
+            joint = self._by_child[link]
+            chain.append(joint)
+            link = joint.parent
+        pose = np.eye(4)
+        for joint in reversed(chain):
+            angle = self._angle(angles, joint.name) if joint.moves else 0.0
+            pose = pose @ joint.transform(angle)
+        return pose
+
+    def root_pose(self, holding_link: str, holding_pose: np.ndarray,
+                  angles: Mapping[str, float]) -> np.ndarray:
+        """Pose [4x4] of the root link in the world, given where ``holding_link`` is held.
+
+        The base gripper's link is where the truss holds the robot; the root link follows
+        from it through the joint angles (the identity when the root itself holds).
+        """
+        return np.asarray(holding_pose, dtype=float) @ invert_transform(
+            self.link_in_root(holding_link, angles))

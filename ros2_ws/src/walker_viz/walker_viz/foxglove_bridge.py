@@ -1,0 +1,185 @@
+"""The Foxglove bridge: the graph's topics, live, over the Foxglove WebSocket protocol.
+
+``ros2 run walker_viz foxglove_bridge --ros-args -r __ns:=/walker -p port:=8765`` (what
+``run_all.py --foxglove`` starts). The Python counterpart of foxglove_bridge, on the official
+Foxglove SDK's server, bound to 127.0.0.1 only: every topic of the selection (``topics``,
+names or glob patterns as the recorder takes them; by default the robot's namespace, ``/tf``,
+``/tf_static``, ``/diagnostics`` and ``/clock``) is advertised once it has a publisher, as a
+channel with the ``ros2msg`` schema of its type (the ``.msg`` text with its dependencies, as
+rosbag2 stores it) and ``cdr`` message encoding, and its messages are passed on as the CDR
+bytes DDS delivered, never decoded here. Each topic is subscribed with a QoS that matches all
+its publishers (transient local where they all latch: a client connecting later gets the
+robot description, the static transforms and the markers). The subscriptions live on a helper
+node no executor spins; what they received is taken every ``take_period`` seconds, all topics
+at once, oldest first, so the bridge costs no callback per message of the 500 Hz topics.
+
+Message log times are the node's clock (the simulated clock under ``use_sim_time``, which is
+also broadcast to clients as the server's time, so Foxglove's time follows the simulation).
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import foxglove
+import rclpy
+from foxglove.websocket import Capability
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.logging import get_logger
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
+
+from walker_bag.core.errors import MessageDefinitionError, TopicNameError
+from walker_bag.core.message_definitions import message_definition
+from walker_bag.core.qos import subscription_policies
+from walker_bag.core.topic_selection import TopicSelection
+from walker_bag.recorder_node import message_class, offered_qos
+from walker_runtime.spinning import TopicSampler, init_node_process, spin_nodes
+
+__all__ = ['FoxgloveBridge', 'DEFAULT_TOPICS', 'main']
+
+#: What the bridge serves unless told otherwise.
+DEFAULT_TOPICS = ('*', '/tf', '/tf_static', '/diagnostics', '/clock')
+#: Host the server binds to: this machine only.
+HOST = '127.0.0.1'
+_DISCOVERY_PERIOD = 0.5  # [s] how often new topics are looked for (steady clock)
+_TAKE_PERIOD = 0.02  # [s] how often received messages are taken and sent (steady clock)
+_QUEUE_DEPTH = 100  # messages each subscription holds between two takes
+
+
+class BridgeError(ValueError):
+    """The bridge cannot start: a bad parameter, or a port it cannot bind."""
+
+
+class FoxgloveBridge(Node):
+    """Serve the selected topics of the graph to Foxglove clients.
+
+    Raises
+    ------
+    BridgeError
+        If ``port`` or ``topics`` is invalid, or the server cannot listen on the port.
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('foxglove_bridge', **kwargs)
+        port = self.declare_parameter(
+            'port', 8765, ParameterDescriptor(
+                description='TCP port of the WebSocket server on 127.0.0.1 (0: any free port)',
+                read_only=True, integer_range=[IntegerRange(from_value=0, to_value=65535,
+                                                            step=1)])).value
+        topics = self.declare_parameter(
+            'topics', list(DEFAULT_TOPICS), ParameterDescriptor(
+                description='topics served: names or glob patterns, relative ones in the '
+                            "node's namespace", read_only=True)).value
+        try:
+            self._selection = TopicSelection(list(topics), self.get_namespace())
+        except TopicNameError as error:
+            raise BridgeError(f'topics: {error}') from None
+        if not 0 <= port <= 65535:
+            raise BridgeError(f'port must be 0..65535, got {port}')
+        self._sim_time = bool(self.get_parameter('use_sim_time').value)
+        try:
+            self.server = foxglove.start_server(
+                name=f'walker {self.get_namespace()}', host=HOST, port=port,
+                capabilities=[Capability.Time] if self._sim_time else [])
+        except (RuntimeError, OSError) as error:
+            raise BridgeError(f'cannot serve on {HOST}:{port}: {error}') from None
+        self._channels: dict[str, tuple[Any, foxglove.Channel]] = {}
+        self._skipped: set[str] = set()
+        self._sampler = TopicSampler(f'{self.get_name()}_sampler', self.get_namespace(),
+                                     self.context)
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(_DISCOVERY_PERIOD, self._discover, clock=steady)
+        self.create_timer(_TAKE_PERIOD, self.forward_received, clock=steady)
+        self.get_logger().info(f'serving {self._selection!r} to Foxglove at '
+                               f'ws://{HOST}:{self.port}')
+        self._discover()
+
+    @property
+    def port(self) -> int:
+        """The port the server listens on."""
+        return self.server.port
+
+    def _discover(self) -> None:
+        """Advertise and subscribe to selected topics that have appeared since the last look."""
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self._channels or topic in self._skipped \
+                    or not self._selection.matches(topic):
+                continue
+            publishers = self.get_publishers_info_by_topic(topic)
+            if len(types) != 1:
+                self._skip(topic, f'it has several types ({", ".join(types)})')
+            elif publishers:
+                self._serve(topic, types[0], publishers)
+
+    def _skip(self, topic: str, reason: str) -> None:
+        self._skipped.add(topic)
+        self.get_logger().warning(f'not serving {topic}: {reason}')
+
+    def _serve(self, topic: str, type_name: str, publishers) -> None:
+        try:
+            definition = message_definition(type_name)
+            type_class = message_class(type_name)
+        except (MessageDefinitionError, ImportError, AttributeError, ValueError) as error:
+            self._skip(topic, f'its type {type_name} is not installed here ({error})')
+            return
+        reliability, durability = subscription_policies(offered_qos(p) for p in publishers)
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=_QUEUE_DEPTH,
+                         reliability=ReliabilityPolicy[reliability.upper()],
+                         durability=DurabilityPolicy[durability.upper()])
+        schema = foxglove.Schema(name=type_name, encoding=definition.encoding,
+                                 data=definition.text.encode())
+        channel = foxglove.Channel(topic, schema=schema, message_encoding='cdr')
+        subscription = self._sampler.subscribe(type_class, topic, qos, raw=True)
+        self._channels[topic] = (subscription, channel)
+        self.get_logger().info(f'serving {topic} [{type_name}] ({reliability}, {durability})')
+
+    def forward_received(self) -> int:
+        """Send every message received since the last call, oldest first; return how many."""
+        now = self.get_clock().now().nanoseconds
+        batch = []
+        for subscription, channel in self._channels.values():
+            for data, info in self._sampler.take_with_info(subscription):
+                received = info.get('received_timestamp') or 0
+                batch.append((received, channel, data))
+        batch.sort(key=lambda item: item[0])
+        for _, channel, data in batch:
+            channel.log(bytes(data), log_time=now)
+        if self._sim_time and batch:
+            self.server.broadcast_time(now)
+        return len(batch)
+
+    def destroy_node(self) -> None:
+        """Stop the server, close the channels, destroy the node and its helper."""
+        self.server.stop()
+        for _, channel in self._channels.values():
+            channel.close()
+        self._sampler.destroy()
+        super().destroy_node()
+
+
+def main(args=None) -> int:
+    """Run the bridge until shut down; exit code 1 when it cannot start."""
+    stop = init_node_process(args)
+    node = None
+    try:
+        node = FoxgloveBridge()
+        spin_nodes(node, stop=stop)
+    except (BridgeError, ParameterException) as error:
+        get_logger('foxglove_bridge').fatal(f'refusing to start: {error}')
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
