@@ -8,6 +8,7 @@ moves the joint it names, and a tip jog lifts the free gripper. Every ``gripper_
 message seen is checked: at least one gripper is attached at every instant.
 """
 
+import math
 import subprocess
 import sys
 import time
@@ -193,6 +194,13 @@ def test_jogs_out_of_limits_or_in_the_wrong_phase_are_refused_and_valid_ones_mov
     assert 'larger than a jog may be (teleop.max_joint_jog = 0.2 rad)' in run.stdout
     run = graph.walkerctl('jog-joint', 'b_yaw_joint', 'nan')
     assert run.returncode == 2 and "must be a finite number, got 'nan'" in run.stderr
+    # what the plain ros2 CLI sends: refused in words an operator reads (no numpy repr, the
+    # reason said once)
+    unknown = graph.call(graph.operate_gripper, GripperCommand.Request(gripper='b', command=7))
+    assert not unknown.success
+    assert unknown.message == 'unknown gripper command 7: expected SCREW_IN (1) or UNSCREW (2)'
+    nan = graph.call(graph.jog_tip, JogTip.Request(delta=[math.nan, 0.0, 0.0]))
+    assert not nan.success and nan.message == 'delta must be a finite number, got nan m'
     assert _moved(before, graph.positions()) < STILL
 
     # Within the limits: the free gripper turns about its own axis (its contact point stays),

@@ -58,7 +58,8 @@ def test_several_walkers_get_their_namespace_start_and_clock(configuration):
     assert graphs[0][2] == walker_graph(PARAMS, '/walker', sim_time=True)
     for namespace, start, nodes in graphs[1:]:
         assert all(n.namespace == namespace for n in nodes)
-        assert all(dict(n.remaps) == {'/clock': f'{namespace}/clock'} for n in nodes)
+        assert all(dict(n.remaps) == {'/clock': f'{namespace}/clock', '/tf': f'{namespace}/tf',
+                                      '/tf_static': f'{namespace}/tf_static'} for n in nodes)
         plant = next(n for n in nodes if n.executable == 'plant_node')
         overrides = dict(plant.parameters)
         assert overrides['sim.start.base_node'] == start.base_node

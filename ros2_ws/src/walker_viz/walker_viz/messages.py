@@ -12,7 +12,8 @@ from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
 from walker_viz.core.markers import MarkerSpec
-from walker_viz.core.robot_tree import WORLD_FRAME, JointTransform, quaternion_from_matrix
+from walker_core.rotations import quaternion_from_matrix
+from walker_viz.core.robot_tree import WORLD_FRAME, JointTransform
 
 __all__ = ['tf_message', 'marker_array', 'deleted_marker']
 
@@ -28,7 +29,7 @@ def _transform_msg(edge: JointTransform, stamp: Time) -> TransformStamped:
     message.child_frame_id = edge.child
     t, r = message.transform.translation, message.transform.rotation
     t.x, t.y, t.z = (float(v) for v in edge.matrix[:3, 3])
-    r.x, r.y, r.z, r.w = quaternion_from_matrix(edge.matrix)
+    r.x, r.y, r.z, r.w = (float(v) for v in quaternion_from_matrix(edge.matrix))
     return message
 
 

@@ -32,6 +32,7 @@ import pybullet
 from walker_core.joint_roles import GRIPPERS, other_gripper
 from walker_core.kinematics import WalkerKinematics
 from walker_core.parameter_schema import ParameterError
+from walker_core.rotations import quaternion_from_matrix
 from walker_core.truss import Truss
 from walker_core.urdf import flex_joints
 from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
@@ -96,27 +97,7 @@ class Pose:
     def from_matrix(cls, transform: np.ndarray) -> 'Pose':
         """Pose of a homogeneous transform."""
         return cls(np.array(transform[:3, 3], dtype=float),
-                   _quaternion_from_matrix(transform[:3, :3]))
-
-
-def _quaternion_from_matrix(rotation: np.ndarray) -> np.ndarray:
-    """Return the unit quaternion ``(x, y, z, w)`` of a rotation matrix."""
-    m = np.asarray(rotation, dtype=float)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
-    q = np.array(q)
-    return q / np.linalg.norm(q)
+                   quaternion_from_matrix(transform[:3, :3]))
 
 
 @dataclasses.dataclass(frozen=True)

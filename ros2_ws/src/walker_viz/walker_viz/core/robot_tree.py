@@ -24,7 +24,7 @@ import numpy as np
 from walker_core.kinematics import invert_transform
 
 __all__ = ['WORLD_FRAME', 'JointTransform', 'UrdfJoint', 'RobotTree', 'rpy_matrix',
-           'axis_rotation', 'quaternion_from_matrix', 'matrix_from_quaternion']
+           'axis_rotation']
 
 #: The world-fixed frame: the truss face (z up out of it, node n0_0 at the origin).
 WORLD_FRAME = 'truss'
@@ -47,44 +47,6 @@ def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
     skew = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
     return c * np.eye(3) + s * skew + (1.0 - c) * np.outer(axis, axis)
-
-
-def quaternion_from_matrix(transform: np.ndarray) -> tuple[float, float, float, float]:
-    """Return the unit quaternion ``(x, y, z, w)`` of a transform's rotation, ``w >= 0``."""
-    m = np.asarray(transform, dtype=float)[:3, :3]
-    trace = float(m[0, 0] + m[1, 1] + m[2, 2])
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s]
-    q = np.array(q) / np.linalg.norm(q)
-    if q[3] < 0.0:
-        q = -q
-    return tuple(float(v) for v in q)
-
-
-def matrix_from_quaternion(translation, quaternion) -> np.ndarray:
-    """Transform (4x4) of a translation [m] and a quaternion ``(x, y, z, w)``."""
-    x, y, z, w = (float(v) for v in quaternion)
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if not norm > 0.0:
-        raise ValueError('a rotation quaternion must not be zero')
-    x, y, z, w = x / norm, y / norm, z / norm, w / norm
-    transform = np.eye(4)
-    transform[:3, :3] = [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    transform[:3, 3] = [float(v) for v in translation]
-    return transform
 
 
 @dataclasses.dataclass(frozen=True)
