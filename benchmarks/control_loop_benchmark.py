@@ -410,7 +410,9 @@ def _run_real_plant(args: argparse.Namespace, rate: float) -> dict:
         env = ros_environment(domain)
         events_file = Path(scratch) / 'plant_events.json'
         env['WALKER_BENCHMARK_EVENTS'] = str(events_file)
-        ros_args = ['--ros-args', '-r', '__ns:=/walker', '-p', f'timing.control_rate:={rate}']
+        # real time as run_all.py --realtime runs it: the loop under SCHED_FIFO 50
+        ros_args = ['--ros-args', '-r', '__ns:=/walker', '-p', f'timing.control_rate:={rate}',
+                    '-p', 'timing.realtime_priority:=50']
         controllers = [NodeProcess([executable, *ros_args, '-p', f'joint_name:={joint}'], env,
                                    joint) for joint in PHYSICAL_JOINT_NAMES]
         plant = NodeProcess([sys.executable, '-c', _PLANT_HOOK, *ros_args, '-p',

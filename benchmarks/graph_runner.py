@@ -72,6 +72,11 @@ class GraphRun:
         self.parameters = tuple(parameters)
         if loop and sim_time:  # as run_all.py --composed-loop: the plant waits for decisions
             self.parameters += (('sim.wait_for_decisions', 'true'),)
+        if not sim_time:  # the real-time figures are the loop's under SCHED_FIFO, as run_all.py
+            # --realtime runs it (the shipped parameter file asks for no priority)
+            from walker_bringup.run import REALTIME_PRIORITY
+
+            self.parameters += (('timing.realtime_priority', str(REALTIME_PRIORITY)),)
         self.record = record
         self.graphs = []          # (namespace, start, nodes)
         self.groups = []          # one ProcessGroup per walker

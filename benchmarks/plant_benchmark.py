@@ -191,7 +191,7 @@ def jitter_benchmark(seconds: float) -> dict:
 
         node.create_subscription(JointState, '/walker/joint_states', on_state, SENSOR_QOS)
         args = [executable, '--ros-args', '-r', '__ns:=/walker', '-p',
-                'sim.clock_mode:=real_time']
+                'sim.clock_mode:=real_time', '-p', 'timing.realtime_priority:=50']  # --realtime
         try:
             with NodeProcess(args, env, 'plant'):
                 deadline = time.monotonic() + 60.0

@@ -67,7 +67,6 @@ def test_a_missing_parameter_is_named(tmp_path, name):
     ('truss.spacing', 1.3, 'reach'),
     ('robot.flexibility.joint1_mode', 90.0, 'lower than'),
     ('robot.name', 'my walker', 'ROS name'),
-    ('timing.decision_priority', 50, 'must be below timing.realtime_priority'),
     ('timing.decision_priority', 100, 'above the maximum'),
 ])
 def test_invalid_values_are_refused_with_the_parameter_named(tmp_path, name, value, words):
@@ -149,3 +148,10 @@ def test_no_parameter_file_anywhere_is_a_clear_error(monkeypatch, tmp_path):
                         lambda: tmp_path / 'missing' / 'walker.yaml')
     with pytest.raises(FileNotFoundError, match='AMENT_PREFIX_PATH.*pass the parameter file'):
         parameter_file.default_parameter_file()
+
+
+def test_real_time_deciders_at_the_loops_priority_are_refused(tmp_path):
+    path = write_params(tmp_path, {'timing.realtime_priority': 50,
+                                   'timing.decision_priority': 50})
+    with pytest.raises(ParameterError, match='must be below timing.realtime_priority'):
+        load_walker_parameters(path)
