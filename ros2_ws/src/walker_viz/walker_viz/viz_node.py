@@ -35,7 +35,7 @@ from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-from walker_runtime.node_parameters import declare_section, guard_section_updates
+from walker_runtime.node_parameters import declare_section
 from walker_core.parameter_schema import ParameterError
 from walker_runtime.qos import (
     LATCHED_QOS, MODE_QOS, TF_QOS, TF_STATIC_QOS, latched_qos)
@@ -102,19 +102,11 @@ class VizNode(Node):
         self._tf_static.publish(tf_message(self.tree.static_transforms(),
                                            self.get_clock().now().to_msg()))
         self._publish_markers()
-        self._timer = self.create_timer(1.0 / self.settings.tf_rate, self._publish_tf)
-        guard_section_updates(self, VizParameters, VIZ_PREFIX, lambda: self.settings,
-                              self._apply_settings)
+        self.create_timer(1.0 / self.settings.tf_rate, self._publish_tf)
         self.get_logger().info(
             f'publishing TF of {len(self.tree.links)} links ({len(self.tree.moving_joints)} '
             f'moving joints at {self.settings.tf_rate:g} Hz) in the {WORLD_FRAME} frame, and '
             f'the truss of {len(self.truss.node_names)} nodes as markers')
-
-    def _apply_settings(self, settings: VizParameters) -> None:
-        self.settings = settings
-        self._timer.cancel()
-        self.destroy_timer(self._timer)
-        self._timer = self.create_timer(1.0 / settings.tf_rate, self._publish_tf)
 
     def destroy_node(self) -> None:
         """Destroy the node and the one its joint-state subscription lives on."""

@@ -23,8 +23,7 @@ class VizParameters:
     tf_rate: float = parameter(
         'rate at which the moving transforms are sent on /tf: with straight links the newest '
         "joint state's, with viz.flexible every flexible joint state received since (in sim "
-        'time on the simulated clock)', 'Hz', 1.0, 1000.0,
-        read_only=False)
+        'time on the simulated clock)', 'Hz', 1.0, 1000.0)
     flexible: bool = parameter(
         'draw the links bent as the plant reports them on flexible_joint_states (the '
         "simulated plant's joints with its passive bending joints, all moving on /tf); false: "
