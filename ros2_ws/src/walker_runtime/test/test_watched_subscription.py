@@ -1,13 +1,15 @@
 """WatchedSubscription on a real rclpy node: silence, renewal, and a stream that still flows."""
 
 import math
+import time
 
 import pytest
 from ros_test_support import spin_executor_until
 from std_msgs.msg import Int32
 
 from walker_runtime.qos import COMMAND_QOS
-from walker_runtime.watched_subscription import WatchedSubscription
+from walker_runtime.spinning import TopicSampler
+from walker_runtime.watched_subscription import SampledSubscription, WatchedSubscription
 
 SPIN = 5.0  # [s] wall clock, for a message to come through on a loaded machine
 
@@ -130,3 +132,37 @@ def test_renew_and_destroy_act_at_once_and_log_nothing(node):
     watched.destroy()
     assert watched.subscription is None and list(node.subscriptions) == []
     assert logger.warnings == [] and watched.renewals == 0
+
+
+def _take_until(sampled, publisher, value):
+    """Publish ``value`` until a take of ``sampled`` has it (matching takes a while)."""
+    deadline = time.monotonic() + SPIN
+    while time.monotonic() < deadline:
+        publisher.publish(Int32(data=value))
+        time.sleep(0.05)
+        if value in [m.data for m in sampled.take()]:
+            return True
+    return False
+
+
+def test_a_sampled_subscription_is_made_anew_and_takes_again(node):
+    """A stream read in batches: a take counts as heard; renewed on the sampler's node."""
+    steady, logger = _Steady(), _Logger()
+    sampler = TopicSampler('sampled', node.get_namespace(), node.context)
+    try:
+        publisher = node.create_publisher(Int32, 'numbers', COMMAND_QOS)
+        sampled = SampledSubscription(sampler, Int32, 'numbers', COMMAND_QOS, after=1.0,
+                                      steady_now=steady, logger=logger)
+        assert sampled.take() == [] and sampled.last_heard is None
+        assert _take_until(sampled, publisher, 1)
+        assert sampled.last_heard == steady.now
+        first = sampled.subscription
+        steady.now += 1.0
+        assert sampled.check() and sampled.subscription is not first
+        assert list(sampler.node.subscriptions) == [sampled.subscription]
+        assert logger.warnings[0].startswith('numbers: silent for 1.0 s, subscription made anew')
+        assert _take_until(sampled, publisher, 2), 'the new subscription receives'
+        sampled.destroy()
+        assert sampled.subscription is None and list(sampler.node.subscriptions) == []
+    finally:
+        sampler.destroy()

@@ -263,10 +263,15 @@ class TopicSampler:
         Messages not yet taken are lost. Use it for a stream silent for long while its
         publisher may live on (see :class:`walker_runtime.core.resubscription.Resubscription`).
         """
-        message_type, qos, raw = self._made.pop(subscription)
+        message_type, qos, raw = self._made[subscription]
         topic = subscription.topic_name
-        self.node.destroy_subscription(subscription)
+        self.unsubscribe(subscription)
         return self.subscribe(message_type, topic, qos, raw)
+
+    def unsubscribe(self, subscription) -> None:
+        """Destroy ``subscription``; messages not yet taken are lost."""
+        del self._made[subscription]
+        self.node.destroy_subscription(subscription)
 
     def destroy(self) -> None:
         """Destroy the helper node and its subscriptions."""

@@ -14,7 +14,8 @@ What counts as heard, and when a silence counts at all, the caller may say: ``la
 the callback ran) and ``counts`` (a silence counts only while it returns True: a clock that
 runs past the newest message, peers that are heard from). The renewal itself is
 :class:`Renewal`'s, which holds nothing of a subscription: a publisher that must be made anew
-when its commands have no effect is another small subclass.
+when its commands have no effect is another small subclass; a subscription read on demand
+through a :class:`~walker_runtime.spinning.TopicSampler` is :class:`SampledSubscription`.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from rclpy.node import Node
 
 from walker_runtime.core.resubscription import Resubscription
 
-__all__ = ['Renewal', 'WatchedSubscription']
+__all__ = ['Renewal', 'WatchedSubscription', 'SampledSubscription']
 
 
 class Renewal:
@@ -194,4 +195,57 @@ class WatchedSubscription(Renewal):
     def _destroy(self) -> None:
         if self.subscription is not None:
             self._node.destroy_subscription(self.subscription)
+            self.subscription = None
+
+
+class SampledSubscription(Renewal):
+    """A :class:`~walker_runtime.spinning.TopicSampler` subscription watched for silence.
+
+    For a stream a node takes in batches (:meth:`take`) instead of a callback per message:
+    what a take returns counts as heard. The subscription lives on the sampler's helper node,
+    which no executor spins, so it may be made anew whatever executor spins the node itself
+    (the events executor registers a node's entities only once).
+
+    Parameters
+    ----------
+    sampler : walker_runtime.spinning.TopicSampler
+        Holds the subscription.
+    message_type : type
+        The message type.
+    topic : str
+        The topic, relative to the sampler's namespace.
+    qos : rclpy.qos.QoSProfile
+        The subscription's QoS (its depth: the messages kept between two takes).
+    after : float
+        [s] steady time of silence before a renewal (see :class:`Renewal`).
+    logger : rclpy logger
+        Where renewals are logged.
+    **watch
+        ``last_heard``, ``counts``, ``count_from_start``, ``steady_now``, ``label`` of
+        :class:`Renewal` (``label`` defaults to the topic).
+    """
+
+    def __init__(self, sampler, message_type: type, topic: str, qos, *, after: float, logger,
+                 label: str | None = None, **watch) -> None:
+        super().__init__(logger, label or topic, after, **watch)
+        self._sampler = sampler
+        self._message_type = message_type
+        self._topic = topic
+        self._qos = qos
+        self.subscription = None
+        self._create()
+
+    def take(self) -> list:
+        """Every message received since the last take, oldest first (heard when any)."""
+        taken = self._sampler.take(self.subscription)
+        if taken:
+            self.heard()
+        return taken
+
+    def _create(self) -> None:
+        self.subscription = self._sampler.subscribe(self._message_type, self._topic, self._qos)
+
+    def _destroy(self) -> None:
+        if self.subscription is not None:
+            self._sampler.unsubscribe(self.subscription)
             self.subscription = None
