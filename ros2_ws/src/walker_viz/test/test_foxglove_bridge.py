@@ -69,9 +69,11 @@ def _publish_stream(context):
 async def _receive(port: int, wanted: dict[str, int], deadline: float) -> dict[str, list]:
     """Subscribe to the ``wanted`` topics; decode until each has its count of messages."""
     import websockets
-    from mcap_ros2._dynamic import generate_dynamic
+    from mcap.records import Schema
+    from mcap_ros2.decoder import DecoderFactory
 
     decoded: dict[str, list] = {topic: [] for topic in wanted}
+    factory = DecoderFactory()
     async with websockets.connect(f'ws://127.0.0.1:{port}',
                                   subprotocols=['foxglove.sdk.v1', 'foxglove.websocket.v1'],
                                   max_size=None) as socket:
@@ -91,9 +93,10 @@ async def _receive(port: int, wanted: dict[str, int], deadline: float) -> dict[s
                     if channel['topic'] in wanted and channel['topic'] not in subscribed.values():
                         assert channel['encoding'] == 'cdr'
                         assert channel['schemaEncoding'] == 'ros2msg'
-                        schema_name = channel['schemaName']
-                        decoders[channel['id']] = generate_dynamic(
-                            schema_name, channel['schema'])[schema_name]
+                        decoders[channel['id']] = factory.decoder_for('cdr', Schema(
+                            id=channel['id'], name=channel['schemaName'],
+                            encoding=channel['schemaEncoding'],
+                            data=channel['schema'].encode()))
                         subscription = len(subscribed) + 1
                         subscribed[subscription] = channel['topic']
                         await socket.send(json.dumps({'op': 'subscribe', 'subscriptions': [
@@ -139,3 +142,22 @@ def test_a_websocket_client_decodes_tf_and_joint_states(rclpy_context, ros_env):
     t = anchor.transform.translation
     assert (t.x, t.y, t.z) == pytest.approx(tuple(seat), abs=1e-9)
     assert 'link_a_1' in moving  # a segment of the flexible link, beyond a bend
+
+
+@pytest.mark.parametrize('executable, arguments, words', [
+    ('viz_node', ['-p', 'viz.tf_rate:=0.0'], 'viz.tf_rate'),
+    ('foxglove_bridge', ['-p', 'port:=70000'], 'port'),
+    ('foxglove_bridge', ['-p', "topics:=['/bad name']"], 'topics'),
+])
+def test_bad_parameters_are_refused_at_start_in_one_line(ros_env, executable, arguments,
+                                                         words):
+    """Exit code 2 and one line naming the parameter, as every walker node refuses."""
+    from walker_runtime.node_main import EXIT_REFUSED
+
+    with NodeProcess([str(INSTALL / executable), '--ros-args', '-r', '__ns:=/walker',
+                      *arguments], ros_env, executable) as node:
+        assert node.process.wait(timeout=WAIT) == EXIT_REFUSED, node.output
+        output = node.output
+    lines = [line for line in output.splitlines() if 'refusing to start' in line]
+    assert len(lines) == 1 and words in lines[0], output
+    assert 'Traceback' not in output

@@ -23,12 +23,8 @@ import sys
 from typing import Any
 
 import foxglove
-import rclpy
 from foxglove.websocket import Capability
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
-from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
@@ -38,7 +34,8 @@ from walker_bag.core.message_definitions import message_definition
 from walker_bag.core.qos import subscription_policies
 from walker_bag.core.topic_selection import TopicSelection
 from walker_bag.recorder_node import message_class, offered_qos
-from walker_runtime.spinning import TopicSampler, init_node_process, spin_nodes
+from walker_runtime.node_main import run_node
+from walker_runtime.spinning import TopicSampler
 
 __all__ = ['FoxgloveBridge', 'DEFAULT_TOPICS', 'main']
 
@@ -163,22 +160,11 @@ class FoxgloveBridge(Node):
 
 
 def main(args=None) -> int:
-    """Run the bridge until shut down; exit code 1 when it cannot start."""
-    stop = init_node_process(args)
-    node = None
-    try:
-        node = FoxgloveBridge()
-        spin_nodes(node, stop=stop)
-    except (BridgeError, ParameterException) as error:
-        get_logger('foxglove_bridge').fatal(f'refusing to start: {error}')
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Run the bridge until shut down; exit codes of :mod:`walker_runtime.node_main`.
+
+    A port it cannot listen on is a refusal to start (2), as invalid parameters are.
+    """
+    return run_node(FoxgloveBridge, 'foxglove_bridge', args)
 
 
 if __name__ == '__main__':

@@ -11,10 +11,10 @@ A robot_state_publisher that also knows where the robot holds the truss. Thin la
   latched message) and ``markers`` (``visualization_msgs/MarkerArray``, latched: the truss,
   the step's target node and the planned tip path; every message holds them all);
 * subscribes to ``flexible_joint_states`` or ``joint_states`` (taken at the TF rate, not one
-  callback per state), ``gripper_states`` (which gripper is screwed into which node), ``phase``
-  and
-  ``control_mode`` (the supervisor's base gripper, and the step's target node) and
-  ``planned_trajectory`` (the path drawn).
+  callback per state; made anew when it falls silent while the clock runs on, see
+  :mod:`walker_runtime.watched_subscription`), ``gripper_states`` (which gripper is screwed
+  into which node), ``phase`` and ``control_mode`` (the supervisor's base gripper, and the
+  step's target node) and ``planned_trajectory`` (the path drawn).
 
 Under ``use_sim_time`` the TF timer runs on the simulated clock.
 """
@@ -24,10 +24,6 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-import rclpy
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
-from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -35,14 +31,15 @@ from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-from walker_runtime.node_parameters import declare_section
-from walker_core.parameter_schema import ParameterError
-from walker_runtime.qos import (
-    LATCHED_QOS, MODE_QOS, TF_QOS, TF_STATIC_QOS, latched_qos)
 from walker_core.robot_parameters import WalkerParameters
-from walker_runtime.spinning import TopicSampler, init_node_process, spin_nodes
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.urdf import robot_urdf
+from walker_runtime.core.resubscription import clock_ran_past
+from walker_runtime.node_main import run_node
+from walker_runtime.node_parameters import declare_section
+from walker_runtime.qos import LATCHED_QOS, MODE_QOS, TF_QOS, TF_STATIC_QOS, latched_qos
+from walker_runtime.spinning import TopicSampler
+from walker_runtime.watched_subscription import SampledSubscription
 from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase
 from walker_viz.core.base_anchor import BaseTracker
 from walker_viz.core.markers import (
@@ -61,6 +58,11 @@ _PHASE_QOS = latched_qos(1)
 #: runs ahead of this node in sim time.
 _STATES_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=64,
                          reliability=ReliabilityPolicy.BEST_EFFORT)
+#: [s] steady time the joint states may be silent, the clock running on, before their
+#: subscription is made anew (a restarted plant, a graph frozen and resumed)
+_RESUBSCRIBE_AFTER = 2.0
+#: [ns] how far the ROS clock must run past the newest joint state for a silence to count
+_CLOCK_AHEAD = 500_000_000
 
 
 class VizNode(Node):
@@ -81,6 +83,7 @@ class VizNode(Node):
                                          rotors=False))
         self.tracker = BaseTracker(self.tree, self.truss)
         self._angles: dict[str, float] | None = None
+        self._newest_state: int | None = None  # [ns] stamp of the newest joint state drawn
         self._target: str = ''
         self._path: np.ndarray | None = None
 
@@ -89,9 +92,11 @@ class VizNode(Node):
         self._markers = self.create_publisher(MarkerArray, 'markers', LATCHED_QOS)
         self._sampler = TopicSampler(f'{self.get_name()}_sampler', self.get_namespace(),
                                      self.context)
-        self._joint_states = self._sampler.subscribe(
-            JointState, 'flexible_joint_states' if self.settings.flexible else 'joint_states',
-            _STATES_QOS)
+        self._joint_states = SampledSubscription(
+            self._sampler, JointState,
+            'flexible_joint_states' if self.settings.flexible else 'joint_states', _STATES_QOS,
+            after=_RESUBSCRIBE_AFTER, logger=self.get_logger(),
+            counts=self._clock_ran_past_the_states)
         self.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
                                  LATCHED_QOS)
         self.create_subscription(StepPhase, 'phase', self._on_phase, _PHASE_QOS)
@@ -114,8 +119,13 @@ class VizNode(Node):
         super().destroy_node()
 
     # ------------------------------------------------------------------ TF
+    def _clock_ran_past_the_states(self) -> bool:
+        return clock_ran_past(self.get_clock().now().nanoseconds, self._newest_state,
+                              _CLOCK_AHEAD, self.get_parameter('use_sim_time').value)
+
     def _publish_tf(self) -> None:
-        states = self._sampler.take(self._joint_states)
+        states = self._joint_states.take()
+        self._joint_states.check()
         # the links' bends change within a period of their modes: every flexible sample is
         # drawn; straight links, the newest joint state
         for state in states if self.settings.flexible else states[-1:]:
@@ -130,6 +140,8 @@ class VizNode(Node):
                                           throttle_duration_sec=1.0)
                 continue
             self._angles = angles
+            self._newest_state = state.header.stamp.sec * 1_000_000_000 + \
+                state.header.stamp.nanosec
             root = self.tracker.root_pose(angles)
             if root is not None:
                 edges.append(JointTransform(WORLD_FRAME, self.tree.root, root))
@@ -189,22 +201,8 @@ class VizNode(Node):
 
 
 def main(args=None) -> int:
-    """Run the viz node until shut down; exit code 1 when it refuses to start."""
-    stop = init_node_process(args)
-    node = None
-    try:
-        node = VizNode()
-        spin_nodes(node, stop=stop)
-    except (ParameterError, ParameterException) as error:
-        get_logger('viz').fatal(f'refusing to start: {error}')
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Run the viz node until shut down; exit codes of :mod:`walker_runtime.node_main`."""
+    return run_node(VizNode, 'viz', args)
 
 
 if __name__ == '__main__':
