@@ -18,6 +18,7 @@ from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_sim.core.config import load_sim_parameters
 from walker_supervisor.core.sequencer import SupervisorParameters
 from walker_supervisor.core.teleop import TeleopParameters
+from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 
 
 def _file(tmp_path, changes=None, remove=()):
@@ -42,6 +43,7 @@ def test_every_section_is_what_the_nodes_build_from_the_same_file(defaults):
     assert defaults.supervisor == default.section(SupervisorParameters, 'supervisor.')
     assert defaults.teleop == default.section(TeleopParameters, 'teleop.')
     assert defaults.recorder == default.section(RecorderParameters, RECORDER_PREFIX)
+    assert defaults.viz == default.section(VizParameters, VIZ_PREFIX)
 
 
 def test_the_file_is_parsed_once_and_the_defaults_once_per_process(tmp_path, monkeypatch):
@@ -87,6 +89,7 @@ def test_overrides_apply_over_the_file(defaults):
     ({'timing.control_rate': math.nan}, (), "'timing.control_rate'"),
     ({}, ('planner.stream.lookahead',), "parameter 'planner.stream.lookahead' is missing"),
     ({}, ('recorder.directory',), "parameter 'recorder.directory' is missing"),
+    ({'viz.tf_rate': 0.0}, (), "parameter 'viz.tf_rate' = 0.0: below the minimum"),
     # a section's own rule
     ({'teleop.joint_speed': 1.2, 'teleop.max_joint_speed': 1.0}, (), 'teleop.joint_speed'),
     # the rules between sections

@@ -2,9 +2,9 @@
 
 import pytest
 
+from walker_bringup.core.configuration import load_configuration
 from walker_bringup.graph import several_walkers, walker_graph
 from walker_bringup.run import REALTIME_PRIORITY, _graph_parameters, parse_arguments
-from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 
 
 def test_the_graph_publishes_tf_and_markers_and_records_them():
@@ -29,7 +29,7 @@ def test_foxglove_is_served_only_when_asked_on_the_port_asked():
 
 
 def test_each_walker_of_several_has_its_own_tf_and_records_it():
-    graphs = several_walkers(default_parameter_file(), 2, sim_time=True, record=True,
+    graphs = several_walkers(load_configuration(), 2, sim_time=True, record=True,
                              bag_dir='/tmp/bags')
     first, second = (nodes for _, _, nodes in graphs)
     assert not any(dict(n.remaps).get('/tf') for n in first)  # the single walker's graph
@@ -41,7 +41,7 @@ def test_each_walker_of_several_has_its_own_tf_and_records_it():
 
 def test_real_time_priority_is_asked_for_only_with_realtime():
     """An idle SCHED_FIFO graph starved the machine's own tools: never by default."""
-    assert load_walker_parameters(default_parameter_file()).timing.realtime_priority == 0
+    assert load_configuration().walker.timing.realtime_priority == 0
     assert not any('realtime' in name for name, _ in _graph_parameters(parse_arguments([])))
     asked = _graph_parameters(parse_arguments(['--realtime']))
     assert ('timing.realtime_priority', str(REALTIME_PRIORITY)) in asked

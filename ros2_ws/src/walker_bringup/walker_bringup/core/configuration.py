@@ -31,6 +31,7 @@ from walker_supervisor.core.parameter_rules import (
     check_against_walker as check_supervisor_against_walker)
 from walker_supervisor.core.sequencer import SupervisorParameters
 from walker_supervisor.core.teleop import TeleopParameters
+from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 
 __all__ = ['WalkerConfiguration', 'load_configuration', 'check_cross_section_rules']
 
@@ -57,6 +58,8 @@ class WalkerConfiguration:
         ``teleop.*`` (the supervisor's operator commands).
     recorder : RecorderParameters
         ``recorder.*``.
+    viz : VizParameters
+        ``viz.*`` (the TF and marker publisher's).
     values : mapping
         The flat values all sections were built from (the file's, then the overrides).
     """
@@ -69,6 +72,7 @@ class WalkerConfiguration:
     supervisor: SupervisorParameters
     teleop: TeleopParameters
     recorder: RecorderParameters
+    viz: VizParameters
     values: Mapping[str, Any]
 
 
@@ -119,6 +123,7 @@ def load_configuration(path: str | Path | None = None,
         supervisor=file.section(SupervisorParameters, 'supervisor.'),
         teleop=file.section(TeleopParameters, 'teleop.'),
         recorder=file.section(RecorderParameters, RECORDER_PREFIX),
+        viz=file.section(VizParameters, VIZ_PREFIX),
         values=file.values)
     check_cross_section_rules(configuration)
     return configuration
