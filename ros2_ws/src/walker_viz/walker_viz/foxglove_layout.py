@@ -16,6 +16,7 @@ import json
 import sys
 
 import foxglove.layouts as fl
+from walker_msgs.msg import ControlMode, StepPhase
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_viz.core.robot_tree import WORLD_FRAME
@@ -26,10 +27,12 @@ _PHASES = ('IDLE', 'EXTRACTION', 'COARSE', 'FINE', 'INSERTION', 'SAFE_HOLD')
 _MODES = ('OFF', 'HOLD', 'COARSE', 'FINE')
 
 
-def _states(names: tuple[str, ...]) -> fl.StateTransitionsDiscreteCustomStates:
+def _states(message: type,
+            names: tuple[str, ...]) -> fl.StateTransitionsDiscreteCustomStates:
+    """Label each constant of ``message`` named in ``names`` (its value) with its name."""
     return fl.StateTransitionsDiscreteCustomStates(states=[
-        fl.StateTransitionsDiscreteCustomState(value=str(code), label=name)
-        for code, name in enumerate(names)])
+        fl.StateTransitionsDiscreteCustomState(value=str(getattr(message, name)), label=name)
+        for name in names])
 
 
 def walker_layout(namespace: str = '/walker') -> fl.Layout:
@@ -55,11 +58,11 @@ def walker_layout(namespace: str = '/walker') -> fl.Layout:
                                           fl.StateTransitionsSeries(
                                               value=f'{ns}/phase.phase', label='phase',
                                               timestamp_method='headerStamp',
-                                              custom_states=_states(_PHASES)),
+                                              custom_states=_states(StepPhase, _PHASES)),
                                           fl.StateTransitionsSeries(
                                               value=f'{ns}/control_mode.mode', label='mode',
                                               timestamp_method='headerStamp',
-                                              custom_states=_states(_MODES))]))
+                                              custom_states=_states(ControlMode, _MODES))]))
     return fl.Layout(content=fl.SplitContainer(direction='row', items=[
         fl.SplitItem(proportion=3, content=scene),
         fl.SplitItem(proportion=2, content=fl.SplitContainer(direction='column', items=[
