@@ -1,7 +1,5 @@
 """The workspace's tf2_msgs: Jazzy's interfaces and type hashes, skipped under a ROS install.
 
-Skipped where a ROS install provides its own.
-
 ``/tf`` and ``/tf_static`` must carry the very type every ROS tool expects: a subscriber of
 another type hash (RViz, tf2_ros, ``ros2 bag``) would not match our publishers on a full Jazzy
 install. The expected hash is not computed here from our own files (that would only check the
@@ -111,9 +109,16 @@ def test_an_underlay_without_tf2_msgs_builds_ours(tmp_path: Path) -> None:
     assert (workspace / 'install' / 'tf2_msgs').is_dir()
 
 
-def test_this_set_up_builds_ours_because_the_wheels_lack_tf2_msgs() -> None:
-    underlay = os.environ.get('VIRTUAL_ENV') or str(REPO_ROOT / '.venv')
+def test_this_set_up_builds_ours_where_the_underlay_lacks_tf2_msgs() -> None:
     env = _walker_env()
-    if env.underlay_provides('tf2_msgs', [underlay]):
+    venv = os.environ.get('VIRTUAL_ENV') or str(REPO_ROOT / '.venv')
+    if env.underlay_provides('tf2_msgs', [venv]):
         pytest.fail('the virtual environment provides tf2_msgs now: drop the stand-in')
-    assert not (REPO_ROOT / 'ros2_ws' / 'src' / 'tf2_msgs' / 'COLCON_IGNORE').exists()
+    workspace = str(REPO_ROOT / 'ros2_ws' / 'install')
+    underlay = [prefix for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep)
+                if prefix and not prefix.startswith(workspace)]
+    ignored = (REPO_ROOT / 'ros2_ws' / 'src' / 'tf2_msgs' / 'COLCON_IGNORE').exists()
+    if env.underlay_provides('tf2_msgs', underlay):  # a full ROS install sourced beneath
+        assert ignored, "the underlay's tf2_msgs must not be shadowed by the workspace copy"
+    else:
+        assert not ignored, 'no underlay provides tf2_msgs: the workspace must build it'
