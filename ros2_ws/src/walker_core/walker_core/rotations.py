@@ -1,6 +1,6 @@
 """Rotations as quaternions ``(x, y, z, w)``, the order ROS messages and pybullet use.
 
-Plain numpy, no rclpy: the plant's poses, the TF tree and the walk report share these.
+Plain numpy, no rclpy: the plant's poses, the TF tree and the operator's status share these.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-__all__ = ['quaternion_from_matrix', 'matrix_from_quaternion']
+__all__ = ['quaternion_from_matrix', 'rotation_from_quaternion']
 
 
 def quaternion_from_matrix(rotation: np.ndarray) -> np.ndarray:
@@ -32,8 +32,8 @@ def quaternion_from_matrix(rotation: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
-def matrix_from_quaternion(translation, quaternion) -> np.ndarray:
-    """Return the transform (4x4) of a translation [m] and a quaternion ``(x, y, z, w)``.
+def rotation_from_quaternion(quaternion) -> np.ndarray:
+    """Return the rotation (3x3) of a quaternion ``(x, y, z, w)``, normalised here.
 
     Raises
     ------
@@ -45,10 +45,7 @@ def matrix_from_quaternion(translation, quaternion) -> np.ndarray:
     if not norm > 0.0:
         raise ValueError('a rotation quaternion must not be zero')
     x, y, z, w = x / norm, y / norm, z / norm, w / norm
-    transform = np.eye(4)
-    transform[:3, :3] = [
+    return np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    transform[:3, 3] = [float(v) for v in translation]
-    return transform
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])

@@ -11,7 +11,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics, invert_transform
 from walker_core.robot_parameters import load_walker_parameters
 from walker_core.urdf import GRIPPER_LINKS, description_urdf
-from walker_core.rotations import matrix_from_quaternion, quaternion_from_matrix
+from walker_core.rotations import quaternion_from_matrix, rotation_from_quaternion
 from walker_viz.core.robot_tree import RobotTree
 
 PARAMS = load_walker_parameters()
@@ -74,4 +74,9 @@ def test_quaternions_round_trip(theta):
     pose = TREE.link_in_root('gripper_b', angles_of(theta))
     q = quaternion_from_matrix(pose)
     assert math.isclose(np.linalg.norm(q), 1.0)
-    assert np.allclose(matrix_from_quaternion(pose[:3, 3], q), pose, atol=1e-12)
+    assert np.allclose(rotation_from_quaternion(q), pose[:3, :3], atol=1e-12)
+
+
+def test_a_zero_quaternion_is_refused():
+    with pytest.raises(ValueError, match='must not be zero'):
+        rotation_from_quaternion([0.0, 0.0, 0.0, 0.0])

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from walker_core.rotations import rotation_from_quaternion
 from walker_core.text import millimetres
 from walker_core.truss import Truss
 
@@ -92,16 +93,6 @@ class StatusView:
     mode_base: str = ''
     grippers: tuple[GripperView, ...] = ()
     joints: tuple[tuple[str, float], ...] | None = None
-
-
-def rotation_from_quaternion(quaternion: Sequence[float]) -> np.ndarray:
-    """Rotation matrix (3x3) of a quaternion ``(x, y, z, w)`` (normalised here)."""
-    x, y, z, w = np.asarray(quaternion, dtype=float) / np.linalg.norm(quaternion)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
 
 
 def hole_offset(position: Sequence[float], orientation: Sequence[float],
