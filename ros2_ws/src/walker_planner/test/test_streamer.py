@@ -34,7 +34,7 @@ def streamer(sent):
 
 
 def ramp(duration=0.02, start=START):
-    """A joint-1 ramp of 0.1 rad over ``duration`` seconds."""
+    """Return a joint-1 ramp of 0.1 rad over ``duration`` seconds."""
     times = np.array([0.0, duration])
     positions = np.array([start, start + [0.1, 0, 0, 0, 0]])
     velocity = np.zeros((2, 5))
