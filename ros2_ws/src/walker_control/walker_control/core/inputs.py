@@ -21,6 +21,7 @@ from __future__ import annotations
 import bisect
 import dataclasses
 import math
+from typing import NamedTuple
 
 from walker_core.robot_parameters import Drive
 
@@ -32,9 +33,8 @@ class SetpointError(ValueError):
     """A setpoint that must not be followed (non-finite or outside the joint's limits)."""
 
 
-@dataclasses.dataclass(frozen=True)
-class Setpoint:
-    """Desired motion of one joint.
+class Setpoint(NamedTuple):
+    """Desired motion of one joint (immutable).
 
     Attributes
     ----------

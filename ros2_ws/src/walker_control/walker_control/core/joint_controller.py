@@ -54,6 +54,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 from walker_core.dynamics import RigidModel
 from walker_core.joint_roles import role_of_joint, role_permutation, validate_gripper
@@ -84,9 +85,8 @@ class MissingAccelerationError(MeasurementError):
     """Acceleration feedback is on but no measured acceleration was given."""
 
 
-@dataclasses.dataclass(frozen=True)
-class Measurement:
-    """The joint's measured state, and the configuration of the whole robot.
+class Measurement(NamedTuple):
+    """The joint's measured state, and the configuration of the whole robot (immutable).
 
     Attributes
     ----------
@@ -107,8 +107,7 @@ class Measurement:
     joint_positions: Sequence[float]
 
 
-@dataclasses.dataclass(frozen=True)
-class ControlOutput:
+class ControlOutput(NamedTuple):
     """One controller sample: the command and every term, for the state message and plots.
 
     Torques in N*m, angles in rad, rates in rad/s. ``feedforward`` to ``acceleration_feedback``
@@ -558,7 +557,7 @@ class JointController:
             return None
         self._relaxing_for = elapsed + dt
         output = self._off(measurement)
-        output = dataclasses.replace(output, effort=dither.torque(elapsed), mode=Mode.HOLD)
+        output = output._replace(effort=dither.torque(elapsed), mode=Mode.HOLD)
         self._last_output = output
         return output
 
