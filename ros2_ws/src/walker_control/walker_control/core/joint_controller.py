@@ -53,10 +53,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import operator
 from collections.abc import Sequence
 from typing import NamedTuple
 
-from walker_core.dynamics import RigidModel
+from walker_core.dynamics import RigidModel, role_inertia
 from walker_core.joint_roles import role_of_joint, role_permutation, validate_gripper
 from walker_control.core.accel_feedback import acceleration_feedback_torque
 from walker_control.core.config import ControllerSettings
@@ -184,9 +185,8 @@ class JointController:
 
     def __init__(self, settings: ControllerSettings, joint_name: str,
                  base_gripper: str = 'a') -> None:
-        role_of_joint(joint_name, validate_gripper(base_gripper))
         self._joint_name = joint_name
-        self._base = base_gripper
+        self._set_base(validate_gripper(base_gripper))
         self._settings = settings
         self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
         self._commanded = Mode.HOLD
@@ -225,7 +225,19 @@ class JointController:
     @property
     def role(self) -> int:
         """Role J1..J5 the joint plays for the current base."""
-        return role_of_joint(self._joint_name, self._base)
+        return self._role
+
+    def _set_base(self, base: str) -> None:
+        """Take ``base`` as the base gripper: the joint's role and the role order of the joints.
+
+        Raises
+        ------
+        ValueError
+            For an unknown joint.
+        """
+        self._role = role_of_joint(self._joint_name, base)
+        self._base = base
+        self._in_role_order = operator.itemgetter(*role_permutation(base))
 
     @property
     def settings(self) -> ControllerSettings:
@@ -279,7 +291,8 @@ class JointController:
             self._relaxing_for = 0.0
         elif mode != Mode.HOLD:  # the same HOLD again leaves a relaxation running
             self._relaxing_for = None
-        self._base = base
+        if base != self._base:
+            self._set_base(base)
         self._commanded = mode
         self._hold_reason = ''
 
@@ -356,7 +369,8 @@ class JointController:
             received = commanded = Setpoint(position=self._hold_position)
         reference = self._shape(cached.shaping, transition, measurement, commanded, periods)
 
-        inertia = self._feedforward.inertia(role, configuration)
+        # the configuration is checked (_check_measurement): the model's term directly
+        inertia = role_inertia(configuration, self._feedforward.model, role)
         limit = cached.torque_limit
         self._pid.set_gains(PidGains(p=inertia * cached.kp, i=inertia * cached.ki,
                                      d=inertia * cached.kd, output_limit=limit,
@@ -426,16 +440,17 @@ class JointController:
         """
         positions = measurement.joint_positions
         acceleration = measurement.acceleration
+        isfinite = math.isfinite
         try:
-            valid = (math.isfinite(measurement.position) and math.isfinite(measurement.velocity)
-                     and (acceleration is None or math.isfinite(acceleration))
-                     and len(positions) == 5 and all(math.isfinite(q) for q in positions))
+            valid = (isfinite(measurement.position) and isfinite(measurement.velocity)
+                     and (acceleration is None or isfinite(acceleration))
+                     and len(positions) == 5 and all(map(isfinite, positions)))
         except TypeError:
             valid = False
         if not valid:
             raise MeasurementError(f'{self._joint_name}: measurement refused, not finite or not '
                                    f'5 joint positions: {measurement!r}')
-        return tuple(float(positions[i]) for i in role_permutation(self._base))
+        return tuple(map(float, self._in_role_order(positions)))
 
     def _periods(self, dt: float) -> int:
         """Control periods a sample of ``dt`` seconds spans (1 to ``_MAX_CATCH_UP_PERIODS``).
