@@ -13,6 +13,7 @@ Stamps are integer nanoseconds.
 
 from __future__ import annotations
 
+import itertools
 import struct
 from collections.abc import Sequence
 
@@ -24,26 +25,28 @@ _SIZES = {'b': 1, 'B': 1, '?': 1, 'i': 4, 'I': 4, 'd': 8}
 
 
 class _Layout:
-    """A CDR layout built field by field: a struct format, and which values are constant."""
+    """A CDR layout built field by field: its constant parts packed once, its variable runs.
+
+    Each field is a ``struct`` code (with the padding that aligns it before it) and either a
+    constant value or None (a value given at every message). Consecutive constant fields are
+    packed into bytes at once; consecutive variable fields become one :class:`struct.Struct`.
+    """
 
     def __init__(self) -> None:
-        self.format = '<'
         self.offset = 0  # from the start of the data (after the encapsulation header)
-        self.constants: list = []  # values in order; None marks a variable field
+        self.fields: list[tuple[str, object]] = []
 
-    def _align(self, size: int) -> None:
+    def _align(self, size: int) -> str:
         pad = -self.offset % size
-        if pad:
-            self.format += f'{pad}x'
-            self.offset += pad
+        self.offset += pad
+        return f'{pad}x' if pad else ''
 
     def primitive(self, code: str, value=None) -> '_Layout':
         """Add a primitive (``struct`` code); ``value`` makes it constant."""
         size = _SIZES[code]
-        self._align(size)
-        self.format += code
+        pad = self._align(size)
         self.offset += size
-        self.constants.append(value)
+        self.fields.append((pad + code, value))
         return self
 
     def primitives(self, code: str, count: int) -> '_Layout':
@@ -56,9 +59,8 @@ class _Layout:
         """Add a constant string (length with the terminating NUL, then the bytes)."""
         data = text.encode() + b'\x00'
         self.primitive('I', len(data))
-        self.format += f'{len(data)}s'
         self.offset += len(data)
-        self.constants.append(data)
+        self.fields.append((f'{len(data)}s', data))
         return self
 
     def stamp(self) -> '_Layout':
@@ -66,19 +68,31 @@ class _Layout:
         return self.primitive('i').primitive('I')
 
     def packer(self):
-        """Return ``pack(values) -> bytes``: the variable fields' values, in order."""
-        packed = struct.Struct(self.format)
-        constants = self.constants
-        slots = [i for i, value in enumerate(constants) if value is None]
-        if slots == list(range(len(slots))):  # every variable first: no merging needed
-            tail = tuple(constants[len(slots):])
-            return lambda values: _HEADER + packed.pack(*values, *tail)
-        template = list(constants)
+        """Return ``pack(*values) -> bytes``: the variable fields' values, in order."""
+        pieces: list = []  # bytes (constant) or (Struct, count) (variable run)
+        for constant, run in itertools.groupby(self.fields, key=lambda f: f[1] is not None):
+            run = list(run)
+            codes = '<' + ''.join(code for code, _ in run)
+            if constant:
+                pieces.append(struct.pack(codes, *(value for _, value in run)))
+            else:
+                pieces.append((struct.Struct(codes).pack, len(run)))
+        if len(pieces) == 1:
+            only = pieces[0][0]
+            return lambda *values: _HEADER + only(*values)
+        plan = tuple(pieces)
 
-        def pack(values: Sequence) -> bytes:
-            for slot, value in zip(slots, values, strict=True):
-                template[slot] = value
-            return _HEADER + packed.pack(*template)
+        def pack(*values) -> bytes:
+            out = [_HEADER]
+            start = 0
+            for piece in plan:
+                if type(piece) is bytes:
+                    out.append(piece)
+                else:
+                    packer, count = piece
+                    out.append(packer(*values[start:start + count]))
+                    start += count
+            return b''.join(out)
         return pack
 
 
@@ -115,7 +129,7 @@ class JointStateEncoder:
     def encode(self, stamp: int, positions: Sequence[float], velocities: Sequence[float],
                efforts: Sequence[float]) -> bytes:
         """Return the message stamped ``stamp`` [ns]: angles [rad], speeds [rad/s], efforts."""
-        return self._pack((*_split(stamp), *positions, *velocities, *efforts))
+        return self._pack(*_split(stamp), *positions, *velocities, *efforts)
 
 
 class PoseEncoder:
@@ -133,7 +147,7 @@ class PoseEncoder:
     def encode(self, stamp: int, position: Sequence[float], orientation: Sequence[float]
                ) -> bytes:
         """Return the pose stamped ``stamp`` [ns]: position [m], orientation ``(x, y, z, w)``."""
-        return self._pack((*_split(stamp), *position, *orientation))
+        return self._pack(*_split(stamp), *position, *orientation)
 
 
 class ControllerStateEncoder:
@@ -159,4 +173,4 @@ class ControllerStateEncoder:
     def encode(self, stamp: int, role: int, mode: int, values: Sequence[float],
                saturated: bool, stale: bool) -> bytes:
         """Return the state stamped ``stamp`` [ns]; ``values`` in the order of :attr:`FLOATS`."""
-        return self._pack((*_split(stamp), role, mode, *values, saturated, stale))
+        return self._pack(*_split(stamp), role, mode, *values, saturated, stale)

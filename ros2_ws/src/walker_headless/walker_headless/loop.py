@@ -95,6 +95,7 @@ class RobotLoop:
         self.velocities: list[float] = self.state.velocity.tolist()  # [rad/s]
         self.tracking = False
         self.poses_out = False  # the gripper poses went out with the state in self.state
+        self.grippers_changed = False  # and the gripper states (they changed)
         #: commands the drives refused (non-finite) and clamped at the torque limit, so far
         self.counts = {'refused': 0, 'saturated': 0}
 
@@ -123,7 +124,8 @@ class RobotLoop:
         if recording is not None and self.poses_out:
             recording.poses(stamp, state)
         key = gripper_states_key(state)
-        if key != self._gripper_key:
+        self.grippers_changed = key != self._gripper_key
+        if self.grippers_changed:
             self._gripper_key = key
             if recording is not None:
                 recording.gripper_states(stamp, state)

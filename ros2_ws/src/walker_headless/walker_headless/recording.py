@@ -26,7 +26,7 @@ from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 from walker_headless.cdr import (
     ControllerStateEncoder, JointStateEncoder, PoseEncoder, clock_cdr)
 
-__all__ = ['WalkRecording', 'TOPICS']
+__all__ = ['WalkRecording', 'TOPICS', 'CHUNK_SIZE']
 
 _SENSOR = QosProfile('best_effort', 'volatile', 'keep_last', 1)
 _COMMAND = QosProfile('reliable', 'volatile', 'keep_last', 10)
@@ -54,6 +54,10 @@ TOPICS = {
     '/clock': ('rosgraph_msgs/msg/Clock', _CLOCK),
 }
 _TRUSS_FRAME = 'truss'
+#: [bytes] The bag's chunk size: larger than the graph recorder's (768 KiB), since every chunk
+#: written out also rewrites ``metadata.yaml`` (crash safety), which costs more CPU than the
+#: thousands of messages of a chunk; a walk's bag is a few of these. Readers do not care.
+CHUNK_SIZE = 8 * 1024 * 1024
 _NS_PER_S = 1_000_000_000
 
 
@@ -81,7 +85,8 @@ class WalkRecording:
         self._types = self._store.types
         self.names = {relative: relative if relative.startswith('/')
                       else f'{namespace.rstrip("/")}/{relative}' for relative in TOPICS}
-        self.writer = BagWriter(bag_dir, custom_data={'clock': 'sim_time'})
+        self.writer = BagWriter(bag_dir, max_chunk_size=CHUNK_SIZE,
+                                custom_data={'clock': 'sim_time'})
         try:
             for relative, (type_name, qos) in TOPICS.items():
                 self.writer.add_topic(

@@ -161,11 +161,12 @@ class WalkDriver:
         ended = self.executor.take_stream_end()
         if ended is not None:
             self._handle([ended])
-        grippers = self.grippers
-        if grippers != self._grippers_seen:
-            changed = bool(self._grippers_seen)
-            self._grippers_seen = grippers
-            self._tick_due = self._tick_due or changed
+        if loop.grippers_changed:  # a gripper_states message: a change of mode decides now
+            grippers = self.grippers
+            if grippers != self._grippers_seen:
+                changed = bool(self._grippers_seen)
+                self._grippers_seen = grippers
+                self._tick_due = self._tick_due or changed
         if loop.stamp >= self._next_tick:  # the timer: on its grid of simulated time
             self._tick_due = True
             while self._next_tick <= loop.stamp:
