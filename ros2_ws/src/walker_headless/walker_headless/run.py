@@ -102,10 +102,13 @@ def _summarise(result: WalkResult, out: Path, rate: float) -> int:
     """Print the per-step table and the outcome, write ``summary.json``; return the code."""
     rows = rows_from_reports(result.reports)
     print(format_table(rows) if rows else '[walker] no step was taken')
-    speed = result.sim_time / result.wall_time if result.wall_time > 0 else float('nan')
+    def speed(seconds: float) -> float:
+        return result.sim_time / seconds if seconds > 0 else float('nan')
     print(f'[walker] loop: headless, lock-stepped by calls, {result.periods} periods of '
           f'{1e3 / rate:g} ms; {result.sim_time:.1f} s simulated in {result.wall_time:.1f} s '
-          f'({speed:.1f} x real time)')
+          f'of wall time ({speed(result.wall_time):.1f} x real time), the loop '
+          f'{result.cpu_time:.1f} s of CPU ({speed(result.cpu_time):.1f} x real time on one '
+          'core)')
     write_json(rows, out / 'summary.json',
                {'target': result.target, 'reached': result.reached,
                 'message': result.message, 'path': list(result.path),

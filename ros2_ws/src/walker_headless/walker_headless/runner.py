@@ -62,7 +62,10 @@ class WalkResult:
     periods : int
         Control periods simulated.
     wall_time : float
-        Wall time the loop took [s] (not part of the walk's outcome).
+        Wall time the walk took, set-up included [s] (not part of the walk's outcome).
+    cpu_time : float
+        CPU time of this process in the loop, from the walk's start to its end [s] (not part
+        of the walk's outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
     """
 
     target: str
@@ -76,6 +79,7 @@ class WalkResult:
     sim_time: float
     periods: int
     wall_time: float
+    cpu_time: float = 0.0
 
 
 def walk(sections: Sections, target: str, recording=None,
@@ -117,6 +121,7 @@ def walk(sections: Sections, target: str, recording=None,
             driver.start_walk(target)
         except WalkRefusedError as error:
             return _result(target, driver, loop, started, str(error))
+        cpu_started = time.process_time()
         diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
         next_diagnostics = 0
         periods = 0
@@ -135,7 +140,9 @@ def walk(sections: Sections, target: str, recording=None,
             if periods % _WALL_CHECK_PERIODS == 0 and time.monotonic() - started > wall_timeout:
                 message = f'the walk did not end within {wall_timeout:g} s of wall time'
                 break
-        return _result(target, driver, loop, started, message)
+        result = _result(target, driver, loop, started, message)
+        result.cpu_time = time.process_time() - cpu_started
+        return result
     finally:
         loop.close()
 
