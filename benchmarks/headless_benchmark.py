@@ -165,7 +165,7 @@ def profile_walk(sections, target: str, count: int = 20) -> list[dict]:
 
 
 def graph_windows(seconds: float, scratch: Path) -> dict:
-    """The sim-time graph walking, composed and as processes: CPU per simulated second."""
+    """Measure the sim-time graph walking, composed and as processes: CPU per sim second."""
     from run_benchmarks import Suite
 
     suite = Suite(argparse.Namespace(quick=False, soak=None), scratch)
@@ -258,7 +258,7 @@ def _print_table(document: dict) -> None:
         if k == 0:
             print('  '.join('-' * w for w in widths))
     same = all(run['same_final_state'] for run in document['plant_alone']['runs'])
-    print(f'the replay on the plant alone ends in the walk\'s final state: {same}')
+    print(f"the replay on the plant alone ends in the walk's final state: {same}")
     for entry in document.get('profile', [])[:12]:
         print(f'  {100 * entry["own_share"]:5.1f} %  {entry["function"]}')
 
