@@ -224,8 +224,11 @@ class CommandExecutor:
             result = plan(planner_request(request, self.kinematics), self._planning)
         except PlanningError as error:
             return PlanAnswer(False, str(error))
+        trajectory = as_sent(result.times, *result.samples)
+        if self.loop.recording is not None:  # the node publishes every plan it answers
+            self.loop.recording.planned_trajectory(self.loop.stamp, trajectory)
         return PlanAnswer(True, '', result.duration, result.time_optimal_bound or 0.0,
-                          as_sent(result.times, *result.samples))
+                          trajectory)
 
     def _prepare(self, request: TrajectoryRequest) -> list:
         answer = self.plan_now(request)
@@ -277,5 +280,6 @@ class CommandExecutor:
         except PlanningError as error:  # the goal is accepted, then aborted
             return [started, StreamEnded(False, str(error))]
         if self.loop.recording is not None:
-            self.loop.recording.planned_trajectory(self._stream.stream.origin, goal)
+            self.loop.recording.planned_trajectory(self.loop.stamp, goal,
+                                                   self._stream.stream.origin)
         return [started]

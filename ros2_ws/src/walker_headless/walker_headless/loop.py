@@ -88,6 +88,9 @@ class RobotLoop:
         self.recording = recording
         self._clock_rate = StampedRate(sections.sim.clock_rate)
         self._pose_rate = StampedRate(sections.sim.pose_rate)
+        # the node's heartbeat of the gripper states runs on the steady clock; here on the
+        # only clock there is
+        self._heartbeat = StampedRate(sections.sim.gripper_state_rate)
         self._gripper_key: tuple | None = None
         self.stamp = 0  # [ns] of the state in self.state
         self.state: PlantState = self.plant.state()
@@ -125,10 +128,9 @@ class RobotLoop:
             recording.poses(stamp, state)
         key = gripper_states_key(state)
         self.grippers_changed = key != self._gripper_key
-        if self.grippers_changed:
-            self._gripper_key = key
-            if recording is not None:
-                recording.gripper_states(stamp, state)
+        if self._heartbeat.due(stamp, force=self.grippers_changed) and recording is not None:
+            recording.gripper_states(stamp, state)
+        self._gripper_key = key
         if all(map(math.isfinite, self.positions)):  # the planner takes finite states only
             self.streamer.on_state(stamp, state.position)
 

@@ -28,30 +28,29 @@ from walker_headless.cdr import (
 
 __all__ = ['WalkRecording', 'TOPICS', 'CHUNK_SIZE']
 
-_SENSOR = QosProfile('best_effort', 'volatile', 'keep_last', 1)
-_COMMAND = QosProfile('reliable', 'volatile', 'keep_last', 10)
-_LATCHED = QosProfile('reliable', 'transient_local', 'keep_last', 1)
-_MODE = QosProfile('reliable', 'transient_local', 'keep_last', 10)
-_HISTORY = QosProfile('reliable', 'transient_local', 'keep_last', 100)
-_CLOCK = QosProfile('reliable', 'volatile', 'keep_last', 1)
+# What the graph's recorder stores of each publisher's QoS: its reliability and durability as
+# discovered (a remote publisher's history and depth are not discovered: unknown, 0)
+_SENSOR = QosProfile('best_effort', 'volatile')
+_RELIABLE = QosProfile('reliable', 'volatile')
+_LATCHED = QosProfile('reliable', 'transient_local')
 
 #: The recorded topics (relative to the namespace, or absolute), their types and the QoS their
-#: publishers offer (walker_core.qos, docs/architecture.md).
+#: publishers offer (walker_core.qos, docs/architecture.md), as the recorder stores it.
 TOPICS = {
     'joint_states': ('sensor_msgs/msg/JointState', _SENSOR),
     'tip_pose': ('geometry_msgs/msg/PoseStamped', _SENSOR),
     'gripper_a_pose': ('geometry_msgs/msg/PoseStamped', _SENSOR),
     'gripper_b_pose': ('geometry_msgs/msg/PoseStamped', _SENSOR),
     'gripper_states': ('walker_msgs/msg/GripperStates', _LATCHED),
-    'phase': ('walker_msgs/msg/StepPhase', _HISTORY),
-    'step_reports': ('walker_msgs/msg/StepReport', _HISTORY),
-    'control_mode': ('walker_msgs/msg/ControlMode', _MODE),
-    **{f'controllers/{joint}/state': ('walker_msgs/msg/ControllerState', _COMMAND)
+    'phase': ('walker_msgs/msg/StepPhase', _LATCHED),
+    'step_reports': ('walker_msgs/msg/StepReport', _LATCHED),
+    'control_mode': ('walker_msgs/msg/ControlMode', _LATCHED),
+    **{f'controllers/{joint}/state': ('walker_msgs/msg/ControllerState', _RELIABLE)
        for joint in PHYSICAL_JOINT_NAMES},
     'planned_trajectory': ('trajectory_msgs/msg/JointTrajectory', _LATCHED),
     'robot_description': ('std_msgs/msg/String', _LATCHED),
-    '/diagnostics': ('diagnostic_msgs/msg/DiagnosticArray', _COMMAND),
-    '/clock': ('rosgraph_msgs/msg/Clock', _CLOCK),
+    '/diagnostics': ('diagnostic_msgs/msg/DiagnosticArray', _RELIABLE),
+    '/clock': ('rosgraph_msgs/msg/Clock', _RELIABLE),
 }
 _TRUSS_FRAME = 'truss'
 #: [bytes] The bag's chunk size: larger than the graph recorder's (768 KiB), since every chunk
@@ -190,8 +189,12 @@ class WalkRecording:
         self._serialize('step_reports', self._types['walker_msgs/msg/StepReport'](
             header=self._header(record.stamp), **fields), record.stamp)
 
-    def planned_trajectory(self, stamp: int, trajectory) -> None:
-        """``planned_trajectory``: a stream's trajectory, stamped with its time 0 [ns]."""
+    def planned_trajectory(self, stamp: int, trajectory, start: int = 0) -> None:
+        """``planned_trajectory`` at ``stamp`` [ns]: a plan, ``start`` its time 0 [ns].
+
+        The planner publishes each plan it is asked for (unscheduled: ``start`` 0) and each
+        trajectory it begins to stream, stamped with the time its first point applies.
+        """
         t = self._types
         points = []
         for k, time in enumerate(trajectory.times):
@@ -204,7 +207,7 @@ class WalkRecording:
                 time_from_start=t['builtin_interfaces/msg/Duration'](
                     sec=total // _NS_PER_S, nanosec=total % _NS_PER_S)))
         self._serialize('planned_trajectory', t['trajectory_msgs/msg/JointTrajectory'](
-            header=self._header(stamp), joint_names=list(PHYSICAL_JOINT_NAMES),
+            header=self._header(start), joint_names=list(PHYSICAL_JOINT_NAMES),
             points=points), stamp)
 
     def robot_description(self, stamp: int, urdf: str) -> None:
