@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics
 from walker_planner.core.chaining import chain
@@ -69,9 +71,13 @@ def as_sent(times, positions, velocities, accelerations, robot=None) -> SampledT
     PlanningError
         Naming what is wrong (:meth:`SampledTrajectory.from_points`).
     """
-    return SampledTrajectory.from_points(
-        PHYSICAL_JOINT_NAMES, [message_time(float(t)) for t in times], positions, velocities,
-        accelerations, robot)
+    times = [message_time(float(t)) for t in times]
+    if robot is None:  # the planner core's own samples: in order, finite, only rounded
+        return SampledTrajectory(np.array(times), np.asarray(positions, dtype=float),
+                                 np.asarray(velocities, dtype=float),
+                                 np.asarray(accelerations, dtype=float))
+    return SampledTrajectory.from_points(PHYSICAL_JOINT_NAMES, times, positions, velocities,
+                                         accelerations, robot)
 
 
 @dataclasses.dataclass(frozen=True)
