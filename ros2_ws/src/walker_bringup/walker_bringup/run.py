@@ -38,10 +38,7 @@ from walker_bringup.graph_client import (
     GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
-from walker_report.core.errors import ReportError
-from walker_report.core.report import make_report
-from walker_report.progress import ProgressLine
-from walker_report.walk_report import written_text
+from walker_report.walk_report import report_after_walk
 from walker_teleop.core.progress import walk_progress
 
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
@@ -112,6 +109,11 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--foxglove-port', type=_port, default=FOXGLOVE_PORT, metavar='N',
                         help='port of the Foxglove server (default: %(default)s, as '
                              'foxglove_bridge)')
+    parser.add_argument('--headless', action='store_true',
+                        help='walk without ROS: the plant, controller, planner and '
+                             'supervisor cores in one lock-step loop in this process, no DDS, '
+                             'many times faster than real time; the same summary, bag and '
+                             'report (walker_headless)')
     parser.add_argument('--walkers', type=_walker_count, default=1, metavar='N',
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
                              'each from its own start, walking the same route moved with it '
@@ -120,6 +122,13 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     if args.composed_loop and args.composed:
         parser.error('--composed-loop composes the loop only; --composed the whole graph: '
                      'choose one')
+    if args.headless:
+        graph_only = [option for option, given in (
+            ('--composed', args.composed), ('--composed-loop', args.composed_loop),
+            ('--grouped-controllers', args.grouped_controllers), ('--serve', args.serve),
+            ('--no-walk', not args.walk), ('--walkers', args.walkers > 1)) if given]
+        if graph_only:
+            parser.error(f'--headless runs no graph: leave {", ".join(graph_only)} out')
     args.grouped_controllers = args.grouped_controllers or args.composed_loop
     return args
 
@@ -296,6 +305,10 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the main job; return the exit code (0 when every walk reached its target)."""
     args = parse_arguments(argv)
+    if args.headless:
+        from walker_headless.run import run_headless
+
+        return run_headless(args)
     from walker_bringup.core.configuration import load_configuration
     from walker_core.parameter_schema import ParameterError
 
@@ -481,23 +494,9 @@ def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) ->
     """Make the walk report of ``bag`` into ``report_dir`` and say where it is.
 
     Returns False (having said why) when the report could not be made; the walk's own
-    outcome stands.
+    outcome stands (:func:`walker_report.walk_report.report_after_walk`).
     """
-    progress = ProgressLine(quiet, prefix='[walker] report:')
-    try:
-        result = make_report(bag, report_dir, params_file, progress=progress)
-    except (ReportError, ValueError) as error:
-        progress.close()
-        print(f'[walker] error: no walk report: {error}', flush=True)
-        return False
-    progress.close()
-    if quiet:
-        print(f'[walker] report: {result.markdown}', flush=True)
-    else:
-        for line in written_text(result).splitlines():
-            print(f'[walker] {line}', flush=True)
-        print(f'[walker] report made in {result.seconds:.1f} s', flush=True)
-    return True
+    return report_after_walk(bag, report_dir, params_file, quiet)
 
 
 def walk_feedback_text(feedback, elapsed: float) -> str:

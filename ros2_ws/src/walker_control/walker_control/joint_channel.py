@@ -1,14 +1,14 @@
-"""One joint's controller inside a controller node: its core, its inputs and its state topic.
+"""One joint's controller inside a controller node: its core, its topics, its log.
 
 A controller node drives one joint (``joint_controller_node``) or several
-(``joint_controllers_node``); either way each joint has a :class:`JointChannel`: the
-:class:`~walker_control.core.joint_controller.JointController` core, the joint's setpoint
-subscription and buffer, its watchdog over the state and setpoint streams, and its
+(``joint_controllers_node``); either way each joint has a :class:`JointChannel`: the joint's
+:class:`~walker_control.core.channel.ControllerChannel` (the controller core with its setpoint
+buffer, pacing and watchdog, where every decision is made), its setpoint subscription and its
 ``controllers/<joint>/state`` publisher. The node owns what the joints share: the
 ``joint_states``, ``joint_accelerations`` and ``control_mode`` subscriptions, the
 ``effort_commands`` publisher and the watchdog timer.
 
-No control math here: the channel converts messages and calls the core.
+No decision here: the channel converts messages and calls the core.
 """
 
 from __future__ import annotations
@@ -20,17 +20,13 @@ from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 from walker_runtime.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
 from walker_runtime.watched_subscription import WatchedSubscription
 
+from walker_control.core.channel import CLOCK_SLACK_PERIODS, ControllerChannel
 from walker_control.core.config import ControllerSettings
-from walker_control.core.inputs import (
-    InputWatchdog, Setpoint, SetpointBuffer, SetpointError, StaleInputs,
-    StreamPacing, carry_forward, validate_setpoint)
-from walker_control.core.joint_controller import (
-    ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,
-    RoleChangeError)
-from walker_control.core.modes import Mode
+from walker_control.core.inputs import Setpoint
+from walker_control.core.joint_controller import ControlOutput, Measurement
 
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel',
-           'seconds']
+           'CLOCK_SLACK_PERIODS', 'seconds']
 
 #: joint_states and joint_accelerations: best effort, newest only (walker_runtime.qos)
 STATE_QOS = SENSOR_QOS
@@ -40,9 +36,6 @@ STATE_QOS = SENSOR_QOS
 # (re-matching would lengthen the stall) while a walker held on a silent input has a fresh
 # subscription by the time it is resumed.
 RESUBSCRIBE_AFTER_TIMEOUTS = 4.0
-# In sim time an input's silence counts only once the simulated clock has run this many
-# control periods past its last message (InputWatchdog): a clock held still owes nothing.
-CLOCK_SLACK_PERIODS = 2
 
 
 def seconds(stamp) -> float:
@@ -82,19 +75,8 @@ class JointChannel:
         self._prefix = log_prefix
         self._steady_now = steady_now
         self._clock_now = clock_now
-        self._settings = settings
-        self.controller = JointController(settings, joint, 'a')
-        self._setpoints = SetpointBuffer()
-        self._pacing = StreamPacing()
+        self.core = ControllerChannel(settings, joint, self._log)
         self._after_setpoint = after_setpoint
-        control = settings.control
-        self.watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout,
-                                      CLOCK_SLACK_PERIODS * settings.sample_time)
-        self.stale = StaleInputs()
-        self.setpoint_lagging = False
-        self.last_stamp: float | None = None  # [s] stamp of the last state answered
-        self.last_effort: float | None = None  # [N*m] the effort last answered
-        self._last_state_publish: float | None = None  # [s] stamp of the last ControllerState
         self._state_msg = ControllerState(joint_name=joint)
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
         self._state_pub = node.create_publisher(ControllerState, f'controllers/{joint}/state',
@@ -103,8 +85,42 @@ class JointChannel:
         #: calls its ``check`` and keeps the order of its subscriptions)
         self.setpoint_subscription = WatchedSubscription(
             node, JointCommand, f'controllers/{joint}/setpoint', self._on_setpoint_message,
-            COMMAND_QOS, after=RESUBSCRIBE_AFTER_TIMEOUTS * control.setpoint_timeout,
-            last_heard=lambda: self.watchdog.last_setpoint, steady_now=steady_now)
+            COMMAND_QOS, after=RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.setpoint_timeout,
+            last_heard=lambda: self.core.watchdog.last_setpoint, steady_now=steady_now)
+
+    def _log(self, level: str, text: str, throttle: float) -> None:
+        # one call site per severity and throttling: rclpy's logger keys its filters by the
+        # caller's line, and refuses another severity from the same line
+        text = f'{self._prefix}{text}'
+        logger = self._logger
+        if level == 'error' and throttle > 0.0:
+            logger.error(text, throttle_duration_sec=throttle)
+        elif level == 'error':
+            logger.error(text)
+        elif level == 'warning':
+            logger.warning(text)
+        else:
+            logger.info(text)
+
+    @property
+    def controller(self):
+        """The joint's :class:`~walker_control.core.joint_controller.JointController`."""
+        return self.core.controller
+
+    @property
+    def watchdog(self):
+        """The joint's :class:`~walker_control.core.inputs.InputWatchdog`."""
+        return self.core.watchdog
+
+    @property
+    def stale(self):
+        """The inputs found stale at the last check."""
+        return self.core.stale
+
+    @property
+    def last_stamp(self) -> float | None:
+        """[s] Stamp of the last state answered."""
+        return self.core.last_stamp
 
     # ------------------------------------------------------------------------- settings
 
@@ -126,44 +142,15 @@ class JointChannel:
 
     def apply_settings(self, settings: ControllerSettings) -> None:
         """Take validated new settings (the node's parameters changed)."""
-        self._settings = settings
-        self.controller.apply_settings(settings)
-        self.watchdog.state_timeout = settings.control.state_timeout
-        self.watchdog.setpoint_timeout = settings.control.setpoint_timeout
-        self.watchdog.clock_slack = CLOCK_SLACK_PERIODS * settings.sample_time
+        self.core.apply_settings(settings)
         self.setpoint_subscription.after = \
             RESUBSCRIBE_AFTER_TIMEOUTS * settings.control.setpoint_timeout
 
     # -------------------------------------------------------------------------- inputs
     def on_control_mode(self, msg: ControlMode) -> None:
         """Take a mode command (the node passes each one to every channel)."""
-        controller = self.controller
-        before = (controller.mode, controller.base_gripper)
-        try:
-            mode = Mode(msg.mode)
-            controller.command(mode, msg.base_gripper or None)
-        except RoleChangeError as error:
-            controller.hold(str(error))
-            self._logger.error(f'{self._prefix}{error}; holding')
-            return
-        except ValueError as error:
-            self._logger.error(f'{self._prefix}control_mode refused ({error}); nothing changed')
-            return
-        self.setpoint_lagging = False
-        if (controller.mode, controller.base_gripper) != before:
-            # Setpoints sent ahead for the states to come stay (a stream that goes on from
-            # COARSE into FINE); older ones, and every one under another base, are dropped.
-            if controller.base_gripper != before[1] or self.last_stamp is None:
-                self._setpoints.clear()
-            else:
-                self._setpoints.drop_until(self.last_stamp)
-            self._pacing.reset()
-            self._logger.info(f'{self._prefix}mode {controller.mode.name}, base gripper '
-                              f'{controller.base_gripper}, role J{controller.role}')
-        self.watchdog.expect_setpoints(mode.tracks_setpoints)
-        # Judge the inputs again now: the next states must not report a staleness that this
-        # command has ended (the supervisor would take it for a fault of the motion it starts).
-        self.stale = self.watchdog.check(self._steady_now(), self._clock_now())
+        self.core.command_mode(msg.mode, msg.base_gripper, self._steady_now(),
+                               self._clock_now())
 
     def _on_setpoint_message(self, msg: JointCommand) -> None:
         self.on_setpoint(msg)
@@ -172,34 +159,14 @@ class JointChannel:
 
     def on_setpoint(self, msg: JointCommand) -> None:
         """Take one setpoint of the joint's stream; refuse (and hold) an invalid one."""
-        try:
-            if msg.joint_name not in ('', self.joint):
-                raise SetpointError(f'setpoint for {msg.joint_name!r} on the topic of '
-                                    f'{self.joint}')
-            setpoint = validate_setpoint(
-                Setpoint(msg.position, msg.velocity, msg.acceleration, msg.effort),
-                self._settings.drive(self.controller.role), self.joint)
-        except SetpointError as error:
-            self.controller.hold(f'setpoint refused: {error}')
-            self._logger.error(f'{error}; holding')
-            return
-        stamp = seconds(msg.header.stamp)
-        if stamp == 0.0:  # unstamped (an operator's command): it applies from the next state
-            stamp = self.last_stamp or 0.0
-        self._setpoints.add(stamp, setpoint)
-        self.setpoint_lagging = False
-        self.watchdog.setpoint_received(self._steady_now())
+        self.core.take_setpoint(
+            msg.joint_name, Setpoint(msg.position, msg.velocity, msg.acceleration, msg.effort),
+            seconds(msg.header.stamp), self._steady_now())
 
     # --------------------------------------------------------------------------- update
     def owes_setpoint(self, stamp: float) -> bool:
-        """Say whether the state stamped ``stamp`` [s] lacks the setpoint its stream owes it.
-
-        True only while tracking a stream paced by the states (see
-        :class:`~walker_control.core.inputs.StreamPacing`) whose setpoint for ``stamp`` has not
-        come yet; in sim time the node then waits for it before answering.
-        """
-        return self.controller.mode.tracks_setpoints \
-            and self._pacing.owed(stamp, self._setpoints.newest_stamp())
+        """Say whether the state stamped ``stamp`` [s] lacks the setpoint its stream owes it."""
+        return self.core.owes_setpoint(stamp)
 
     def answer(self, header, stamp: float, measurement: Measurement) -> float | None:
         """Compute the joint's effort [N*m] for a state stamped ``stamp`` [s].
@@ -208,22 +175,11 @@ class JointChannel:
         when the measurement is refused and the joint has never answered (the controller
         holds); after a refused measurement otherwise, the last effort again.
         """
-        dt = self._sample_time(stamp)
-        setpoint = self._select_setpoint(stamp)
-        try:
-            output = self.controller.update(measurement, setpoint, dt)
-        except MissingAccelerationError as error:
-            self.controller.hold(str(error))
-            self._logger.error(f'{self._prefix}{error}; holding')
-            output = self.controller.update(measurement, setpoint, dt)
-        except MeasurementError as error:
-            self.controller.hold(str(error))
-            self._logger.error(f'{self._prefix}{error}; holding, last effort repeated',
-                               throttle_duration_sec=1.0)
-            return self.last_effort
-        self.last_stamp = stamp
-        self.last_effort = output.effort
-        self._publish_state(header, stamp, measurement, output)
+        output = self.core.answer(stamp, measurement)
+        if output is None:
+            return self.core.last_effort
+        if self.core.state_due(stamp):
+            self._publish_state(header, measurement, output)
         return output.effort
 
     def check_inputs(self, now: float, clock: float | None) -> None:
@@ -231,53 +187,11 @@ class JointChannel:
 
         ``clock``: the ROS clock [s] in sim time, None on the wall clock.
         """
-        stale = self.watchdog.check(now, clock)
-        if stale.any and not self.stale.any:
-            self._logger.warning(f'{self._prefix}input stale: {stale.reason}; holding')
-        elif self.stale.any and not stale.any:
-            self._logger.info(f'{self._prefix}inputs fresh again; holding until the next '
-                              'mode command')
-        self.stale = stale
-        if stale.any:
-            self.controller.hold(f'input stale: {stale.reason}')
-            if stale.state:
-                self._publish_stale_report()
+        if self.core.check_inputs(now, clock).state:
+            self._publish_stale_report()
 
     # ------------------------------------------------------------------------- helpers
-    def _sample_time(self, stamp: float) -> float:
-        nominal = self._settings.sample_time
-        if self.last_stamp is None:
-            return nominal
-        if stamp < self.last_stamp:
-            self._logger.warning(f'{self._prefix}joint_states stamp went backwards '
-                                 '(plant reset?)')
-            return nominal
-        return stamp - self.last_stamp
-
-    def _select_setpoint(self, stamp: float) -> Setpoint | None:
-        selected = self._setpoints.select(stamp) if self.controller.mode.tracks_setpoints \
-            else None
-        self._pacing.used(stamp, None if selected is None else selected[0])
-        if selected is None:
-            return None
-        lag = self.watchdog.setpoint_lag(stamp, selected[0])
-        if lag:
-            self._pacing.reset()
-            self.setpoint_lagging = True
-            self.controller.hold(f'setpoint stream stale: {lag}')
-            self._logger.warning(f'{self._prefix}setpoint stream stale: {lag}; holding')
-            return None
-        return carry_forward(selected[1], stamp - selected[0],
-                             self._settings.control.setpoint_extrapolation,
-                             self._settings.drive(self.controller.role))
-
-    def _publish_state(self, header, stamp: float, measurement: Measurement,
-                       out: ControlOutput) -> None:
-        period = 1.0 / self._settings.control.state_rate
-        if self._last_state_publish is not None and \
-                0.0 <= stamp - self._last_state_publish < period - 1e-9:
-            return
-        self._last_state_publish = stamp
+    def _publish_state(self, header, measurement: Measurement, out: ControlOutput) -> None:
         # One message object is reused: constructing it costs more than the control law.
         state = self._state_msg
         state.header.stamp = header.stamp
@@ -298,19 +212,20 @@ class JointChannel:
         state.friction_compensation_effort = float(out.friction_compensation)
         state.effort = float(out.effort)
         state.saturated = bool(out.saturated)
-        state.stale = self.stale.any or self.setpoint_lagging
+        state.stale = self.core.reports_stale
         self._state_pub.publish(state)
 
     def _publish_stale_report(self) -> None:
-        last = self.controller.last_output
+        controller = self.core.controller
+        last = controller.last_output
         state = ControllerState()
-        if self.last_stamp is not None:  # the controller's time is the state stream's
-            state.header.stamp.sec = int(self.last_stamp)
-            state.header.stamp.nanosec = \
-                int(round((self.last_stamp % 1.0) * 1e9)) % 1_000_000_000
+        last_stamp = self.core.last_stamp
+        if last_stamp is not None:  # the controller's time is the state stream's
+            state.header.stamp.sec = int(last_stamp)
+            state.header.stamp.nanosec = int(round((last_stamp % 1.0) * 1e9)) % 1_000_000_000
         state.joint_name = self.joint
-        state.role = self.controller.role
-        state.mode = int(self.controller.mode)
+        state.role = controller.role
+        state.mode = int(controller.mode)
         if last is not None:
             state.position_setpoint = float(last.reference.position)
             state.effort = float(last.effort)

@@ -13,9 +13,10 @@ Interfaces (relative to the node's namespace, ``/walker`` by default; docs/archi
 * ``planned_trajectory`` (``trajectory_msgs/msg/JointTrajectory``), latched;
 * ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors.
 
-All planning is in :mod:`walker_planner.core`; this node converts messages, parameters and
-clocks. The stream is paced by the plant's ``joint_states`` (one per control period) and
-stamped from them, in real time and in sim time alike, as the controllers are.
+All planning is in :mod:`walker_planner.core`, and every decision about streams in its
+:class:`~walker_planner.core.streamer.TrajectoryStreamer`; this node converts messages,
+parameters and clocks. The stream is paced by the plant's ``joint_states`` (one per control
+period) and stamped from them, in real time and in sim time alike, as the controllers are.
 """
 
 from __future__ import annotations
@@ -49,8 +50,8 @@ from walker_planner.conversions import sampled_trajectory, to_time, trajectory_m
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.planning import PlanningContext, PlanRequest, plan
-from walker_planner.core.streaming import (
-    SampledTrajectory, SetpointStream, check_start, stamps_due)
+from walker_planner.core.streamer import ActiveStream, TrajectoryStreamer
+from walker_planner.core.streaming import SampledTrajectory
 
 __all__ = ['PlannerNode', 'main']
 
@@ -72,23 +73,17 @@ _CLOCK_AHEAD_PERIODS = 10
 _STREAM_START_WAIT = 5.0
 
 
-class _ActiveStream:
-    """A running stream and how it ends.
+class _StreamGoal:
+    """What the node ties to a stream: its action goal, and the future the goal awaits.
 
-    The stream thread sets ``ended``; the main thread's relay completes ``done``, which the
-    action goal awaits (rclpy futures are completed in the thread of their executor).
+    The goal handle is None for a stream of ``plan_trajectory`` with ``execute``. The stream
+    thread ends the stream; the main thread's relay completes ``done`` (rclpy
+    futures are completed in the thread of their executor).
     """
 
-    def __init__(self, stream: SetpointStream, goal_handle) -> None:
-        self.stream = stream
+    def __init__(self, goal_handle) -> None:
         self.goal_handle = goal_handle
         self.done = Future()
-        self.ended = False
-        self.fed_back = 0
-        self.last = None
-        self.ticks = 0
-        self.cancelled = False
-        self.message = ''
 
 
 class PlannerNode(Node):
@@ -110,16 +105,11 @@ class PlannerNode(Node):
                               self._apply_planner_parameters)
         self._planning = PlanningContext.from_parameters(self._robot, self._planner)
         self._period_ns = int(round(1e9 / self._robot.timing.control_rate))
-        self._active: _ActiveStream | None = None
-        # [rad] held at rest while the controllers track with no stream: the last position
-        # streamed, or where the joints were when they went back to tracking
-        self._holding: np.ndarray | None = None
-        self._hold_sent: int | None = None  # [ns] stamp of the newest hold setpoint sent
-        self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
+        stream = self._planner.stream
+        self._streamer = TrajectoryStreamer(self._period_ns, stream.lookahead,
+                                            stream.start_tolerance, self._send)
         self._reserved = False
-        self._measured: tuple[int, np.ndarray] | None = None
         self._lock = threading.Lock()  # the state shared by the stream thread and this one
-        self._ended: list[_ActiveStream] = []
         self._stream_node = helper_node(f'{self.get_name()}_stream', self.get_namespace(),
                                         self.context, use_global_arguments=False)
         self._stream_thread: threading.Thread | None = None
@@ -208,24 +198,26 @@ class PlannerNode(Node):
     def _relay(self) -> None:
         """Complete the goals of ended streams and send feedback (this node's thread)."""
         with self._lock:
-            ended, self._ended = self._ended, []
-            active = self._active
+            ended = self._streamer.take_ended()
+            active = self._streamer.active
             feedback = None
-            if active is not None and active.goal_handle is not None and active.last is not None:
-                every = max(1, round(self._robot.timing.control_rate
-                                     / self._planner.stream.feedback_rate))
-                if active.ticks // every > active.fed_back // every:  # a multiple was passed
-                    active.fed_back = active.ticks
+            if active is not None and active.owner.goal_handle is not None:
+                every = round(self._robot.timing.control_rate
+                              / self._planner.stream.feedback_rate)
+                if self._streamer.feedback_due(every) is not None:
                     feedback = self._feedback(active)
         if feedback is not None:
-            active.goal_handle.publish_feedback(feedback)
+            active.owner.goal_handle.publish_feedback(feedback)
         for stream in ended:
-            stream.done.set_result(True)
+            stream.owner.done.set_result(True)
 
     # ------------------------------------------------------------------ parameters
     def _apply_planner_parameters(self, section: PlannerParameters) -> None:
         self._planner = section
         self._planning = PlanningContext.from_parameters(self._robot, section)
+        with self._lock:
+            self._streamer.lookahead = section.stream.lookahead
+            self._streamer.start_tolerance = section.stream.start_tolerance
 
     # ------------------------------------------------------------------ subscriptions
     def _resubscribe_if_silent(self) -> None:
@@ -242,7 +234,8 @@ class PlannerNode(Node):
 
     def _clock_ran_past_the_states(self) -> bool:
         """Say whether the ROS clock ran well past the newest joint state (clock_ran_past)."""
-        newest = self._measured[0] if self._measured is not None else None
+        measured = self._streamer.measured
+        newest = measured[0] if measured is not None else None
         return clock_ran_past(self.get_clock().now().nanoseconds, newest,
                               _CLOCK_AHEAD_PERIODS * self._period_ns,
                               self.get_parameter('use_sim_time').value)
@@ -262,20 +255,16 @@ class PlannerNode(Node):
         if np.all(np.isfinite(positions)):
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
             with self._lock:
-                self._measured = (stamp, positions)
-                self._stream_tick(stamp)
+                active = self._streamer.active
+                if active is not None and active.owner.goal_handle is not None \
+                        and active.owner.goal_handle.is_cancel_requested:
+                    active.cancel()
+                self._streamer.on_state(stamp, positions)
 
     def _on_control_mode(self, message: ControlMode) -> None:
         tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
         with self._lock:
-            if tracking and not self._tracking and self._active is None \
-                    and self._measured is not None:
-                # tracking again with no stream (a resume, a step's start): hold where the
-                # joints are, as the controllers do, not where the last stream left its
-                # setpoints; a stream cut short (a fault, a hold) may have left them far away
-                self._holding = np.array(self._measured[1])
-                self._hold_sent = None  # from the next state on, over any sent before
-            self._tracking = tracking
+            self._streamer.on_control_mode(tracking)
 
     # ------------------------------------------------------------------ planning service
     def _on_plan(self, request, response):
@@ -293,7 +282,7 @@ class PlannerNode(Node):
         if request.execute:
             trajectory = SampledTrajectory(result.times, *samples)
             with self._lock:
-                error = self._start_stream(trajectory, response.trajectory, None)
+                error = self._start_stream(trajectory, response.trajectory, None)[1]
             if error:
                 response.success = False
                 response.message = f'planned but not executed: {error}'
@@ -304,17 +293,15 @@ class PlannerNode(Node):
 
     def _on_stop(self, request, response):
         with self._lock:
-            active = self._active
-            if active is not None:
-                self._end_now(active, 'stopped by stop_trajectory')
-        response.success = active is not None
-        response.message = 'stopping the stream' if active else 'no stream is running'
+            stopped = self._streamer.stop()
+        response.success = stopped
+        response.message = 'stopping the stream' if stopped else 'no stream is running'
         return response
 
     # ------------------------------------------------------------------ action
     def _on_goal(self, goal) -> GoalResponse:
         with self._lock:
-            busy = self._active is not None
+            busy = self._streamer.active is not None
         if busy or self._reserved:
             self.get_logger().warning('follow_trajectory goal rejected: a stream is '
                                       'already running (cancel it first)')
@@ -324,29 +311,18 @@ class PlannerNode(Node):
 
     def _on_cancel(self, goal_handle) -> CancelResponse:
         with self._lock:
-            active = self._active
-            if active is not None and active.goal_handle is goal_handle:
-                self._end_now(active, 'cancelled')
+            active = self._streamer.active
+            if active is not None and active.owner.goal_handle is goal_handle:
+                self._streamer.end_now(active, 'cancelled')
         return CancelResponse.ACCEPT
-
-    def _end_now(self, active: _ActiveStream, message: str) -> None:
-        """End a stream at once (lock held), holding where it was, without waiting for a state.
-
-        The stream otherwise ends at the next joint state: a plant that has stopped sending
-        them (frozen, gone) would keep a cancelled stream running, and the next goal refused,
-        until it is back.
-        """
-        active.cancelled, active.message = True, message
-        now = self._measured[0] if self._measured is not None else active.stream.origin
-        self._finish(active, active.stream.hold(now, active.last))
 
     async def _on_execute(self, goal_handle):
         result = FollowTrajectory.Result()
         try:
             trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
             with self._lock:
-                error = self._start_stream(trajectory, goal_handle.request.trajectory,
-                                           goal_handle)
+                active, error = self._start_stream(trajectory, goal_handle.request.trajectory,
+                                                   goal_handle)
         except PlanningError as refusal:
             error = str(refusal)
         finally:
@@ -355,20 +331,17 @@ class PlannerNode(Node):
             result.message = error
             goal_handle.abort()
             return result
-        return await self._wait_for_stream(goal_handle, result)
+        return await self._wait_for_stream(goal_handle, result, active)
 
-    async def _wait_for_stream(self, goal_handle, result):
-        with self._lock:
-            active = self._active
-        if active is not None:
-            await active.done
-        if active is None or not active.done.done():
+    async def _wait_for_stream(self, goal_handle, result, active: ActiveStream):
+        await active.owner.done
+        if not active.owner.done.done():
             result.message = 'the planner is shutting down'
             goal_handle.abort()
             return result
         with self._lock:
-            result.duration = active.last.time_from_start if active.last else 0.0
-            result.final_position_error = self._tracking_error(active.stream)
+            result.duration = active.duration
+            result.final_position_error = self._streamer.tracking_error(active.stream)
         result.message = active.message
         result.success = not active.cancelled
         if active.cancelled and goal_handle.is_cancel_requested:
@@ -381,57 +354,15 @@ class PlannerNode(Node):
 
     # ------------------------------------------------------------------ streaming
     def _start_stream(self, trajectory: SampledTrajectory, message: JointTrajectory,
-                      goal_handle) -> str:
-        """Start streaming; return '' or the reason it was refused."""
-        measured = None if self._measured is None else self._measured[1]
+                      goal_handle) -> tuple[ActiveStream | None, str]:
+        """Start streaming (lock held); return the stream and '' or None and the refusal."""
         try:
-            check_start(trajectory, measured, self._planner.stream.start_tolerance)
+            active = self._streamer.start(trajectory, _StreamGoal(goal_handle))
         except PlanningError as error:
-            return str(error)
-        if self._active is not None:
-            return 'a stream is already running (cancel it or call stop_trajectory)'
-        now = self._measured[0]  # the stream's time is the plant's: the newest state's stamp
-        stream = SetpointStream(trajectory, now, self._period_ns)
-        self._active = _ActiveStream(stream, goal_handle)
-        message.header.stamp = to_time(stream.origin)
+            return None, str(error)
+        message.header.stamp = to_time(active.stream.origin)
         self._plan_publisher.publish(message)
-        self._send_due(self._active, now)
-        return ''
-
-    def _stream_tick(self, now: int) -> None:
-        """Send the setpoints due at the state stamped ``now`` [ns].
-
-        The stream runs on the plant's state stream (one state per control period, in real
-        time and in sim time alike): every setpoint not sent yet up to
-        ``planner.stream.lookahead`` periods after ``now``, each stamped with the time it
-        applies, so that it is in place before the state it applies to. The stream ends (its
-        goal succeeds) at the state one period before its final setpoint, as it would with
-        each setpoint sent just in time.
-        """
-        active = self._active
-        if active is None:
-            if self._holding is not None and self._tracking:
-                self._publish_hold(self._holding, now)
-            return
-        handle = active.goal_handle
-        if handle is not None and handle.is_cancel_requested and not active.cancelled:
-            active.cancelled, active.message = True, 'cancelled'
-        if active.cancelled:
-            self._finish(active, active.stream.hold(now, active.last))
-            return
-        self._send_due(active, now)
-        if active.last.final and now + self._period_ns >= active.last.stamp:
-            self._finish(active, None)
-
-    def _send_due(self, active: _ActiveStream, now: int) -> None:
-        for setpoint in active.stream.due(now, active.last, self._planner.stream.lookahead):
-            self._publish(active, setpoint)
-
-    def _publish(self, active: _ActiveStream, setpoint) -> None:
-        self._send(setpoint.stamp, setpoint.position.tolist(), setpoint.velocity.tolist(),
-                   setpoint.acceleration.tolist())
-        active.last = setpoint
-        active.ticks += 1
+        return active, ''
 
     def _send(self, stamp: int, positions, velocities, accelerations) -> None:
         """Publish one setpoint per joint (physical order), stamped ``stamp`` [ns].
@@ -448,45 +379,12 @@ class PlannerNode(Node):
             command.acceleration = accelerations[j]
             self._setpoint_publishers[name].publish(command)
 
-    def _feedback(self, active: _ActiveStream) -> FollowTrajectory.Feedback:
+    def _feedback(self, active: ActiveStream) -> FollowTrajectory.Feedback:
         """Where the stream is (lock held): at the setpoint of the state after the newest."""
-        stream = active.stream
-        duration = stream.trajectory.duration
-        elapsed = min(duration, max(0.0, stream.trajectory_time(
-            self._measured[0] + self._period_ns))) if self._measured else 0.0
+        elapsed, fraction = self._streamer.progress(active)
         return FollowTrajectory.Feedback(
-            time_from_start=elapsed, fraction=min(1.0, elapsed / duration) if duration else 1.0,
-            max_position_error=self._tracking_error(stream))
-
-    def _finish(self, active: _ActiveStream, hold) -> None:
-        """End the stream (lock held) and wake the waiter.
-
-        The controllers expect a setpoint every period while they track (COARSE or FINE), so the
-        last position sent keeps being streamed, at rest, while they do, until the next stream
-        replaces it (or, after a HOLD, the measured position: :meth:`_on_control_mode`).
-        """
-        if hold is not None:
-            self._publish(active, hold)
-        self._holding = None if active.last is None else np.array(active.last.position)
-        self._hold_sent = None if active.last is None else active.last.stamp
-        self._active = None
-        active.ended = True
-        self._ended.append(active)
-
-    def _publish_hold(self, position: np.ndarray, now: int) -> None:
-        """Send the hold's setpoints not sent yet, up to the lookahead after ``now`` [ns]."""
-        zeros = [0.0] * len(PHYSICAL_JOINT_NAMES)
-        for stamp in stamps_due(now, self._hold_sent, self._period_ns,
-                                self._planner.stream.lookahead):
-            self._send(stamp, position.tolist(), zeros, zeros)
-            self._hold_sent = stamp
-
-    def _tracking_error(self, stream: SetpointStream) -> float:
-        """Largest joint error [rad] of the newest state against the stream; -1 without one."""
-        if self._measured is None:
-            return -1.0
-        stamp, positions = self._measured
-        return stream.tracking_error(stamp, positions)
+            time_from_start=elapsed, fraction=fraction,
+            max_position_error=self._streamer.tracking_error(active.stream))
 
 
 def _plan_request(request) -> PlanRequest:

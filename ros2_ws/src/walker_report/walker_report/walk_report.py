@@ -20,7 +20,7 @@ from walker_report.core.errors import ReportError
 from walker_report.core.report import ReportOptions, ReportResult, make_report
 from walker_report.progress import ProgressLine
 
-__all__ = ['main', 'parse_arguments', 'written_text']
+__all__ = ['main', 'parse_arguments', 'written_text', 'report_after_walk']
 
 
 def _frame_size(text: str) -> tuple[int, int]:
@@ -84,6 +84,31 @@ def written_text(result: ReportResult) -> str:
                      f'rendered in {result.animation.seconds:.1f} s)')
     lines.append(f'numbers: {result.json}')
     return '\n'.join(lines)
+
+
+def report_after_walk(bag: Path, report_dir: Path, params_file: Path | None,
+                      quiet: bool) -> bool:
+    """Make the walk report of ``bag`` into ``report_dir`` at the end of a walk; say where.
+
+    What ``run_all.py`` does once a walk has ended, on the graph or headless: its lines start
+    with ``[walker]``. Returns False (having said why) when the report could not be made; the
+    walk's own outcome stands.
+    """
+    progress = ProgressLine(quiet, prefix='[walker] report:')
+    try:
+        result = make_report(bag, report_dir, params_file, progress=progress)
+    except (ReportError, ValueError) as error:
+        progress.close()
+        print(f'[walker] error: no walk report: {error}', flush=True)
+        return False
+    progress.close()
+    if quiet:
+        print(f'[walker] report: {result.markdown}', flush=True)
+    else:
+        for line in written_text(result).splitlines():
+            print(f'[walker] {line}', flush=True)
+        print(f'[walker] report made in {result.seconds:.1f} s', flush=True)
+    return True
 
 
 def main(argv: list[str] | None = None) -> int:

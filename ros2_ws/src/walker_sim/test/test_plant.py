@@ -252,3 +252,20 @@ def test_make_plant_builds_the_file_plant_with_a_free_tip():
         assert state.tip_position[2] == pytest.approx(0.03, abs=1e-6)
     with pytest.raises(ParameterError, match='other_height'):
         make_plant(other_attached=False, other_height=-0.1)
+
+
+def test_gripper_commands_are_answered_as_the_gripper_command_service_answers(make_plant,
+                                                                              one_attached,
+                                                                              params):
+    plant = make_plant(one_attached(height=2.5 * params.gripper.insertion_position_tolerance))
+    success, message = plant.command_gripper('a', 'unscrew')  # the only one attached
+    assert not success and 'interlock' in message
+    success, message = plant.command_gripper('b', 'screw_in')  # out of tolerance: jams
+    assert not success and 'exceeds' in message
+    assert plant.gripper_status('b').mode == GripperMode.JAMMED
+    assert plant.command_gripper('b', 'twist') == (
+        False, "unknown gripper command 'twist': expected 'screw_in' or 'unscrew'")
+    assert plant.gripper_status('a').mode == GripperMode.ATTACHED
+    both = make_plant()
+    assert both.command_gripper('b', 'unscrew') == (True, '')
+    assert both.gripper_status('b').mode == GripperMode.UNSCREWING

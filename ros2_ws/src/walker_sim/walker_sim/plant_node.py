@@ -53,7 +53,8 @@ from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import (
     CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
 from walker_sim.core.config import SimParameters
-from walker_sim.core.grippers import GripperCommandError, GripperMode
+from walker_sim.core.grippers import GripperMode
+from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_sim.messages import (
     CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, accelerations_msg, clock_msg,
@@ -69,9 +70,12 @@ _WATCH_PERIOD = 0.005
 _REPORT_PERIOD = 1.0
 # Most control periods a late real-time tick steps at once to catch up with the wall clock
 _MAX_CATCH_UP = 10
-#: The commands of gripper_command, by name (how an unknown one is refused)
+#: The commands of gripper_command: the plant core's action for each (how an unknown one is
+#: refused, by name)
 _GRIPPER_COMMANDS = {'SCREW_IN': GripperCommand.Request.SCREW_IN,
                      'UNSCREW': GripperCommand.Request.UNSCREW}
+_GRIPPER_ACTIONS = {GripperCommand.Request.SCREW_IN: 'screw_in',
+                    GripperCommand.Request.UNSCREW: 'unscrew'}
 
 
 class PlantNode(Node):
@@ -100,8 +104,8 @@ class PlantNode(Node):
         self._accelerations = self.create_publisher(JointAccelerations, 'joint_accelerations',
                                                     SENSOR_QOS)
         self._joint_states = self.create_publisher(JointState, 'joint_states', SENSOR_QOS)
-        self._last_clock_stamp: int | None = None  # [ns]
-        self._last_pose_stamp: int | None = None  # [ns]
+        self._clock_rate = StampedRate(self.sim.clock_rate)
+        self._pose_rate = StampedRate(self.sim.pose_rate)
         self._flexible = self.create_publisher(JointState, 'flexible_joint_states',
                                                SENSOR_QOS)
         self._bend_names = [joint.name for joint in flex_joints(
@@ -232,6 +236,7 @@ class PlantNode(Node):
         self.commands.command_timeout = sim.command_timeout
         self.lockstep.timeout = sim.lockstep_timeout
         self.gate.timeout = sim.decision_timeout
+        self._clock_rate.rate, self._pose_rate.rate = sim.clock_rate, sim.pose_rate
         if not sim.wait_for_decisions:
             self.gate.open()
             if self.sim_time and self._started:
@@ -333,19 +338,14 @@ class PlantNode(Node):
         stamp = self._stamp
         # /clock at its rate, and at every state the supervisor's release stops at: its
         # ROS-time timer must see the time it released up to
-        if self._clock_publisher is not None and (
-                self._last_clock_stamp is None
-                or not 0 <= stamp - self._last_clock_stamp < 1e9 / self.sim.clock_rate - 1
-                or not self.gate.allows(stamp + self.period_ns)):
-            self._last_clock_stamp = stamp
+        if self._clock_publisher is not None and self._clock_rate.due(
+                stamp, force=not self.gate.allows(stamp + self.period_ns)):
             self._clock_publisher.publish(clock_msg(stamp))
         accelerations = accelerations_msg(state, stamp)
         joint_states = joint_state_msg(state, stamp)
         self._accelerations.publish(accelerations)
         self._joint_states.publish(joint_states)
-        if self._last_pose_stamp is None or not \
-                0 <= stamp - self._last_pose_stamp < 1e9 / self.sim.pose_rate - 1:
-            self._last_pose_stamp = stamp
+        if self._pose_rate.due(stamp):
             self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
             self._flexible.publish(flexible_joint_state_msg(state, self._bend_names,
                                                             self.plant.bending(), stamp))
@@ -361,7 +361,7 @@ class PlantNode(Node):
             self._handover = (accelerations, joint_states)
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
-        key = tuple((s.mode, s.node, s.message) for s in state.statuses.values())
+        key = gripper_states_key(state)
         if force or key != self._gripper_key:
             self._grippers.publish(gripper_states_msg(state, self._stamp))
             self._gripper_key = key
@@ -426,21 +426,15 @@ class PlantNode(Node):
     def _on_gripper_command(self, request: GripperCommand.Request,
                             response: GripperCommand.Response) -> GripperCommand.Response:
         gripper = request.gripper
-        try:
-            if request.command == GripperCommand.Request.SCREW_IN:
-                outcome = self.plant.screw_in(gripper)
-                self._count_down_injected_jams()
-                response.success = outcome.success
-                response.message = outcome.status.message
-            elif request.command == GripperCommand.Request.UNSCREW:
-                self.plant.unscrew(gripper)
-                response.success = True
-            else:
-                raise GripperCommandError(unknown_choice('gripper command', request.command,
-                                                         _GRIPPER_COMMANDS))
-        except GripperCommandError as error:
+        action = _GRIPPER_ACTIONS.get(request.command)
+        if action is None:
             response.success = False
-            response.message = str(error)
+            response.message = unknown_choice('gripper command', request.command,
+                                              _GRIPPER_COMMANDS)
+        else:
+            response.success, response.message = self.plant.command_gripper(gripper, action)
+            if action == 'screw_in':
+                self._count_down_injected_jams()
         state = self.plant.state()
         if gripper in GRIPPERS:
             response.state = gripper_state_msg(state.grippers[gripper])

@@ -21,6 +21,7 @@ from __future__ import annotations
 import bisect
 import dataclasses
 import math
+from typing import NamedTuple
 
 from walker_core.robot_parameters import Drive
 
@@ -32,9 +33,8 @@ class SetpointError(ValueError):
     """A setpoint that must not be followed (non-finite or outside the joint's limits)."""
 
 
-@dataclasses.dataclass(frozen=True)
-class Setpoint:
-    """Desired motion of one joint.
+class Setpoint(NamedTuple):
+    """Desired motion of one joint (immutable).
 
     Attributes
     ----------
@@ -60,11 +60,16 @@ def validate_setpoint(setpoint: Setpoint, drive: Drive, joint_name: str = 'joint
     Refused: any non-finite field; a position outside ``[position_min, position_max]``; a speed
     above ``velocity_limit``; an extra effort above ``torque_limit``.
     """
-    for name in ('position', 'velocity', 'acceleration', 'effort'):
-        value = getattr(setpoint, name)
-        if not (isinstance(value, (int, float)) and math.isfinite(value)):
-            raise SetpointError(f'{joint_name} setpoint {name} = {value!r} refused: '
-                                f'must be a finite number')
+    position, velocity, acceleration, effort = setpoint
+    # the common case first, cheaply (a stream validates five setpoints every period): floats
+    # whose sum is finite are each finite
+    if not (type(position) is float and type(velocity) is float
+            and type(acceleration) is float and type(effort) is float
+            and math.isfinite(position + velocity + acceleration + effort)):
+        for name, value in zip(Setpoint._fields, setpoint, strict=True):
+            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+                raise SetpointError(f'{joint_name} setpoint {name} = {value!r} refused: '
+                                    f'must be a finite number')
     if not drive.position_min <= setpoint.position <= drive.position_max:
         raise SetpointError(
             f'{joint_name} setpoint position {setpoint.position:.6g} rad refused: outside the '

@@ -53,9 +53,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import operator
 from collections.abc import Sequence
+from typing import NamedTuple
 
-from walker_core.dynamics import RigidModel
+from walker_core.dynamics import RigidModel, role_inertia
 from walker_core.joint_roles import role_of_joint, role_permutation, validate_gripper
 from walker_control.core.accel_feedback import acceleration_feedback_torque
 from walker_control.core.config import ControllerSettings
@@ -84,9 +86,8 @@ class MissingAccelerationError(MeasurementError):
     """Acceleration feedback is on but no measured acceleration was given."""
 
 
-@dataclasses.dataclass(frozen=True)
-class Measurement:
-    """The joint's measured state, and the configuration of the whole robot.
+class Measurement(NamedTuple):
+    """The joint's measured state, and the configuration of the whole robot (immutable).
 
     Attributes
     ----------
@@ -107,8 +108,7 @@ class Measurement:
     joint_positions: Sequence[float]
 
 
-@dataclasses.dataclass(frozen=True)
-class ControlOutput:
+class ControlOutput(NamedTuple):
     """One controller sample: the command and every term, for the state message and plots.
 
     Torques in N*m, angles in rad, rates in rad/s. ``feedforward`` to ``acceleration_feedback``
@@ -185,15 +185,14 @@ class JointController:
 
     def __init__(self, settings: ControllerSettings, joint_name: str,
                  base_gripper: str = 'a') -> None:
-        role_of_joint(joint_name, validate_gripper(base_gripper))
         self._joint_name = joint_name
-        self._base = base_gripper
-        self._settings = settings
-        self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
+        self._set_base(validate_gripper(base_gripper))
+        self._take_settings(settings)
         self._commanded = Mode.HOLD
         self._hold_reason = ''
         limit = settings.drive(self.role).torque_limit
         self._pid = Pid(PidGains(0.0, 0.0, 0.0, limit, limit))
+        self._gains_of: tuple | None = None  # (inertia, role design) the PID's gains are of
         self._filter = self._new_filter(self.role)
         self._filter.reset_to(0.0)
         self._shaper = RestartingShaper()  # reference shaping (control.filter.reference)
@@ -226,7 +225,19 @@ class JointController:
     @property
     def role(self) -> int:
         """Role J1..J5 the joint plays for the current base."""
-        return role_of_joint(self._joint_name, self._base)
+        return self._role
+
+    def _set_base(self, base: str) -> None:
+        """Take ``base`` as the base gripper: the joint's role and the role order of the joints.
+
+        Raises
+        ------
+        ValueError
+            For an unknown joint.
+        """
+        self._role = role_of_joint(self._joint_name, base)
+        self._base = base
+        self._in_role_order = operator.itemgetter(*role_permutation(base))
 
     @property
     def settings(self) -> ControllerSettings:
@@ -280,7 +291,8 @@ class JointController:
             self._relaxing_for = 0.0
         elif mode != Mode.HOLD:  # the same HOLD again leaves a relaxation running
             self._relaxing_for = None
-        self._base = base
+        if base != self._base:
+            self._set_base(base)
         self._commanded = mode
         self._hold_reason = ''
 
@@ -292,9 +304,17 @@ class JointController:
 
     def apply_settings(self, settings: ControllerSettings) -> None:
         """Use new (validated) parameters from the next sample on, with bumpless transfer."""
+        self._take_settings(settings)
+        self._role_designs = {}
+
+    def _take_settings(self, settings: ControllerSettings) -> None:
+        """Keep the settings, and what every sample reads of them, once."""
         self._settings = settings
         self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
-        self._role_designs = {}
+        self._sample_time = settings.sample_time  # [s]
+        self._feedforward_speed = settings.control.friction_compensation.feedforward_speed
+        self._bumpless_time_constant = settings.control.bumpless_time_constant  # [s]
+        self._decay_of: tuple[float, float] = (math.nan, math.nan)  # (dt, its decay)
 
     # ------------------------------------------------------------------------------- update
     def update(self, measurement: Measurement, setpoint: Setpoint | None,
@@ -333,7 +353,6 @@ class JointController:
             output = self._relax(measurement, dt)
             if output is not None:
                 return output
-        settings = self._settings
         role = self.role
         cached = self._role_design(role, mode)
         design = cached.loop
@@ -348,27 +367,31 @@ class JointController:
         if transition:
             self._hold_position = measurement.position
         periods = self._periods(dt)
+        restart = not self._keeps_tracking(transition)
         if setpoint is not None and mode.tracks_setpoints:
             received = setpoint
-            commanded = self._filter_setpoint(cached.setpoint_filter, transition, measurement,
+            commanded = self._filter_setpoint(cached.setpoint_filter, restart, measurement,
                                               setpoint, periods)
         else:
             self._setpoint_filter.stop()
             received = commanded = Setpoint(position=self._hold_position)
-        reference = self._shape(cached.shaping, transition, measurement, commanded, periods)
+        reference = self._shape(cached.shaping, restart, measurement, commanded, periods)
 
-        inertia = self._feedforward.inertia(role, configuration)
+        # the configuration is checked (_check_measurement): the model's term directly
+        inertia = role_inertia(configuration, self._feedforward.model, role)
         limit = cached.torque_limit
-        self._pid.set_gains(PidGains(p=inertia * cached.kp, i=inertia * cached.ki,
-                                     d=inertia * cached.kd, output_limit=limit,
-                                     integral_limit=limit))
+        if (inertia, cached) != self._gains_of:  # the gains scale with the inertia
+            self._pid.set_gains(PidGains(p=inertia * cached.kp, i=inertia * cached.ki,
+                                         d=inertia * cached.kd, output_limit=limit,
+                                         integral_limit=limit))
+            self._gains_of = (inertia, cached)
         error = reference.position - measurement.position
         error_rate = reference.velocity - measurement.velocity
         feedforward = self._feedforward.torque(
             inertia, commanded.acceleration,
             commanded.effort + friction_feedforward(
                 cached.coulomb, commanded.velocity,
-                settings.control.friction_compensation.feedforward_speed))
+                self._feedforward_speed))
         acceleration = measurement.acceleration if measurement.acceleration is not None else 0.0
         if self._shaper.active:  # feed back the acceleration error (reference_shaping)
             acceleration -= reference.acceleration
@@ -402,15 +425,14 @@ class JointController:
             self._saturation = math.copysign(1.0, command)
         else:
             self._saturation = 0.0
-        output = ControlOutput(
-            effort=effort, mode=mode, role=role, reference=received, position_error=error,
-            inertia=inertia, feedforward=feedforward, proportional=terms.proportional,
-            integral=terms.integral, derivative=terms.derivative,
-            acceleration_feedback=accel_term, transfer=self._transfer, filtered=filtered,
-            friction_compensation=friction_total,
-            saturated=clamped_input or clamped_output or terms.saturated,
-            shaped_reference=reference)
-        decay = math.exp(-dt / settings.control.bumpless_time_constant)
+        output = ControlOutput(  # in the order of its fields (by position: the faster)
+            effort, mode, role, received, error, inertia, feedforward, terms.proportional,
+            terms.integral, terms.derivative, accel_term, self._transfer, filtered,
+            friction_total, clamped_input or clamped_output or terms.saturated, reference)
+        decay_dt, decay = self._decay_of
+        if dt != decay_dt:  # the same dt every period: exp once
+            decay = math.exp(-dt / self._bumpless_time_constant)
+            self._decay_of = (dt, decay)
         self._transfer *= decay
         self._friction_transfer *= decay
         self._last_command = command
@@ -427,16 +449,17 @@ class JointController:
         """
         positions = measurement.joint_positions
         acceleration = measurement.acceleration
+        isfinite = math.isfinite
         try:
-            valid = (math.isfinite(measurement.position) and math.isfinite(measurement.velocity)
-                     and (acceleration is None or math.isfinite(acceleration))
-                     and len(positions) == 5 and all(math.isfinite(q) for q in positions))
+            valid = (isfinite(measurement.position) and isfinite(measurement.velocity)
+                     and (acceleration is None or isfinite(acceleration))
+                     and len(positions) == 5 and all(map(isfinite, positions)))
         except TypeError:
             valid = False
         if not valid:
             raise MeasurementError(f'{self._joint_name}: measurement refused, not finite or not '
                                    f'5 joint positions: {measurement!r}')
-        return tuple(float(positions[i]) for i in role_permutation(self._base))
+        return tuple(map(float, self._in_role_order(positions)))
 
     def _periods(self, dt: float) -> int:
         """Control periods a sample of ``dt`` seconds spans (1 to ``_MAX_CATCH_UP_PERIODS``).
@@ -447,7 +470,7 @@ class JointController:
         slow down with the controller (joint 1's 0.5 s delay doubling when every other state
         is missed) and the loop would lose the phase margin its stability check counted on.
         """
-        return min(_MAX_CATCH_UP_PERIODS, max(1, round(dt / self._settings.sample_time)))
+        return min(_MAX_CATCH_UP_PERIODS, max(1, round(dt / self._sample_time)))
 
     def _keeps_tracking(self, transition: bool) -> bool:
         """Return True unless this sample enters or leaves HOLD, or changes the role."""
@@ -455,7 +478,7 @@ class JointController:
             self._key is not None and self._key[0] == self.role
             and self._key[1].tracks_setpoints and self.mode.tracks_setpoints)
 
-    def _filter_setpoint(self, design: tuple | None, transition: bool,
+    def _filter_setpoint(self, design: tuple | None, restart: bool,
                          measurement: Measurement, setpoint: Setpoint,
                          periods: int) -> Setpoint:
         """Return the setpoint through the role's setpoint filter, if it has one.
@@ -466,11 +489,10 @@ class JointController:
         state when tracking begins (from HOLD, on a role change) and when its design changes,
         and advances by ``periods`` control periods, as the command filter does.
         """
-        return self._setpoint_filter.update(design, not self._keeps_tracking(transition),
-                                            measurement.position, measurement.velocity,
-                                            setpoint, periods)
+        return self._setpoint_filter.update(design, restart, measurement.position,
+                                            measurement.velocity, setpoint, periods)
 
-    def _shape(self, design: tuple | None, transition: bool, measurement: Measurement,
+    def _shape(self, design: tuple | None, restart: bool, measurement: Measurement,
                commanded: Setpoint, periods: int) -> Setpoint:
         """Return the setpoint the feedback compares with: shaped by the role's filter, if on.
 
@@ -481,9 +503,8 @@ class JointController:
         filter's design changes. It advances by ``periods`` control periods (:meth:`_periods`),
         holding the setpoint over them, as the command filter does.
         """
-        return self._shaper.update(design, not self._keeps_tracking(transition),
-                                   measurement.position, measurement.velocity, commanded,
-                                   periods)
+        return self._shaper.update(design, restart, measurement.position,
+                                   measurement.velocity, commanded, periods)
 
     def _role_design(self, role: int, mode: Mode) -> _RoleDesign:
         """Return the settings of ``role`` in ``mode``, derived once per settings (_RoleDesign)."""
@@ -558,7 +579,7 @@ class JointController:
             return None
         self._relaxing_for = elapsed + dt
         output = self._off(measurement)
-        output = dataclasses.replace(output, effort=dither.torque(elapsed), mode=Mode.HOLD)
+        output = output._replace(effort=dither.torque(elapsed), mode=Mode.HOLD)
         self._last_output = output
         return output
 

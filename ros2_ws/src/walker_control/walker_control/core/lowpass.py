@@ -30,6 +30,7 @@ direct form II (as :func:`scipy.signal.sosfilt`), one sample (or several of a he
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -88,6 +89,17 @@ def design_lowpass_sos(order: int, corner: float, sample_time: float,
         raise FilterDesignError(
             f'filter corner {corner!r} rad/s must be positive and below the Nyquist frequency '
             f'{nyquist:.1f} rad/s of the {sample_time * 1e3:g} ms sample time')
+    return _designed(int(order), float(corner), float(sample_time), kind)[0].copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _designed(order: int, corner: float, sample_time: float, kind: str
+              ) -> tuple[np.ndarray, tuple, np.ndarray]:
+    """Return the sections of a valid design, their rows as floats, and their unit state.
+
+    Designed once per design: scipy takes milliseconds for what the controllers rebuild at
+    every restart of a reference shaper (a mode change).
+    """
     fs = 1.0 / sample_time
     if kind == 'butterworth':
         sos = signal.butter(order, corner / (2.0 * math.pi), btype='low', output='sos', fs=fs)
@@ -103,7 +115,12 @@ def design_lowpass_sos(order: int, corner: float, sample_time: float,
     dc = np.prod(sos[:, :3].sum(axis=1) / sos[:, 3:].sum(axis=1))
     sos = sos.copy()
     sos[0, :3] /= dc
-    return sos
+    sos.setflags(write=False)
+    rows = tuple((float(b0), float(b1), float(b2), float(a1), float(a2))
+                 for b0, b1, b2, _, a1, a2 in sos)
+    unit_state = signal.sosfilt_zi(sos)
+    unit_state.setflags(write=False)
+    return sos, rows, unit_state
 
 
 class LowPassFilter:
@@ -128,8 +145,11 @@ class LowPassFilter:
         self.sample_time = float(sample_time)
         self.kind = kind
         self.sos = design_lowpass_sos(order, corner, sample_time, kind)
-        self._coefficients = [tuple(float(c) for c in row) for row in self.sos]
-        self._unit_state = signal.sosfilt_zi(self.sos) if len(self.sos) else np.zeros((0, 2))
+        if len(self.sos):
+            _, self._coefficients, self._unit_state = _designed(
+                self.order, self.corner, self.sample_time, kind)
+        else:
+            self._coefficients, self._unit_state = (), np.zeros((0, 2))
         self._state = [[0.0, 0.0] for _ in self._coefficients]
         self._output = 0.0
 
@@ -165,9 +185,15 @@ class LowPassFilter:
         taken (a controller that missed states), holding it as a zero-order hold would, so that
         the filter keeps its designed dynamics in time.
         """
+        sections = self._coefficients
+        if not sections:  # order 0: a pass-through
+            if samples >= 1:
+                self._output = float(value)
+            return self._output
+        state = self._state
         for _ in range(samples):
             x = float(value)
-            for (b0, b1, b2, _, a1, a2), z in zip(self._coefficients, self._state, strict=True):
+            for (b0, b1, b2, a1, a2), z in zip(sections, state, strict=True):
                 y = b0 * x + z[0]
                 z[0] = b1 * x - a1 * y + z[1]
                 z[1] = b2 * x - a2 * y

@@ -20,8 +20,8 @@ saturation error it would feed back.
 
 from __future__ import annotations
 
-import dataclasses
 import math
+from typing import NamedTuple
 
 __all__ = ['PidGains', 'PidTerms', 'Pid']
 
@@ -30,9 +30,16 @@ def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
 
-@dataclasses.dataclass(frozen=True)
-class PidGains:
-    """Gains and limits of a :class:`Pid`.
+class _Gains(NamedTuple):
+    p: float
+    i: float
+    d: float
+    output_limit: float
+    integral_limit: float
+
+
+class PidGains(_Gains):
+    """Gains and limits of a :class:`Pid` (immutable; validated when built).
 
     Attributes
     ----------
@@ -46,27 +53,32 @@ class PidGains:
         The output is clamped to +-output_limit [N*m].
     integral_limit : float
         The integral term is clamped to +-integral_limit [N*m].
+
+    Raises
+    ------
+    ValueError
+        If a value is not a finite number >= 0.
     """
 
-    p: float
-    i: float
-    d: float
-    output_limit: float
-    integral_limit: float
+    __slots__ = ()
 
-    def __post_init__(self) -> None:
+    def __new__(cls, p: float, i: float, d: float, output_limit: float,
+                integral_limit: float) -> 'PidGains':
+        """Build and validate the gains."""
         # the common case first, cheaply: the controllers build gains every control period
-        if all(type(value) is float and 0.0 <= value < math.inf for value in (
-                self.p, self.i, self.d, self.output_limit, self.integral_limit)):
-            return
-        for name in ('p', 'i', 'd', 'output_limit', 'integral_limit'):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0):
-                raise ValueError(f'PID {name} must be a finite number >= 0, got {value!r}')
+        if not (type(p) is float and type(i) is float and type(d) is float
+                and type(output_limit) is float and type(integral_limit) is float
+                and 0.0 <= p < math.inf and 0.0 <= i < math.inf and 0.0 <= d < math.inf
+                and 0.0 <= output_limit < math.inf and 0.0 <= integral_limit < math.inf):
+            for name, value in (('p', p), ('i', i), ('d', d), ('output_limit', output_limit),
+                                ('integral_limit', integral_limit)):
+                if not (isinstance(value, (int, float)) and math.isfinite(value)
+                        and value >= 0.0):
+                    raise ValueError(f'PID {name} must be a finite number >= 0, got {value!r}')
+        return super().__new__(cls, p, i, d, output_limit, integral_limit)
 
 
-@dataclasses.dataclass(frozen=True)
-class PidTerms:
+class PidTerms(NamedTuple):
     """One PID evaluation, each term in N*m."""
 
     proportional: float

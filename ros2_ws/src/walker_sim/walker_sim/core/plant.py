@@ -485,6 +485,36 @@ class WalkerPlant:
             raise GripperCommandError(f'unknown gripper {gripper!r}: expected "a" or "b"')
         return self._grippers.request_unscrew(gripper)
 
+    def command_gripper(self, gripper: str, action: str) -> tuple[bool, str]:
+        """Carry out a gripper command and say how it went, as ``gripper_command`` answers.
+
+        Parameters
+        ----------
+        gripper : str
+            ``'a'`` or ``'b'``.
+        action : {'screw_in', 'unscrew'}
+            What to do.
+
+        Returns
+        -------
+        success : bool
+            A screw-in that started (SCREWING) or an unscrewing that started (UNSCREWING);
+            False for a screw-in that jammed at once and for any refusal (nothing changed).
+        message : str
+            The jam's or the refusal's reason ('' when there is none).
+        """
+        try:
+            if action == 'screw_in':
+                outcome = self.screw_in(gripper)
+                return outcome.success, outcome.status.message
+            if action == 'unscrew':
+                self.unscrew(gripper)
+                return True, ''
+            raise GripperCommandError(f'unknown gripper command {action!r}: expected '
+                                      f"'screw_in' or 'unscrew'")
+        except GripperCommandError as error:
+            return False, str(error)
+
     def gripper_status(self, gripper: str) -> GripperStatus:
         """State of one gripper."""
         return self._grippers.status(gripper)

@@ -1,0 +1,43 @@
+"""``run_all.py --headless``: the options, the summary, the bag, the table and exit codes."""
+
+import json
+
+import pytest
+
+from walker_bringup.run import main, parse_arguments
+
+
+@pytest.mark.parametrize('options, named', [
+    (['--composed'], '--composed'), (['--composed-loop'], '--composed-loop'),
+    (['--grouped-controllers'], '--grouped-controllers'), (['--serve'], '--serve'),
+    (['--no-walk'], '--no-walk'), (['--walkers', '2'], '--walkers'),
+])
+def test_the_graphs_own_options_are_refused_with_headless(options, named, capsys):
+    with pytest.raises(SystemExit):
+        parse_arguments(['--headless', *options])
+    assert f'--headless runs no graph: leave {named} out' in capsys.readouterr().err
+
+
+def test_a_headless_walk_writes_the_summary_and_the_bag_and_says_it_reached(tmp_path,
+                                                                           capsys):
+    code = main(['--headless', '--target', 'n1_2', '--out', str(tmp_path), '--no-report',
+                 '--quiet'])
+    printed = capsys.readouterr().out
+    assert code == 0, printed
+    summary = json.loads((tmp_path / 'summary.json').read_text())
+    assert summary['reached'] and summary['path'] == ['n1_2'] and summary['message'] == ''
+    assert summary['runner'] == 'headless' and summary['loop']['lockstep_timeouts'] == 0
+    assert [s['to_node'] for s in summary['steps']] == ['n1_2']
+    assert (tmp_path / 'bag' / 'metadata.yaml').exists()
+    assert 'n2_1 -> n1_2' in printed and '[walker] reached n1_2 in 1 steps' in printed
+    assert main(['--headless', '--target', 'n1_2', '--out', str(tmp_path), '--quiet']) == 2
+    assert 'already exists' in capsys.readouterr().out  # a bag is never overwritten
+
+
+def test_a_target_off_the_truss_ends_unreached_with_the_reason(tmp_path, capsys):
+    code = main(['--headless', '--target', 'n9_9', '--out', str(tmp_path), '--no-record',
+                 '--quiet'])
+    printed = capsys.readouterr().out
+    assert code == 1 and 'not on the truss' in printed
+    summary = json.loads((tmp_path / 'summary.json').read_text())
+    assert not summary['reached'] and summary['steps'] == []

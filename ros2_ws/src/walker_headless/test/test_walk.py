@@ -1,0 +1,99 @@
+"""A headless step end to end: reached, recorded as the graph records, the same every time.
+
+One step (gripper b from n2_1 to n1_2 about gripper a in n1_1, the start of the parameter
+file) walked twice with its bag, once without: a few seconds of CPU each.
+"""
+
+import fnmatch
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+
+from walker_bag.core.bag_reader import BagReader
+from walker_bringup.graph import RECORDED_TOPICS
+from walker_headless.recording import WalkRecording
+from walker_headless.runner import walk
+from walker_headless.sections import load_sections
+from walker_report.core.walk_data import load_walk
+from walker_supervisor.core.sequencer import Phase
+
+TARGET = 'n1_2'
+STEP_PHASES = [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]
+
+
+@pytest.fixture(scope='module')
+def sections():
+    return load_sections()
+
+
+@pytest.fixture(scope='module')
+def walks(sections, tmp_path_factory):
+    """Two recorded walks of the same step, and their bags."""
+    results = []
+    for name in ('first', 'second'):
+        bag = tmp_path_factory.mktemp(name) / 'bag'
+        recording = WalkRecording(bag)
+        try:
+            result = walk(sections, TARGET, recording)
+        finally:
+            recording.close()
+        results.append((result, bag))
+    return results
+
+
+def messages(bag):
+    """Every message of a bag as stored: topic, log time, publish time, CDR bytes."""
+    with open(next(Path(bag).glob('*.mcap')), 'rb') as stream:
+        return [(channel.topic, message.log_time, message.publish_time, message.data)
+                for _, channel, message in make_reader(stream).iter_messages()]
+
+
+def test_the_step_reaches_its_node_through_the_four_phases(walks):
+    result, _ = walks[0]
+    assert result.reached and result.path == [TARGET] and result.message == ''
+    report = result.reports[0]
+    assert report.success and report.phase_names == ['extraction', 'coarse', 'fine',
+                                                     'insertion']
+    assert report.time_optimal_bound > 0 and report.duration > report.time_optimal_bound
+    assert report.insertion_error < 0.5e-3 and report.insertion_attempts == 1
+    in_step = [Phase(p.phase) for p in result.phases if p.step_count and p.from_node]
+    assert [p for i, p in enumerate(in_step) if i == 0 or p != in_step[i - 1]] == STEP_PHASES
+    assert result.phases[-1].phase == Phase.IDLE
+
+
+def test_the_same_parameters_give_the_same_walk_and_bag_bit_for_bit(walks):
+    (first, first_bag), (second, second_bag) = walks
+    assert first.reports == second.reports and first.phases == second.phases
+    assert (first.sim_time, first.periods) == (second.sim_time, second.periods)
+    assert messages(first_bag) == messages(second_bag)
+
+
+def test_a_walk_without_a_bag_is_the_same_walk(sections, walks):
+    assert walk(sections, TARGET).reports == walks[0][0].reports
+
+
+def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
+    result, bag = walks[0]
+    with BagReader(bag) as reader:
+        topics = {name.removeprefix('/walker/') for name in reader.topics}
+        counts = {name.removeprefix('/walker/'): n
+                  for name, n in reader.message_counts.items()}
+    assert all(any(fnmatch.fnmatch(topic, pattern) for pattern in RECORDED_TOPICS)
+               for topic in topics)
+    assert all(any(fnmatch.fnmatch(topic, pattern) for topic in topics)
+               for pattern in RECORDED_TOPICS)
+    assert counts['joint_states'] == result.periods + 1  # every state, the last included
+    assert counts['step_reports'] == 1
+    data = load_walk(bag)
+    assert not data.missing
+    assert len(data.step_reports) == 1 and data.step_reports[0].message.to_node == TARGET
+    assert set(data.controllers) == {'a_yaw_joint', 'a_pitch_joint', 'vertex_joint',
+                                     'b_pitch_joint', 'b_yaw_joint'}
+    assert abs(data.tip.position[-1][0] - data.tip.position[0][0]) > 0.1  # the tip moved
+
+
+def test_an_unknown_target_is_refused_before_anything_moves(sections):
+    result = walk(sections, 'n9_9')
+    assert not result.reached and 'not on the truss' in result.message
+    assert result.periods == 0 and result.reports == []

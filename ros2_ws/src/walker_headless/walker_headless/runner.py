@@ -1,0 +1,185 @@
+"""A whole walk in the lock-step loop: the library call behind ``run_all.py --headless``.
+
+:func:`walk` builds the robot side (:class:`~walker_headless.loop.RobotLoop`) and the
+supervisor's walk (:class:`~walker_headless.walk_driver.WalkDriver`) from the parameter file's
+sections, and runs them period by period until the walk has ended::
+
+    state t_k out (recorded, to the planner's stream) -> the controllers answer ->
+    the supervisor decides at t_k -> the plant steps to t_(k+1)
+
+Deterministic: the same sections and target give the same walk, bit for bit, on any machine
+load (nothing in it reads a wall clock but the optional time limit). One process, one core,
+no DDS: a campaign runs many at once.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.urdf import description_urdf
+
+from walker_headless.loop import RobotLoop
+from walker_headless.records import PhaseRecord, StepReportRecord
+from walker_headless.sections import Sections
+from walker_headless.walk_driver import WalkDriver, WalkRefusedError
+
+__all__ = ['WalkResult', 'walk', 'DIAGNOSTICS_PERIOD']
+
+#: [s] of simulated time between two of the plant's ``/diagnostics`` statuses
+DIAGNOSTICS_PERIOD = 1.0
+#: Periods between two looks at the wall clock (the time limit, the progress)
+_WALL_CHECK_PERIODS = 250
+
+
+@dataclasses.dataclass
+class WalkResult:
+    """How a headless walk went (the fields of ``walker_msgs/action/WalkTo``'s result, and more).
+
+    Attributes
+    ----------
+    target : str
+        The node walked to.
+    reached : bool
+        Every planned step succeeded.
+    message : str
+        Why not ('' when reached).
+    path : list of str
+        The nodes the moving grippers were screwed into, in order.
+    steps_taken : int
+        Steps that succeeded.
+    duration : float
+        Time of the steps [s], summed.
+    reports : list of StepReportRecord
+        One per step ended.
+    phases : list of PhaseRecord
+        Every phase message, in order.
+    sim_time : float
+        Simulated time at the end [s].
+    periods : int
+        Control periods simulated.
+    wall_time : float
+        Wall time the walk took, set-up included [s] (not part of the walk's outcome).
+    cpu_time : float
+        CPU time of this process in the loop, from the walk's start to its end [s] (not part
+        of the walk's outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
+    """
+
+    target: str
+    reached: bool
+    message: str
+    path: list[str]
+    steps_taken: int
+    duration: float
+    reports: list[StepReportRecord]
+    phases: list[PhaseRecord]
+    sim_time: float
+    periods: int
+    wall_time: float
+    cpu_time: float = 0.0
+
+
+def walk(sections: Sections, target: str, recording=None,
+         progress: Callable[[WalkDriver], None] | None = None,
+         say: Callable[[str, str], None] | None = None,
+         wall_timeout: float = math.inf) -> WalkResult:
+    """Walk from the plant's start (``sim.start``) to ``target``, headless.
+
+    Parameters
+    ----------
+    sections : Sections
+        The parameter file's sections.
+    target : str
+        The truss node to walk to.
+    recording : WalkRecording, optional
+        The bag to record into (not closed here).
+    progress : callable, optional
+        ``progress(driver)``, called with the walk's feedback (every ``FEEDBACK_PERIOD`` of
+        simulated time).
+    say : callable, optional
+        ``say(level, text)`` for what the supervisor would log.
+    wall_timeout : float
+        Longest wall time [s] the walk may take; it ends unreached after it.
+
+    Raises
+    ------
+    ParameterError
+        If the plant refuses its settings.
+    """
+    started = time.monotonic()
+    loop = RobotLoop(sections, recording)
+    try:
+        if recording is not None:
+            recording.robot_description(0, description_urdf(sections.walker))
+        driver = WalkDriver(loop, say)
+        if progress is not None:
+            driver.feedback = lambda walk, sequencer: progress(driver)
+        try:
+            driver.start_walk(target)
+        except WalkRefusedError as error:
+            return _result(target, driver, loop, started, str(error))
+        cpu_started = time.process_time()
+        diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
+        next_diagnostics = 0
+        periods = 0
+        message = None
+        while not driver.done:
+            loop.sense()
+            loop.control()
+            driver.decide()
+            if recording is not None and loop.stamp >= next_diagnostics:
+                next_diagnostics += diagnostics_ns
+                _plant_diagnostics(recording, loop)
+            if driver.done:
+                break
+            loop.step()
+            periods += 1
+            if periods % _WALL_CHECK_PERIODS == 0 and time.monotonic() - started > wall_timeout:
+                message = f'the walk did not end within {wall_timeout:g} s of wall time'
+                break
+        result = _result(target, driver, loop, started, message)
+        result.cpu_time = time.process_time() - cpu_started
+        return result
+    finally:
+        loop.close()
+
+
+def _result(target: str, driver: WalkDriver, loop: RobotLoop, started: float,
+            message: str | None) -> WalkResult:
+    walk_ = driver.walk
+    outcomes = walk_.outcomes if walk_ is not None else []
+    reached = walk_ is not None and walk_.reached and message is None
+    if message is None:
+        message = '' if reached else _walk_message(walk_)
+    return WalkResult(
+        target=target, reached=reached, message=message,
+        path=walk_.path if walk_ is not None else [],
+        steps_taken=sum(1 for o in outcomes if o.success),
+        duration=float(sum(o.duration for o in outcomes)), reports=list(driver.reports),
+        phases=list(driver.phases), sim_time=loop.time, periods=loop.stamp // loop.period_ns,
+        wall_time=time.monotonic() - started)
+
+
+def _walk_message(walk_) -> str:
+    if walk_ is None:
+        return 'the walk did not start'
+    if walk_.failed:
+        return walk_.outcomes[-1].message
+    if walk_.cancel_requested:
+        return f'cancelled after {walk_.step_index} of {len(walk_.route)} steps'
+    return 'the walk did not finish'
+
+
+def _plant_diagnostics(recording, loop: RobotLoop) -> None:
+    """Record the plant's status as its node publishes it (lock-stepped: nothing missed)."""
+    values = {f'missed {joint}': 0 for joint in PHYSICAL_JOINT_NAMES}
+    values.update({'refused commands': loop.counts['refused'],
+                   'saturated commands': loop.counts['saturated'],
+                   'expired commands': 0, 'overruns commands': 0, 'lock-step timeouts': 0,
+                   'not waited for': ''})
+    recording.diagnostics(loop.stamp, f'{recording.namespace}/plant: plant', 'walker_sim', 0,
+                          f'sim_time, t={loop.plant.time:.3f} s, 0 missed command periods',
+                          values)

@@ -1,0 +1,87 @@
+"""The parameter file read once into every typed section the headless loop needs.
+
+The same file, the same sections and the same validation as the nodes (each node reads its
+sections with :func:`walker_core.node_parameters.declare_section`): the ``/**`` section of a
+``ros__parameters`` YAML file, with any ``-p``-style overrides on top.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from walker_control.core.config import ControllerSettings
+from walker_core.parameter_schema import ParameterError, load_parameter_file, section_from_flat
+from walker_core.robot_parameters import WalkerParameters, default_parameter_file
+from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
+from walker_planner.core.parameters import PlannerParameters
+from walker_sim.core.config import SimParameters, check_against_walker
+from walker_supervisor.core.sequencer import SupervisorParameters
+
+__all__ = ['Sections', 'load_sections']
+
+
+@dataclasses.dataclass(frozen=True)
+class Sections:
+    """Every section of the parameter file the headless loop uses, validated.
+
+    Attributes
+    ----------
+    path : Path
+        The parameter file.
+    walker : WalkerParameters
+        Robot, truss, gripper and timing (every node's).
+    sim : SimParameters
+        ``sim.*`` (the plant's).
+    control : ControllerSettings
+        The joint controllers' (stability check included).
+    planner : PlannerParameters
+        ``planner.*``.
+    supervisor : SupervisorParameters
+        ``supervisor.*``.
+    """
+
+    path: Path
+    walker: WalkerParameters
+    sim: SimParameters
+    control: ControllerSettings
+    planner: PlannerParameters
+    supervisor: SupervisorParameters
+
+
+def load_sections(path: str | Path | None = None,
+                  overrides: Mapping[str, Any] | None = None) -> Sections:
+    """Read and validate every section of a parameter file (default: the installed one).
+
+    ``overrides`` maps dotted parameter names to values, as ``-p name:=value`` would.
+
+    Raises
+    ------
+    ParameterError
+        Naming the file's missing or invalid parameter, or a rule between sections broken.
+    """
+    path = Path(path or default_parameter_file())
+    flat = {**load_parameter_file(path), **dict(overrides or {})}
+    walker = WalkerParameters.from_flat(flat)
+    sim = section_from_flat(SimParameters, flat, 'sim.')
+    check_against_walker(sim, walker)
+    supervisor = section_from_flat(SupervisorParameters, flat, 'supervisor.')
+    _check_alignment(supervisor, walker)
+    return Sections(path, walker, sim, ControllerSettings.from_flat(flat),
+                    section_from_flat(PlannerParameters, flat, PLANNER_PREFIX), supervisor)
+
+
+def _check_alignment(supervisor: SupervisorParameters, walker: WalkerParameters) -> None:
+    """Check the rules between ``supervisor.*`` and the gripper (as the supervisor node)."""
+    tolerance = walker.gripper.insertion_position_tolerance
+    if supervisor.insertion_alignment >= tolerance:
+        raise ParameterError(
+            f'supervisor.insertion_alignment ({supervisor.insertion_alignment} m) must be '
+            f'smaller than gripper.insertion_position_tolerance ({tolerance} m)')
+    if supervisor.descent_region > tolerance:
+        raise ParameterError(
+            f'supervisor.descent_region ({supervisor.descent_region} m) must not exceed '
+            f'gripper.insertion_position_tolerance ({tolerance} m): the descent starts '
+            f'only with the tip inside it')

@@ -1,0 +1,148 @@
+"""The streamer: one stream at a time on the joint states, its end, and the hold after it."""
+
+import numpy as np
+import pytest
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_planner.core.errors import PlanningError
+from walker_planner.core.streamer import TrajectoryStreamer
+from walker_planner.core.streaming import SampledTrajectory
+
+MS = 1_000_000
+PERIOD = 2 * MS
+LOOKAHEAD = 4
+START = np.array([0.0, 0.8, 1.4, 0.8, 0.0])
+
+
+class Sent(list):
+    def __call__(self, stamp, positions, velocities, accelerations):
+        self.append((stamp, list(positions), list(velocities), list(accelerations)))
+
+    @property
+    def stamps(self):
+        return [s[0] for s in self]
+
+
+@pytest.fixture
+def sent():
+    return Sent()
+
+
+@pytest.fixture
+def streamer(sent):
+    return TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, sent)
+
+
+def ramp(duration=0.02, start=START):
+    """Return a joint-1 ramp of 0.1 rad over ``duration`` seconds."""
+    times = np.array([0.0, duration])
+    positions = np.array([start, start + [0.1, 0, 0, 0, 0]])
+    velocity = np.zeros((2, 5))
+    return SampledTrajectory.from_points(PHYSICAL_JOINT_NAMES, times, positions, velocity,
+                                         velocity)
+
+
+def test_a_stream_needs_a_joint_state_starting_where_the_trajectory_starts(streamer):
+    with pytest.raises(PlanningError, match='no joint_states'):
+        streamer.start(ramp())
+    streamer.on_state(0, START + [0.1, 0, 0, 0, 0])
+    with pytest.raises(PlanningError, match='a_yaw_joint'):
+        streamer.start(ramp())
+    assert streamer.active is None
+
+
+def test_a_stream_sends_the_lookahead_at_once_then_one_setpoint_a_state(streamer, sent):
+    streamer.on_state(10 * PERIOD, START)
+    active = streamer.start(ramp(), owner='goal')
+    assert active.owner == 'goal' and active.stream.origin == 11 * PERIOD
+    assert sent.stamps == [11 * PERIOD, 12 * PERIOD, 13 * PERIOD, 14 * PERIOD]
+    assert sent[0][1] == pytest.approx(START)  # time 0 applies a period after the state
+    streamer.on_state(11 * PERIOD, START)
+    assert sent.stamps[-1] == 15 * PERIOD
+    with pytest.raises(PlanningError, match='already running'):
+        streamer.start(ramp())
+
+
+def test_a_stream_ends_at_the_state_one_period_before_its_final_setpoint(streamer, sent):
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(0.02))  # final setpoint at 2 ms + 20 ms
+    stamp = 0
+    while streamer.active is not None:
+        stamp += PERIOD
+        streamer.on_state(stamp, START)
+    assert stamp + PERIOD == active.last.stamp == 22 * MS and active.last.final
+    assert not active.cancelled and streamer.take_ended() == [active]
+    assert streamer.take_ended() == []
+    assert active.duration == pytest.approx(0.02)
+
+
+def test_after_a_stream_its_last_position_is_held_while_the_controllers_track(streamer, sent):
+    streamer.on_control_mode(True)
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(0.004))
+    stamp = 0
+    while streamer.active is not None:
+        stamp += PERIOD
+        streamer.on_state(stamp, START)
+    last = active.last
+    before = len(sent)
+    streamer.on_state(last.stamp, START)
+    held = sent[before:]
+    assert held and all(s[1] == pytest.approx(last.position) and s[2] == [0.0] * 5
+                        for s in held)
+    assert [s[0] for s in held] == list(range(last.stamp + PERIOD,
+                                              last.stamp + LOOKAHEAD * PERIOD + 1, PERIOD))
+    streamer.on_control_mode(False)  # HOLD: the controllers need no setpoints
+    before = len(sent)
+    streamer.on_state(last.stamp + PERIOD, START)
+    assert len(sent) == before
+
+
+def test_tracking_again_without_a_stream_holds_where_the_joints_are(streamer, sent):
+    streamer.on_state(0, START)
+    streamer.start(ramp(0.004))
+    streamer.end_now(streamer.active, 'cancelled')
+    streamer.on_control_mode(False)
+    measured = START + [0.05, 0, 0, 0, 0]
+    streamer.on_state(20 * PERIOD, measured)
+    streamer.on_control_mode(True)
+    before = len(sent)
+    streamer.on_state(21 * PERIOD, measured)
+    assert sent[before:] and all(s[1] == pytest.approx(measured) for s in sent[before:])
+    assert sent[before][0] == 22 * PERIOD
+
+
+def test_a_cancelled_stream_stops_at_rest_where_its_sent_setpoints_end(streamer, sent):
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(1.0))
+    last_sent = sent[-1]
+    streamer.end_now(active, 'cancelled')
+    hold = sent[-1]
+    assert hold[0] == last_sent[0] + PERIOD and hold[1] == pytest.approx(last_sent[1])
+    assert hold[2] == [0.0] * 5 and hold[3] == [0.0] * 5
+    assert active.cancelled and active.message == 'cancelled' and streamer.active is None
+    assert streamer.stop() is False  # nothing runs now
+
+
+def test_a_stream_marked_cancelled_ends_at_the_next_state(streamer, sent):
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(1.0))
+    active.cancel()
+    streamer.on_state(PERIOD, START)
+    assert streamer.active is None and active.ended and active.message == 'cancelled'
+
+
+def test_feedback_is_due_every_so_many_setpoints(streamer):
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(1.0))  # 4 sent
+    assert streamer.feedback_due(4) is active
+    assert streamer.feedback_due(4) is None
+    for k in range(1, 5):
+        streamer.on_state(k * PERIOD, START)
+    assert streamer.feedback_due(4) is active
+    elapsed, fraction = streamer.progress(active)
+    assert elapsed == pytest.approx(4 * PERIOD * 1e-9) and fraction == pytest.approx(0.008)
+    # the newest state (4 periods) against the trajectory at its own time (3 periods in)
+    desired = active.stream.trajectory.sample(3 * PERIOD * 1e-9).position
+    assert streamer.tracking_error(active.stream) == pytest.approx(abs(desired[0] - START[0]))
+    assert streamer.tracking_error(active.stream) > 0.0

@@ -1,0 +1,247 @@
+"""The planner's setpoint streaming as a whole: one stream at a time, and the hold after it.
+
+Everything the planner node decides about streams, free of ROS, so that the node and the
+headless lock-step loop (``walker_headless``) run the same code: :class:`TrajectoryStreamer`
+starts a stream on the newest joint state (refused while one runs, or when the trajectory
+does not start where the joints are), sends at each joint state the setpoints due
+(:meth:`~walker_planner.core.streaming.SetpointStream.due`), ends the stream at the state one
+period before its final setpoint, ends it at once on a cancel or a stop with a setpoint at
+rest where its sent setpoints end, and, while the controllers track (COARSE or FINE) with no
+stream, keeps streaming a hold: the last position streamed, or, back in a tracking mode after
+HOLD or OFF, the measured position (docs/architecture.md, ``follow_trajectory``).
+
+Setpoints leave through ``send(stamp, positions, velocities, accelerations)``: ``stamp`` the
+clock time [ns] the setpoint applies, the others sequences of five floats in physical joint
+order [rad, rad/s, rad/s^2]. Clock times are integer nanoseconds (the states' stamps). Not
+thread-safe: a caller with several threads holds its own lock around every call.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from walker_planner.core.errors import PlanningError
+from walker_planner.core.streaming import (
+    SampledTrajectory, Setpoint, SetpointStream, check_start, stamps_due)
+
+__all__ = ['ActiveStream', 'TrajectoryStreamer', 'Send']
+
+#: ``send(stamp, positions, velocities, accelerations)`` (see the module docstring).
+Send = Callable[[int, Sequence[float], Sequence[float], Sequence[float]], None]
+
+_ZEROS = (0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+class ActiveStream:
+    """A stream under way, and how it ended.
+
+    Attributes
+    ----------
+    stream : SetpointStream
+        Its timing and trajectory.
+    owner : object
+        Whatever the caller tied to it (the node's action goal), or None.
+    last : Setpoint or None
+        The last setpoint sent.
+    ticks : int
+        Setpoints sent.
+    fed_back : int
+        ``ticks`` at the last feedback (:meth:`TrajectoryStreamer.feedback_due`).
+    cancelled : bool
+        It ended before its end (cancel, stop).
+    ended : bool
+        It has ended, whether complete or not.
+    message : str
+        Why it ended early ('' when it completed).
+    """
+
+    def __init__(self, stream: SetpointStream, owner: object = None) -> None:
+        self.stream = stream
+        self.owner = owner
+        self.last: Setpoint | None = None
+        self.ticks = 0
+        self.fed_back = 0
+        self.cancelled = False
+        self.ended = False
+        self.message = ''
+
+    def cancel(self, message: str = 'cancelled') -> None:
+        """Mark the stream cancelled: it ends, holding, at the next joint state."""
+        if not self.cancelled:
+            self.cancelled, self.message = True, message
+
+    @property
+    def duration(self) -> float:
+        """Trajectory time [s] of the last setpoint sent (0 before the first)."""
+        return self.last.time_from_start if self.last is not None else 0.0
+
+
+class TrajectoryStreamer:
+    """One stream at a time, paced by the joint states (see the module docstring).
+
+    Parameters
+    ----------
+    period : int
+        Control period [ns].
+    lookahead : int
+        ``planner.stream.lookahead``: periods ahead of the newest state sent at once.
+    start_tolerance : float
+        ``planner.stream.start_tolerance`` [rad].
+    send : callable
+        Where setpoints go (see the module docstring).
+    """
+
+    def __init__(self, period: int, lookahead: int, start_tolerance: float, send: Send
+                 ) -> None:
+        self.period = int(period)
+        self.lookahead = lookahead
+        self.start_tolerance = start_tolerance
+        self._send = send
+        self.active: ActiveStream | None = None
+        #: (stamp [ns], positions [rad] in physical order) of the newest joint state
+        self.measured: tuple[int, np.ndarray] | None = None
+        # [rad] held at rest while the controllers track with no stream: the last position
+        # streamed, or where the joints were when they went back to tracking
+        self._holding: np.ndarray | None = None
+        self._hold_sent: int | None = None  # [ns] stamp of the newest hold setpoint sent
+        self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
+        self._ended: list[ActiveStream] = []
+
+    # ------------------------------------------------------------------ inputs
+    def on_state(self, stamp: int, positions: np.ndarray) -> None:
+        """Take a joint state stamped ``stamp`` [ns] (finite positions, physical order).
+
+        Sends the setpoints due: every one not sent yet up to ``lookahead`` periods after
+        ``stamp``, each stamped with the time it applies, so that it is in place before the
+        state it applies to. A stream ends (complete) at the state one period before its
+        final setpoint, as it would with each setpoint sent just in time.
+        """
+        self.measured = (int(stamp), positions)
+        active = self.active
+        if active is None:
+            if self._holding is not None and self._tracking:
+                self._send_hold(self._holding, stamp)
+            return
+        if active.cancelled:
+            self._finish(active, active.stream.hold(stamp, active.last))
+            return
+        self._send_due(active, stamp)
+        if active.last.final and stamp + self.period >= active.last.stamp:
+            self._finish(active, None)
+
+    def on_control_mode(self, tracking: bool) -> None:
+        """Take a mode command: ``tracking`` True for COARSE or FINE.
+
+        Tracking again with no stream (a resume, a step's start): hold where the joints are,
+        as the controllers do, not where the last stream left its setpoints; a stream cut
+        short (a fault, a hold) may have left them far away.
+        """
+        if tracking and not self._tracking and self.active is None \
+                and self.measured is not None:
+            self._holding = np.array(self.measured[1])
+            self._hold_sent = None  # from the next state on, over any sent before
+        self._tracking = tracking
+
+    # ------------------------------------------------------------------ streams
+    def start(self, trajectory: SampledTrajectory, owner: object = None) -> ActiveStream:
+        """Start streaming ``trajectory`` from the newest joint state; return the stream.
+
+        The trajectory's time 0 applies one period after that state's stamp; the setpoints
+        due are sent at once.
+
+        Raises
+        ------
+        PlanningError
+            No joint state yet, a joint too far from the trajectory's first point
+            (``start_tolerance``), or a stream already under way; nothing changes.
+        """
+        measured = None if self.measured is None else self.measured[1]
+        check_start(trajectory, measured, self.start_tolerance)
+        if self.active is not None:
+            raise PlanningError('a stream is already running (cancel it or call '
+                                'stop_trajectory)')
+        now = self.measured[0]
+        self.active = ActiveStream(SetpointStream(trajectory, now, self.period), owner)
+        self._send_due(self.active, now)
+        return self.active
+
+    def end_now(self, active: ActiveStream, message: str) -> None:
+        """End a stream at once, holding where its sent setpoints end (a cancel, a stop).
+
+        It does not wait for a joint state: a plant that stopped sending them (frozen, gone)
+        would otherwise keep a cancelled stream running, and the next one refused.
+        """
+        active.cancelled, active.message = True, message
+        now = self.measured[0] if self.measured is not None else active.stream.origin
+        self._finish(active, active.stream.hold(now, active.last))
+
+    def stop(self) -> bool:
+        """End whatever stream runs (``stop_trajectory``); return False when none ran."""
+        active = self.active
+        if active is not None:
+            self.end_now(active, 'stopped by stop_trajectory')
+        return active is not None
+
+    def take_ended(self) -> list[ActiveStream]:
+        """Return the streams ended since the last call, oldest first."""
+        ended, self._ended = self._ended, []
+        return ended
+
+    # ------------------------------------------------------------------ figures
+    def tracking_error(self, stream: SetpointStream) -> float:
+        """Largest joint error [rad] of the newest state against ``stream``; -1 without one."""
+        if self.measured is None:
+            return -1.0
+        stamp, positions = self.measured
+        return stream.tracking_error(stamp, positions)
+
+    def progress(self, active: ActiveStream) -> tuple[float, float]:
+        """Where a stream is: trajectory time [s] and fraction, at the state after the newest."""
+        stream = active.stream
+        duration = stream.trajectory.duration
+        elapsed = min(duration, max(0.0, stream.trajectory_time(
+            self.measured[0] + self.period))) if self.measured else 0.0
+        return elapsed, min(1.0, elapsed / duration) if duration else 1.0
+
+    def feedback_due(self, every: int) -> ActiveStream | None:
+        """Return the stream under way when it has sent ``every`` setpoints since its last.
+
+        Marks the feedback given. None when no stream runs, none was sent, or it is not due.
+        """
+        active = self.active
+        if active is None or active.last is None:
+            return None
+        every = max(1, int(every))
+        if active.ticks // every <= active.fed_back // every:
+            return None
+        active.fed_back = active.ticks
+        return active
+
+    # ------------------------------------------------------------------ internals
+    def _send_due(self, active: ActiveStream, now: int) -> None:
+        for setpoint in active.stream.due(now, active.last, self.lookahead):
+            self._send_setpoint(active, setpoint)
+
+    def _send_setpoint(self, active: ActiveStream, setpoint: Setpoint) -> None:
+        self._send(setpoint.stamp, setpoint.position.tolist(), setpoint.velocity.tolist(),
+                   setpoint.acceleration.tolist())
+        active.last = setpoint
+        active.ticks += 1
+
+    def _finish(self, active: ActiveStream, hold: Setpoint | None) -> None:
+        """End the stream; the controllers keep getting its last position while they track."""
+        if hold is not None:
+            self._send_setpoint(active, hold)
+        self._holding = None if active.last is None else np.array(active.last.position)
+        self._hold_sent = None if active.last is None else active.last.stamp
+        self.active = None
+        active.ended = True
+        self._ended.append(active)
+
+    def _send_hold(self, position: np.ndarray, now: int) -> None:
+        """Send the hold's setpoints not sent yet, up to the lookahead after ``now`` [ns]."""
+        for stamp in stamps_due(now, self._hold_sent, self.period, self.lookahead):
+            self._send(stamp, position.tolist(), _ZEROS, _ZEROS)
+            self._hold_sent = stamp
