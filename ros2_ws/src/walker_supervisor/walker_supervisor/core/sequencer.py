@@ -59,7 +59,6 @@ Rules it enforces:
 from __future__ import annotations
 
 import dataclasses
-import enum
 import math
 from collections.abc import Callable
 
@@ -67,6 +66,10 @@ import numpy as np
 
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
+from walker_supervisor.core.commands import (
+    CancelTrajectory, GripperRequest, Notice, PrepareTrajectory, SetControlMode,
+    TrajectoryRequest)
+from walker_supervisor.core.phases import Phase, SequencerError, StepOutcome
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.way_back import (
@@ -79,17 +82,6 @@ __all__ = [
 ]
 
 
-class Phase(enum.IntEnum):
-    """Phases of a step; the values are those of ``walker_msgs/StepPhase``."""
-
-    IDLE = 0
-    EXTRACTION = 1
-    COARSE = 2
-    FINE = 3
-    INSERTION = 4
-    SAFE_HOLD = 5
-
-
 #: Fine correction lines tried before insertion is attempted anyway.
 MAX_FINE_LINES = 3
 #: [rad] The descent planned ahead (on entering FINE) starts at the configuration above the
@@ -98,10 +90,6 @@ PREPARED_DESCENT_TOLERANCE = 0.02
 #: [s] A step starts no earlier than this before the unscrewing would end with the relaxation
 #: still running, so that the stance is measured after the relaxation, with the chain closed.
 STANCE_MARGIN = 0.1
-
-
-class SequencerError(ValueError):
-    """An event that the sequencer cannot accept in its current state."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -190,126 +178,6 @@ class SupervisorParameters:
                 f'supervisor.descent_region ({self.descent_region} m) must be at least '
                 f'supervisor.insertion_alignment ({self.insertion_alignment} m) and smaller '
                 f'than supervisor.coarse_to_fine_region ({self.coarse_to_fine_region} m)')
-
-
-@dataclasses.dataclass(frozen=True)
-class SetControlMode:
-    """Put all five controllers in ``mode`` ('off', 'hold', 'coarse', 'fine') for a base."""
-
-    mode: str
-    base_gripper: str
-
-
-@dataclasses.dataclass(frozen=True)
-class GripperRequest:
-    """Screw a gripper in (``'screw_in'``) or out (``'unscrew'``)."""
-
-    gripper: str
-    action: str
-
-
-@dataclasses.dataclass(frozen=True)
-class TrajectoryRequest:
-    """Plan and stream a trajectory.
-
-    Attributes
-    ----------
-    purpose : str
-        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'
-        (a step's), 'jog_joint' or 'jog_tip' (an operator's, :mod:`.teleop`).
-    start, goal : ndarray, shape (5,)
-        Joint angles J1..J5 [rad] (role order of ``base_gripper``).
-    start_point, goal_point : ndarray, shape (3,)
-        The same tip positions [m] in the base frame, for Cartesian trajectory types.
-    sweep : float
-        Signed base yaw sweep [rad] (coarse motion only, else 0).
-    base_gripper : str
-        The base during the motion.
-    mode : str
-        Controller mode for the motion ('coarse' or 'fine'), commanded again just before it
-        streams: a controller that latched a hold (a stale input) tracks again. Not part of
-        :meth:`same_motion`: the plan does not depend on it.
-    then : TrajectoryRequest or None
-        A motion streamed with this one, as one trajectory: it starts ``lead`` [s] before
-        this one ends, and over the overlap the two motions add (the lift and the sweep,
-        ``sweep_lead``). Not part of :meth:`same_motion`: each is planned on its own.
-    lead : float
-        See ``then`` [s].
-    """
-
-    purpose: str
-    start: np.ndarray
-    goal: np.ndarray
-    start_point: np.ndarray
-    goal_point: np.ndarray
-    sweep: float
-    base_gripper: str
-    mode: str = 'fine'
-    then: 'TrajectoryRequest | None' = None
-    lead: float = 0.0
-
-    def same_motion(self, other: 'TrajectoryRequest') -> bool:
-        """Return True if ``other`` asks for exactly this motion (a plan of one serves both).
-
-        The mode it streams in and what streams with it do not change the plan.
-        """
-        return (self.purpose == other.purpose and self.base_gripper == other.base_gripper
-                and self.sweep == other.sweep
-                and all(np.array_equal(getattr(self, name), getattr(other, name))
-                        for name in ('start', 'goal', 'start_point', 'goal_point')))
-
-
-@dataclasses.dataclass(frozen=True)
-class PrepareTrajectory:
-    """Plan a trajectory that will be requested later, unchanged, so it can stream at once.
-
-    Nothing streams: a later :class:`TrajectoryRequest` equal to ``request``
-    (:meth:`TrajectoryRequest.same_motion`) may use the plan; any other plans afresh. With
-    ``request.then`` (prepared too, on its own), the two plans may also be joined ahead, for
-    a later request that streams them together with the same ``lead``.
-    """
-
-    request: TrajectoryRequest
-
-
-@dataclasses.dataclass(frozen=True)
-class CancelTrajectory:
-    """Stop any trajectory being streamed (the controllers hold the last setpoint)."""
-
-
-@dataclasses.dataclass(frozen=True)
-class Notice:
-    """Something the operator should know that changes nothing (a warning to log)."""
-
-    message: str
-
-
-@dataclasses.dataclass
-class StepOutcome:
-    """How a step ended, with the figures the walk summary reports.
-
-    Attributes
-    ----------
-    success : bool
-    message : str
-        Why it failed ('' on success).
-    phase_durations : dict of str to float
-        Time spent in each phase [s].
-    duration : float
-        Step time [s] from start to the screw-in (the gripper reported attached).
-    insertion_error : float
-        Tip distance [m] from the hole's axis when the screw-in was requested, at the mouth
-        (forward kinematics of the measured joints: what the walker knows); before that, from
-        the point above the hole when the descent started; NaN if insertion never started.
-    insertion_attempts : int
-    """
-
-    success: bool
-    message: str
-    phase_durations: dict[str, float]
-    duration: float
-    insertion_error: float
-    insertion_attempts: int
 
 
 class StepSequencer:
