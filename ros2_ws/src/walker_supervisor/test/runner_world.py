@@ -28,7 +28,7 @@ from walker_supervisor.core.commands import (
 from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.prepared_motions import PlanAnswer, stream_lead
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
-from walker_supervisor.core.sequencer import SupervisorParameters
+from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.step_geometry import BaseFrame
 
 __all__ = ['World', 'PARAMS', 'KIN', 'TRUSS', 'SETTINGS', 'START', 'DT', 'join']

@@ -11,7 +11,7 @@ from walker_core.kinematics import WalkerKinematics
 from walker_core.parameter_schema import (
     ParameterError, load_parameter_file, section_from_flat)
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-from walker_supervisor.core.sequencer import Phase
+from walker_supervisor.core.phases import Phase
 from walker_supervisor.core.teleop import (
     SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules, busy_reason,
     tip_heading)

@@ -76,7 +76,8 @@ from walker_supervisor.core.phases import Phase, SequencerError, StepOutcome
 from walker_supervisor.core.prepared_motions import PlanAnswer
 from walker_supervisor.core.reports import PhaseAnnouncer, StepFigures
 from walker_supervisor.core.route import PlannedStep
-from walker_supervisor.core.sequencer import StepSequencer, SupervisorParameters
+from walker_supervisor.core.parameters import SupervisorParameters
+from walker_supervisor.core.sequencer import StepSequencer
 from walker_supervisor.core.step_geometry import StepTargets, measure_step_targets
 from walker_supervisor.core.teleop import Situation, busy_reason
 from walker_supervisor.core.walk import Walk
