@@ -12,9 +12,9 @@ import pytest
 from runner_world import PARAMS, SETTINGS, START, World
 from walker_supervisor.core.adoption import RecordedStep
 from walker_supervisor.core.commands import (
-    CancelFollow, Feedback, FollowMotion, ForgetRecordedStep, GoalEnded, GripperRequest, Notice,
-    PhaseRecord, PlanMotion, RecordStep, RenewPlannerClient, SetControlMode, StepRecord, StopJog,
-    StopOrphanStream)
+    CancelFollow, Feedback, FollowMotion, ForgetRecordedStep, GoalEnded, GripperRequest,
+    Notice, PhaseRecord, PlanMotion, RecordStep, RenewPlannerClient, SetControlMode,
+    StepRecord, StopJog, StopOrphanStream)
 from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.goals import GoalRefusedError
 from walker_supervisor.core.phases import Phase, SequencerError

@@ -1,7 +1,8 @@
-"""The vocabulary of a step: its phases (paper section 2, Figure 2) and how it ended.
+"""The vocabulary of a step: its phases (paper section 2, Figure 2), stages, and how it ended.
 
 A step runs EXTRACTION -> COARSE -> FINE -> INSERTION; IDLE between steps, SAFE_HOLD after a
-fault. The values of :class:`Phase` are those of ``walker_msgs/StepPhase``.
+fault. The values of :class:`Phase` are those of ``walker_msgs/StepPhase``. Within a phase the
+step is at one :class:`Stage` (what it waits for now).
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 
-__all__ = ['Phase', 'StepOutcome', 'SequencerError']
+__all__ = ['Phase', 'Stage', 'StepOutcome', 'SequencerError']
 
 
 class Phase(enum.IntEnum):
@@ -21,6 +22,26 @@ class Phase(enum.IntEnum):
     FINE = 3
     INSERTION = 4
     SAFE_HOLD = 5
+
+
+class Stage(enum.StrEnum):
+    """Where a step is within its phase: what it waits for (its value is what the logs say)."""
+
+    NONE = ''  # no step under way
+    UNSCREWING = 'unscrewing'  # EXTRACTION: the moving gripper unscrews (then waits for the
+    # sweep's plan, at most sweep_lead)
+    LIFTING = 'lifting'  # EXTRACTION: the lift along the hole's axis streams (with the sweep)
+    LIFTED = 'lifted'  # EXTRACTION: the lift ended; waiting for the joints at the sweep's start
+    MOVING = 'moving'  # COARSE: the sweep streams; FINE: a fine line or a way back streams
+    ARRIVING = 'arriving'  # COARSE or FINE: the motion there ended (or runs on); waiting for
+    # the tip to come within the region, or to come to rest
+    SETTLING = 'settling'  # FINE, INSERTION: waiting for the joints to be still (or, above the
+    # hole, for the tip to close on it slowly enough to descend)
+    DESCENDING = 'descending'  # INSERTION: the descent along the axis streams
+    ALIGNING = 'aligning'  # INSERTION: a fine line at the mouth, onto the axis, streams
+    SCREWING = 'screwing'  # INSERTION: the gripper screws in
+    RETRY_LIFT = 'retry_lift'  # INSERTION: lifted back to the approach height after a jam, or
+    # a descent that left the axis
 
 
 class SequencerError(ValueError):
