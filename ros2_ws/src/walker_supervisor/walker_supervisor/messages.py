@@ -111,6 +111,7 @@ def feedback_message(feedback: Feedback):
                                to_node=feedback.to_node,
                                tip_position_error=feedback.tip_position_error)
     return Step.Feedback(phase=int(feedback.phase),
+                         phase_progress=float(feedback.phase_progress),
                          tip_position_error=feedback.tip_position_error)
 
 

@@ -4,14 +4,17 @@ Every decision is :class:`~walker_supervisor.core.runner.WalkRunner`'s; this nod
 messages, parameters and clocks, carries out the runner's commands over ROS and publishes what
 it reports. Interfaces (relative to the node's namespace):
 
-* actions ``step`` (walker_msgs/action/Step), ``walk_to`` (walker_msgs/action/WalkTo); a goal sent
-  while a walk runs is refused (aborted at once with the reason); cancelling a walk lets the step
-  under way finish, so the walker ends with both grippers attached;
+* actions ``step`` (walker_msgs/action/Step), ``walk_to`` (walker_msgs/action/WalkTo): a goal
+  that cannot be taken (a target that is not a node name, not on the truss or out of reach, a
+  goal while another runs, in safe hold, ...) is rejected at goal time, with the reason in the
+  log and on ``goal_rejections`` (walker_msgs/GoalRejection, latched); cancelling a walk lets the
+  step under way finish, so the walker ends with both grippers attached;
 * services ``hold`` and ``resume`` (std_srvs/srv/Trigger); ``hold`` also stops a jog;
 * the teleoperation services ``jog_joint``, ``jog_tip`` and ``operate_gripper``
   (:mod:`walker_supervisor.teleop_server`);
-* publishes ``phase`` (walker_msgs/StepPhase, latched), ``control_mode`` (latched),
-  ``step_reports`` (walker_msgs/StepReport, one per step, latched history) and
+* publishes ``phase`` (walker_msgs/StepPhase, latched: the phase now), ``phase_history`` (the
+  same messages, a latched history), ``control_mode`` (latched), ``step_reports``
+  (walker_msgs/StepReport, one per step, latched history) and
   ``/diagnostics``; subscriptions: :mod:`walker_supervisor.inputs`; clients of the planner and
   the plant: :mod:`walker_supervisor.links`.
 """
@@ -25,11 +28,11 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
-from walker_msgs.msg import ControlMode, StepPhase, StepReport
+from walker_msgs.msg import ControlMode, GoalRejection, StepPhase, StepReport
 
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.qos import MODE_QOS, latched_qos
+from walker_core.qos import LATCHED_QOS, MODE_QOS, latched_qos
 from walker_core.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.spinning import destroy_actions, init_node_process, spin_nodes
@@ -52,11 +55,11 @@ from walker_supervisor.teleop_server import TeleopServer
 
 __all__ = ['SupervisorNode', 'main', 'MODE_QOS']
 
-# The phase is latched with a history: a subscriber that matches late (a recorder matching a
-# supervisor restarted after a SIGKILL, seen to take from one to about 30 s over UDP, about
-# 20 phase messages of a walk in sim time) still receives the phases it missed, a safe hold
-# among them, and its newest message is the phase now. 100 messages are about five steps.
-_PHASE_QOS = latched_qos(100)
+# The phase history: a subscriber that matches late (a recorder matching a supervisor restarted
+# after a SIGKILL, seen to take from one to about 30 s over UDP, about 20 phase messages of a
+# walk in sim time) still receives the phases it missed, a safe hold among them, the newest
+# last. 100 messages are about five steps. ``phase`` itself gives a late joiner the phase now.
+_PHASE_HISTORY_QOS = latched_qos(100)
 _REPORTS = latched_qos(100)
 _FIRST_STATE_WAIT = 5.0  # [s] steady: a goal waits this long for the first measurements
 _DIAGNOSTICS_PERIOD = 1.0  # [s] steady clock
@@ -79,19 +82,23 @@ class SupervisorNode(Node):
                               check=lambda s: check_with_gripper(s, self.params.gripper))
         self.clocks = Clocks(self)
         self.mode_pub = self.create_publisher(ControlMode, 'control_mode', MODE_QOS)
-        self.phase_pub = self.create_publisher(StepPhase, 'phase', _PHASE_QOS)
+        self.phase_pub = self.create_publisher(StepPhase, 'phase', LATCHED_QOS)
+        self.phase_history_pub = self.create_publisher(StepPhase, 'phase_history',
+                                                       _PHASE_HISTORY_QOS)
+        self.rejection_pub = self.create_publisher(GoalRejection, 'goal_rejections',
+                                                   LATCHED_QOS)
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.links = SupervisorLinks(self, self.runner, self.clocks, self._answer)
         self.inputs = SupervisorInputs(self, self.runner, self.clocks, self._execute)
         self._goal_handle = None
-        self._goal_ended: rclpy.task.Future | None = None
+        self._goal_ended: rclpy.task.Future | None = None  # the result of the walk under way
+        self._accepted: list[rclpy.task.Future] = []  # of goals accepted, not yet executed
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
         self._ticking = self._tick_due = False
-        for name, execute in (('walk_to', self._execute_walk), ('step', self._execute_step)):
-            ActionServer(self, _GOALS[name][0], name, execute_callback=execute,
-                         goal_callback=lambda _: GoalResponse.ACCEPT,
-                         cancel_callback=self._on_cancel)
+        for name, (action, _) in _GOALS.items():
+            ActionServer(self, action, name, execute_callback=self._run_goal,
+                         goal_callback=self._accept, cancel_callback=self._on_cancel)
         self.create_service(Trigger, 'hold', self._on_hold)
         self.create_service(Trigger, 'resume', self._on_resume)
         self.teleop = TeleopServer(self, self.runner, self.links, self.clocks, self._execute,
@@ -135,15 +142,18 @@ class SupervisorNode(Node):
             elif isinstance(command, SetControlMode):
                 self.mode_pub.publish(mode_message(command, self.clocks.stamp()))
             elif isinstance(command, PhaseRecord):
-                self.phase_pub.publish(phase_message(command, self.clocks.stamp()))
+                message = phase_message(command, self.clocks.stamp())
+                self.phase_pub.publish(message)
+                self.phase_history_pub.publish(message)
             elif isinstance(command, StepRecord):
                 self.report_pub.publish(report_message(command, self.clocks.stamp()))
             elif isinstance(command, Feedback):
                 if self._goal_handle is not None:
                     self._goal_handle.publish_feedback(feedback_message(command))
             elif isinstance(command, GoalEnded):
-                if self._goal_ended is not None and not self._goal_ended.done():
-                    self._goal_ended.set_result(command)
+                ended, self._goal_ended = self._goal_ended, None
+                if ended is not None and not ended.done():
+                    ended.set_result(command)
             elif isinstance(command, RecordStep):
                 write_step_state(self._state_file, command.step, command.heading)
             elif isinstance(command, ForgetRecordedStep):
@@ -178,8 +188,7 @@ class SupervisorNode(Node):
 
     # ------------------------------------------------------------------ goals
     def _on_cancel(self, goal_handle) -> CancelResponse:
-        if goal_handle is self._goal_handle:
-            self.runner.cancel_goal()  # the step under way finishes, no other starts
+        self.runner.cancel_goal()  # one goal runs at a time: the step under way finishes
         return CancelResponse.ACCEPT
 
     async def _measurements_ready(self) -> None:
@@ -201,28 +210,37 @@ class SupervisorNode(Node):
                 self._measurement_waiters.remove(entry)
                 entry[1].set_result(ready)
 
-    async def _execute_walk(self, goal_handle):
-        return await self._run_goal(goal_handle, 'walk_to')
+    async def _accept(self, goal) -> GoalResponse:
+        """Take a goal, or reject it at goal time with the reason (log, ``goal_rejections``).
 
-    async def _execute_step(self, goal_handle):
-        return await self._run_goal(goal_handle, 'step')
-
-    async def _run_goal(self, goal_handle, goal: str):
-        target = goal_handle.request.target_node
-        action, verb = _GOALS[goal]
+        A rejected goal has no result in ROS 2 actions: its reason travels on the topic.
+        """
+        kind = 'walk_to' if isinstance(goal, WalkTo.Goal) else 'step'
         await self._measurements_ready()
         self.inputs.sample()
         try:
-            commands = self.runner.start_goal(goal, target, self.clocks.now(),
+            commands = self.runner.start_goal(kind, goal.target_node, self.clocks.now(),
                                               self.clocks.steady())
         except GoalRefusedError as error:
-            self.get_logger().warning(f'{verb} to {target!r} refused: {error}')
-            goal_handle.abort()
-            return action.Result(message=str(error))
-        self._goal_handle, self._goal_ended = goal_handle, rclpy.task.Future()
+            self.get_logger().warning(f'{_GOALS[kind][1]} to {goal.target_node!r} rejected: '
+                                      f'{error}')
+            rejection = GoalRejection(action=kind, target_node=goal.target_node,
+                                      reason=str(error))
+            rejection.header.stamp = self.clocks.stamp()
+            self.rejection_pub.publish(rejection)
+            return GoalResponse.REJECT
+        self._goal_ended = rclpy.task.Future()
+        self._accepted.append(self._goal_ended)
         self._execute(commands)
-        ended = await self._goal_ended
-        self._goal_handle = self._goal_ended = None
+        return GoalResponse.ACCEPT
+
+    async def _run_goal(self, goal_handle):
+        """Follow an accepted goal to its end (the runner walks it); return its result."""
+        ended_future = self._accepted.pop(0)  # goals are executed in the order accepted
+        self._goal_handle = goal_handle
+        ended = await ended_future
+        if self._goal_handle is goal_handle:
+            self._goal_handle = None
         {'succeeded': goal_handle.succeed, 'canceled': goal_handle.canceled,
          'aborted': goal_handle.abort}[ended.status]()
         return result_message(ended)
