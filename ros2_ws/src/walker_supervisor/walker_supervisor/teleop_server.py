@@ -49,20 +49,12 @@ from walker_supervisor.core.teleop import (
     TeleopRules, TipJog)
 from walker_supervisor.links import SupervisorLinks
 from walker_supervisor.messages import GRIPPER_STATE_NAMES, plan_request_message
+from walker_supervisor.teleop_waits import TeleopWaits
 
 __all__ = ['TeleopServer']
 
 _STATE_NUMBERS = {name: number for number, name in GRIPPER_STATE_NAMES.items()}
 _ZERO = np.zeros(3)
-
-
-@dataclasses.dataclass
-class _Wait:
-    """A teleoperation coroutine waiting for a future or a condition, with a deadline."""
-
-    deadline: float  # [s] ROS clock
-    waiter: rclpy.task.Future
-    condition: Callable[[float], bool] | None = None
 
 
 @dataclasses.dataclass
@@ -106,7 +98,7 @@ class TeleopServer:
         self._moving = False  # a jog is under way (hold stops it)
         self._stopped = ''  # why hold stopped the jog under way
         self._follow = None
-        self._waits: list[_Wait] = []
+        self._waits = TeleopWaits(clocks)
         group = ReentrantCallbackGroup()
         node.create_service(JogJoint, 'jog_joint', self._on_jog_joint, callback_group=group)
         node.create_service(JogTip, 'jog_tip', self._on_jog_tip, callback_group=group)
@@ -130,16 +122,7 @@ class TeleopServer:
 
     def tick(self, now: float) -> None:
         """Release the waits that are over (every decision tick, after the measurements)."""
-        for wait in list(self._waits):
-            if not wait.waiter.done():
-                if self._stopped:
-                    wait.waiter.set_result(False)
-                elif wait.condition is not None and wait.condition(now):
-                    wait.waiter.set_result(True)
-                elif now > wait.deadline:
-                    wait.waiter.set_result(False)
-            if wait.waiter.done():
-                self._waits.remove(wait)
+        self._waits.release(now, bool(self._stopped))
 
     # ------------------------------------------------------------------ waiting
     def _mode(self, mode: str, base: str) -> None:
@@ -155,25 +138,6 @@ class TeleopServer:
         waiter = rclpy.task.Future()
         self._links.when_ready(ready, lambda: waiter.set_result(True),
                                lambda: waiter.set_result(False))
-        return bool(await waiter)
-
-    async def _wait(self, future, timeout: float):
-        """Return the future's result, or None after ``timeout`` [s] or when stopped."""
-        waiter = rclpy.task.Future()
-
-        def done(_future) -> None:
-            if not waiter.done():
-                waiter.set_result(True)
-
-        self._waits.append(_Wait(self._clocks.now() + timeout, waiter))
-        future.add_done_callback(done)
-        finished = await waiter
-        return future.result() if finished and future.done() else None
-
-    async def _until(self, condition: Callable[[float], bool], timeout: float) -> bool:
-        """Wait until ``condition(now)`` holds at a tick; False after ``timeout`` [s] or a stop."""
-        waiter = rclpy.task.Future()
-        self._waits.append(_Wait(self._clocks.now() + timeout, waiter, condition))
         return bool(await waiter)
 
     # ------------------------------------------------------------------ jogs
@@ -278,7 +242,7 @@ class TeleopServer:
         """
         settings, clocks = self._runner.settings, self._clocks
         timeout = settings.phase_timeout
-        planned = await self._wait(self._links.plan_client.call_async(call), timeout)
+        planned = await self._waits.result(self._links.plan_client.call_async(call), timeout)
         nothing = ('nothing moved', 0.0, math.nan) if started is None else \
             ('holding', clocks.now() - started, error())
         if self._stopped:
@@ -292,7 +256,7 @@ class TeleopServer:
         self._mode('fine', base)
         sent = self._links.follow_client.send_goal_async(
             FollowTrajectory.Goal(trajectory=planned.trajectory))
-        handle = await self._wait(sent, timeout)
+        handle = await self._waits.result(sent, timeout)
         if handle is None or not handle.accepted:
             sent.add_done_callback(_cancel_if_accepted)
             self._mode('hold', base)
@@ -302,7 +266,7 @@ class TeleopServer:
         self._follow = handle
         started = clocks.now() if started is None else started
         self._log().info(f'{what}: {planned.duration:.2f} s')
-        wrapped = await self._wait(handle.get_result_async(), planned.duration + timeout)
+        wrapped = await self._waits.result(handle.get_result_async(), planned.duration + timeout)
         self._follow = None
         if self._stopped:  # hold has cancelled the stream and holds the controllers
             return _Outcome(False, f'{what} stopped: {self._stopped}',
@@ -315,7 +279,7 @@ class TeleopServer:
             return _Outcome(False, f'{what} failed: {reason}; holding', clocks.now() - started,
                             error()), started
         settle = SettleDetector(settings.settle_velocity, settings.settle_time)
-        settled = await self._until(
+        settled = await self._waits.until(
             lambda now: settle.update(now, self._runner.measured.velocities), timeout)
         if self._stopped:
             return _Outcome(False, f'{what} stopped: {self._stopped}',
@@ -362,7 +326,7 @@ class TeleopServer:
             refusal = runner.release_refusal(gripper, self._clocks.steady())  # as for a step
             if refusal:
                 return _Outcome(False, f'{what} refused: {refusal}')
-        answer = await self._wait(self._links.gripper_client.call_async(
+        answer = await self._waits.result(self._links.gripper_client.call_async(
             GripperCommand.Request(gripper=gripper, command=command)), timeout)
         if answer is None:
             return _Outcome(False, f'{what}: no answer from the plant')
@@ -375,7 +339,7 @@ class TeleopServer:
             runner.use_base(operation.base_after)
             self._mode('hold', operation.base_after)
             self._log().info(f'gripper {operation.base_after} is the base now')
-        done = await self._until(
+        done = await self._waits.until(
             lambda now: measured.grippers.get(gripper) in operation.expected, timeout)
         # hold where the arm is now: seated by the thread, or released from it
         base = runner.sequencer.base_gripper

@@ -1,4 +1,4 @@
-"""What the supervisor reports: the phase as it goes, and each step's figures (free of ROS).
+"""What the supervisor reports: the phase, each step's figures, a goal's feedback and result.
 
 :class:`PhaseAnnouncer` says when the phase is published again: on a change of phase, reason,
 base, step or walk, and within a phase each time its progress has grown by
@@ -10,18 +10,19 @@ screw-in the tip's measured distance from the hole's axis and its residual vibra
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 
 import numpy as np
 
-from walker_supervisor.core.commands import Notice, PhaseRecord, StepRecord
+from walker_supervisor.core.commands import Feedback, GoalEnded, Notice, PhaseRecord, StepRecord
 from walker_supervisor.core.phases import Phase, StepOutcome
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.walk import VibrationMeter, Walk
 
-__all__ = ['PhaseAnnouncer', 'StepFigures', 'PROGRESS_STEP', 'BOUNDED_MOTIONS',
-           'MIN_VIBRATION_WINDOW']
+__all__ = ['PhaseAnnouncer', 'StepFigures', 'goal_feedback', 'goal_ended', 'PROGRESS_STEP',
+           'BOUNDED_MOTIONS', 'MIN_VIBRATION_WINDOW']
 
 #: The phase is published again, within a phase, each time its progress has grown this much
 #: (and when it reaches 1): a few messages per phase.
@@ -129,3 +130,36 @@ class StepFigures:
         """Return the record of a step that ended."""
         return StepRecord(step_index, step_count, step, outcome, float(self.time_optimal_bound),
                           float(self.insertion_error), float(self.residual_vibration))
+
+
+def goal_feedback(goal: str, walk: Walk, sequencer, now: float) -> Feedback:
+    """Return the feedback of the goal under way at ``now`` [s]."""
+    step = sequencer.step if sequencer.busy else None
+    return Feedback(goal, walk.step_index, len(walk.route), sequencer.phase,
+                    sequencer.phase_progress(now), step.from_node if step else '',
+                    step.to_node if step else '', float(sequencer.tip_error()) if step else 0.0)
+
+
+def goal_ended(goal: str, walk: Walk, base: str, base_node: str,
+               figures: StepFigures) -> GoalEnded:
+    """Return the result of a goal whose walk is finished, its base and the base's node now.
+
+    Succeeded when every step did; canceled when a cancel stopped it with no step failed;
+    aborted otherwise, with the failed step's reason. A ``step`` goal carries its step's
+    figures.
+    """
+    if walk.reached:
+        status, message = 'succeeded', ''
+    elif walk.cancel_requested and not walk.failed:
+        status = 'canceled'
+        message = f'cancelled after {walk.step_index} of {len(walk.route)} steps'
+    else:
+        status = 'aborted'
+        message = walk.outcomes[-1].message if walk.failed else 'the walk did not finish'
+    ended = GoalEnded(goal, status, message, sum(o.success for o in walk.outcomes),
+                      float(sum(o.duration for o in walk.outcomes)), walk.path, base, base_node)
+    if goal == 'step' and walk.outcomes:
+        ended = dataclasses.replace(ended, step_duration=walk.outcomes[-1].duration,
+                                    insertion_error=figures.insertion_error,
+                                    time_optimal_bound=figures.time_optimal_bound)
+    return ended

@@ -52,7 +52,6 @@ A shell without ROS clients or files may ignore :class:`RenewPlannerClient`,
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Mapping
 
@@ -63,7 +62,7 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.truss import Truss
 from walker_supervisor.core.adoption import AdoptionRefusedError, RecordedStep, adopt_step
 from walker_supervisor.core.commands import (
-    CancelTrajectory, DecideNow, Feedback, ForgetRecordedStep, GoalEnded, GripperRequest, Notice,
+    CancelTrajectory, DecideNow, ForgetRecordedStep, GripperRequest, Notice,
     PrepareTrajectory, RecordStep, SetControlMode, StopJog, StopOrphanStream, TrajectoryRequest)
 from walker_supervisor.core.controller_watch import ControllerReport, ControllerWatch
 from walker_supervisor.core.goals import (
@@ -74,7 +73,8 @@ from walker_supervisor.core.motion_requests import (
     MotionEnded, MotionPlanned, MotionRequests, MotionStarted, PlannedAhead)
 from walker_supervisor.core.phases import Phase, SequencerError, StepOutcome
 from walker_supervisor.core.prepared_motions import PlanAnswer
-from walker_supervisor.core.reports import PhaseAnnouncer, StepFigures
+from walker_supervisor.core.reports import (
+    PhaseAnnouncer, StepFigures, goal_ended, goal_feedback)
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.sequencer import StepSequencer
@@ -438,7 +438,7 @@ class WalkRunner:
             if not self.sequencer.busy:
                 self._advance_walk(walk, now)
             if self._walk is not None and now - self._last_feedback >= FEEDBACK_PERIOD:
-                self._emit(self._feedback(walk, now))
+                self._emit(goal_feedback(self._goal, walk, self.sequencer, now))
                 self._last_feedback = now
         else:
             self._end_step_outside_walk()
@@ -503,7 +503,9 @@ class WalkRunner:
         if walk.finished:
             # a walk ends relaxed: a stance measured after it is not bent by its last seat
             if now >= self.sequencer.relaxed_at:
-                self._emit(self._goal_ended(walk))
+                base = self.sequencer.base_gripper
+                self._emit(goal_ended(self._goal, walk, base, self.measured.nodes.get(base, ''),
+                                      self.figures))
                 self._walk, self._goal = None, ''
             return
         if not self.sequencer.can_start(now):  # it would measure its stance bent
@@ -572,32 +574,6 @@ class WalkRunner:
         else:
             self._emit(Notice(f'step {step.from_node} -> {step.to_node} failed after resume: '
                               f'{outcome.message}', 'error'))
-
-    def _goal_ended(self, walk: Walk) -> GoalEnded:
-        if walk.reached:
-            status, message = 'succeeded', ''
-        elif walk.cancel_requested and not walk.failed:
-            status = 'canceled'
-            message = f'cancelled after {walk.step_index} of {len(walk.route)} steps'
-        else:
-            status = 'aborted'
-            message = walk.outcomes[-1].message if walk.failed else 'the walk did not finish'
-        base = self.sequencer.base_gripper
-        ended = GoalEnded(self._goal, status, message, sum(o.success for o in walk.outcomes),
-                          float(sum(o.duration for o in walk.outcomes)), walk.path, base,
-                          self.measured.nodes.get(base, ''))
-        if self._goal == 'step' and walk.outcomes:
-            ended = dataclasses.replace(ended, step_duration=walk.outcomes[-1].duration,
-                                        insertion_error=self.figures.insertion_error,
-                                        time_optimal_bound=self.figures.time_optimal_bound)
-        return ended
-
-    def _feedback(self, walk: Walk, now: float) -> Feedback:
-        step = self.sequencer.step if self.sequencer.busy else None
-        return Feedback(self._goal, walk.step_index, len(walk.route), self.sequencer.phase,
-                        self.sequencer.phase_progress(now), step.from_node if step else '',
-                        step.to_node if step else '',
-                        float(self.sequencer.tip_error()) if step else 0.0)
 
     def _adopt(self) -> None:
         """Take up the step an earlier incarnation left unfinished, if its gripper is free."""
