@@ -477,11 +477,14 @@ def assert_the_bag_holds_the_faults(graph: FaultGraph, some_hold: bool = True) -
     from walker_bag.core.bag_reader import read_messages
     from walker_msgs.msg import StepPhase
 
-    recorded = list(read_messages(graph.bag, ['/walker/phase', '/walker/gripper_states']))
+    # the history: every phase, also those published before the recorder matched
+    recorded = list(read_messages(graph.bag, ['/walker/phase_history',
+                                              '/walker/gripper_states']))
     holds_seen = {m.reason for t, m in graph.phases
                   if t > graph.started and m.phase == StepPhase.SAFE_HOLD}
     holds_recorded = {r.message.reason for r in recorded
-                      if r.topic == '/walker/phase' and r.message.phase == StepPhase.SAFE_HOLD}
+                      if r.topic == '/walker/phase_history'
+                      and r.message.phase == StepPhase.SAFE_HOLD}
     assert holds_seen or not some_hold, 'no safe hold seen'
     assert holds_seen <= holds_recorded, holds_seen - holds_recorded
     grippers = [r.message for r in recorded if r.topic == '/walker/gripper_states']

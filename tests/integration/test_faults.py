@@ -19,6 +19,8 @@ import time
 
 import pytest
 
+from walker_bringup.graph_client import GoalRejectedError
+
 from fault_graph import (
     FAULT_TIMEOUT, STILL, TEST_TIMEOUT, TIMEOUT, FaultGraph, assert_the_bag_holds_the_faults)
 from ros_test_support import running_graph
@@ -71,7 +73,6 @@ def test_bad_parameter_updates_are_refused_and_nothing_moves(graph):
 
 
 def test_commands_in_the_wrong_phase_and_malformed_commands_are_refused(graph):
-    from action_msgs.msg import GoalStatus
     from walker_msgs.msg import StepPhase
     from walker_msgs.srv import GripperCommand
 
@@ -88,8 +89,8 @@ def test_commands_in_the_wrong_phase_and_malformed_commands_are_refused(graph):
     assert graph.client.call_trigger('hold', timeout=30.0).success
     held = graph.wait_phase(StepPhase.SAFE_HOLD, FAULT_TIMEOUT, since)
     assert 'operator' in held.reason
-    status, result = graph.client.walk_to(graph.one_step().to_node, 60.0)
-    assert status == GoalStatus.STATUS_ABORTED and 'resume' in result.message
+    with pytest.raises(GoalRejectedError, match='call resume first'):
+        graph.client.walk_to(graph.one_step().to_node, 60.0)
     since = time.monotonic()
     assert graph.client.call_trigger('resume', timeout=30.0).success
     graph.wait_phase(StepPhase.IDLE, FAULT_TIMEOUT, since)
@@ -107,9 +108,9 @@ def test_a_controller_killed_in_coarse_motion_holds_then_rejoins_and_the_step_co
     started = time.monotonic()
     handle = graph.start_walk(step.to_node)
     graph.wait_phase(StepPhase.EXTRACTION, TIMEOUT, started)
-    # a second goal while a walk runs is refused, the walk goes on
-    status, result = graph.client.walk_to(step.to_node, 60.0)
-    assert status == GoalStatus.STATUS_ABORTED and 'is running' in result.message
+    # a second goal while a walk runs is rejected at goal time, the walk goes on
+    with pytest.raises(GoalRejectedError, match='is running'):
+        graph.client.walk_to(step.to_node, 60.0)
     graph.wait_phase(StepPhase.COARSE, TIMEOUT, started)
     since = time.monotonic()
     graph.kill('controller_vertex')

@@ -182,6 +182,10 @@ def test_jogs_out_of_limits_or_in_the_wrong_phase_are_refused_and_valid_ones_mov
             gripper='b', command=GripperCommand.Request.UNSCREW))
         assert released.success, released.message
     assert graph.grippers() == {'a': 'attached', 'b': 'free'}
+    # a target that is not a node name is rejected as such, before anything else is judged
+    run = graph.walkerctl('walk-to', 'n4_3\n')
+    assert run.returncode == 1, run.stdout + run.stderr
+    assert "walk-to n4_3\n refused: 'n4_3\\n' is not a node name" in run.stdout, run.stdout
 
     # Out of the parameter file's limits: refused, from walkerctl too, and nothing moves.
     before = graph.positions()

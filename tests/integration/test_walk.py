@@ -51,7 +51,9 @@ class Graph:
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.client.node.create_subscription(GripperStates, 'gripper_states',
                                              self.gripper_states.append, qos)
-        self.client.node.create_subscription(StepPhase, 'phase', self.phases.append, qos)
+        # every phase message of the walk: the history (``phase`` gives the phase now)
+        self.client.node.create_subscription(StepPhase, 'phase_history', self.phases.append,
+                                             qos)
         self.client.node.create_subscription(
             JointState, 'joint_states', lambda m: self.joint_states.append(list(m.position)),
             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
@@ -86,19 +88,22 @@ def graph(tmp_path_factory):
 
 
 @pytest.mark.parametrize('action, target, words', [
-    ('walk_to', 'n9_9', 'not on the truss'),
+    ('walk_to', 'n99_99', 'not on the truss'),
     ('walk_to', 'node7', 'not a node name'),
+    ('walk_to', 'n4_03', 'not a node name'),  # not n4_3 in another spelling
+    ('step', 'n4_3\n', 'not a node name'),
     ('step', 'n4_3', 'not one step away'),
 ])
-def test_unknown_and_unreachable_targets_are_refused_before_anything_moves(graph, action,
-                                                                          target, words):
-    from action_msgs.msg import GoalStatus
+def test_unknown_and_unreachable_targets_are_rejected_at_goal_time_with_the_reason(
+        graph, action, target, words):
+    from walker_bringup.graph_client import GoalRejectedError
 
     before = graph.latest_positions()
     send = graph.client.walk_to if action == 'walk_to' else graph.client.step
-    status, result = send(target, 30.0)
-    assert status == GoalStatus.STATUS_ABORTED
-    assert not result.success and words in result.message
+    with pytest.raises(GoalRejectedError) as rejected:  # rejected, not accepted and aborted
+        send(target, 30.0)
+    assert words in rejected.value.reason, rejected.value.reason
+    assert (rejected.value.action, rejected.value.target) == (action, target)
     after = graph.latest_positions()
     assert max(abs(a - b) for a, b in zip(before, after, strict=True)) < 1e-4, 'the arm moved'
     assert set(graph.attached_nodes()) == {'a', 'b'}
@@ -183,6 +188,36 @@ def test_a_cancelled_walk_finishes_its_step_and_ends_attached(graph):
     assert client.phase.phase == StepPhase.IDLE
 
 
+def test_a_late_subscriber_to_the_phase_gets_the_phase_now_and_the_history_has_the_rest(graph):
+    """A late joiner of ``phase`` (``ros2 topic echo --once``) gets the phase now.
+
+    ``phase`` is latched with depth 1, not a history whose old messages come first;
+    ``phase_history`` keeps the recent ones, the newest last.
+    """
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from walker_msgs.msg import StepPhase
+
+    graph.client.spin_for(1.0)
+    now = graph.client.phase
+    assert now is not None and now.phase == StepPhase.IDLE
+    late, history = [], []
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    node = graph.client.node
+    subscriptions = [node.create_subscription(StepPhase, 'phase', late.append, qos),
+                     node.create_subscription(StepPhase, 'phase_history', history.append, qos)]
+    try:
+        graph.client.spin_for(3.0)
+    finally:
+        for subscription in subscriptions:
+            node.destroy_subscription(subscription)
+    assert len(late) == 1, [(m.phase, m.step_index) for m in late]
+    assert (late[0].phase, late[0].base_gripper, late[0].header.stamp) == (
+        now.phase, now.base_gripper, now.header.stamp)
+    assert len(history) > 1 and history[-1].header.stamp == now.header.stamp
+    assert {StepPhase.EXTRACTION, StepPhase.INSERTION} <= {m.phase for m in history}
+
+
 def test_run_all_refuses_a_namespace_a_live_graph_already_uses(graph, tmp_path):
     """Two graphs in one namespace would answer each other's goals: nothing is started."""
     args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--sim-time',
@@ -195,6 +230,34 @@ def test_run_all_refuses_a_namespace_a_live_graph_already_uses(graph, tmp_path):
     assert any(node.name in text for node in graph.nodes) and '--namespace' in text
     assert 'starting' not in text, 'nothing may be started'
     assert graph.group.poll_deaths() == []
+
+
+def test_a_step_reports_its_phase_progress_in_its_feedback(graph):
+    """``Step`` feedback carries ``phase_progress`` in [0, 1], as ``phase`` does."""
+    from walker_msgs.msg import StepPhase
+
+    from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+    from walker_core.truss import Truss
+    from walker_supervisor.core.route import Stance, possible_steps
+
+    params = load_walker_parameters(default_parameter_file())
+    base = graph.client.phase.base_gripper
+    nodes = graph.attached_nodes()
+    positions = graph.latest_positions()
+    drive = params.robot.drive.yaw
+    step = min(possible_steps(Truss.from_parameters(params),
+                              Stance(base, nodes[base], nodes['b' if base == 'a' else 'a']),
+                              (positions[0], positions[4]),
+                              (drive.position_min, drive.position_max)),
+               key=lambda s: (abs(s.sweep), s.to_node))
+    feedback = []
+    status, result = graph.client.step(step.to_node, WALK_TIMEOUT, feedback.append)
+    assert result.success, result.message
+    timed = [f for f in feedback if f.phase in (StepPhase.EXTRACTION, StepPhase.COARSE)]
+    assert timed and all(0.0 <= f.phase_progress <= 1.0 for f in feedback)
+    for phase in (StepPhase.EXTRACTION, StepPhase.COARSE):
+        values = [f.phase_progress for f in feedback if f.phase == phase]
+        assert values == sorted(values) and values[-1] > 0.5, (phase, values)
 
 
 @pytest.mark.parametrize('interrupt', [False, True])

@@ -16,7 +16,7 @@ from walker_core.robot_parameters import load_walker_parameters
 from walker_core.settling import SETTLING_PREFIX, SettlingWindow
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_sim.core.config import load_sim_parameters
-from walker_supervisor.core.sequencer import SupervisorParameters
+from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.teleop import TeleopParameters
 from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 

@@ -27,9 +27,10 @@ from walker_bringup.loop_health import (
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
 from walker_runtime.spinning import (
     TopicSampler, destroy_actions, helper_node, hidden_name)
+from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 
-__all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'Readiness',
-           'init_context']
+__all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'GoalRejectedError',
+           'Readiness', 'init_context']
 
 _POLL = 0.1  # [s]
 _REPORTS = latched_qos(100)
@@ -74,6 +75,7 @@ class GraphClient:
         self.executor.add_node(self.node)
         self.walk_client = ActionClient(self.node, WalkTo, 'walk_to')
         self.step_client = ActionClient(self.node, Step, 'step')
+        self.rejections = GoalRejections(self.node)
         self.hold_client = self.node.create_client(Trigger, 'hold')
         self.resume_client = self.node.create_client(Trigger, 'resume')
         self.gripper_client = self.node.create_client(GripperCommand, 'gripper_command')
@@ -227,7 +229,8 @@ class GraphClient:
         """Send a ``walk_to`` goal and wait for its result; return (status, result).
 
         On interruption the goal is cancelled (the step under way finishes) before
-        :class:`WalkInterruptedError` propagates.
+        :class:`WalkInterruptedError` propagates. A goal the supervisor rejects raises
+        :class:`GoalRejectedError` with its reason.
         """
         goal = WalkTo.Goal(target_node=target)
         return self._run_goal(self.walk_client, goal, timeout, feedback, should_stop,
@@ -244,10 +247,16 @@ class GraphClient:
         if not client.wait_for_server(timeout_sec=min(timeout, 10.0)):
             raise GraphNotReadyError(f'no action server for {what}')
         callback = (lambda msg: feedback(msg.feedback)) if feedback is not None else None
+        deadline = time.monotonic() + min(timeout, 2.0)
+        while not self.rejections.matched and time.monotonic() < deadline:
+            self.spin_for(_POLL)  # the reason of a rejection is heard only once matched
+        sent_at = time.monotonic()
         handle = self._wait(client.send_goal_async(goal, feedback_callback=callback), timeout,
                             should_stop, f'acceptance of {what}')
         if not handle.accepted:
-            raise RuntimeError(f'{what} was rejected')
+            action = 'walk_to' if client is self.walk_client else 'step'
+            raise GoalRejectedError(action, goal.target_node, self.rejections.reason(
+                action, goal.target_node, sent_at, self.spin_for))
         try:
             wrapped = self._wait(handle.get_result_async(), timeout, should_stop, what)
         except (WalkInterruptedError, TimeoutError):

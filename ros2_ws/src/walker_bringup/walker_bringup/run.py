@@ -35,7 +35,7 @@ from walker_bringup.composition import LOOP_NODES, composed_command
 from walker_bringup.graph import (
     FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
-    GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
+    GoalRejectedError, GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
@@ -416,6 +416,9 @@ def main(argv: list[str] | None = None) -> int:
     except GraphNotReadyError as error:
         progress.error(f'[walker] error: {error}')
         code = 3
+    except GoalRejectedError as error:  # the supervisor's reason: nothing moved
+        progress.error(f'[walker] error: {error}')
+        code = 1
     except WalkInterruptedError:
         code = _report_interruption([w.client for w in walkers if w.client is not None],
                                     deaths, interrupted['signal'], progress)

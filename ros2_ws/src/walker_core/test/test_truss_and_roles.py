@@ -22,6 +22,9 @@ def test_nodes_positions_and_neighbours():
 @pytest.mark.parametrize('name, words', [
     ('n5_0', 'not on the truss'), ('n0_4', 'not on the truss'), ('node7', 'not a node name'),
     ('', 'not a node name'), (None, 'not a node name'), ('n-1_0', 'not a node name'),
+    # one spelling per node: no leading zeros, no trailing newline, ASCII digits only
+    ('n4_03', 'not a node name'), ('n04_3', 'not a node name'), ('n4_3\n', 'not a node name'),
+    (' n4_3', 'not a node name'), ('n\u0664_3', 'not a node name'),
 ])
 def test_unknown_nodes_are_refused(name, words):
     with pytest.raises(UnknownNodeError, match=words):

@@ -1,6 +1,7 @@
 """The truss face the walker stands on: nodes on a grid, each with a threaded hole (axis +z).
 
-Nodes are named ``n<column>_<row>`` (``n0_0`` at the origin, columns along +x, rows along +y).
+Nodes are named ``n<column>_<row>`` (``n0_0`` at the origin, columns along +x, rows along +y),
+each in one spelling only: ASCII decimal numbers without leading zeros.
 """
 
 from __future__ import annotations
@@ -12,7 +13,10 @@ import numpy as np
 
 __all__ = ['UnknownNodeError', 'Truss']
 
-_NODE_NAME = re.compile(r'^n(\d+)_(\d+)$')
+# One spelling per node: 'n4_03' or 'n4_3\n' would otherwise name n4_3 ($ matches before a
+# trailing newline, \d any script's digits).
+_NUMBER = r'(0|[1-9][0-9]*)'
+_NODE_NAME = re.compile(rf'n{_NUMBER}_{_NUMBER}', re.ASCII)
 
 
 class UnknownNodeError(ValueError):
@@ -51,7 +55,7 @@ class Truss:
 
     def index(self, name: str) -> tuple[int, int]:
         """``(column, row)`` of a node; raises :class:`UnknownNodeError` if not on the truss."""
-        match = _NODE_NAME.match(name) if isinstance(name, str) else None
+        match = _NODE_NAME.fullmatch(name) if isinstance(name, str) else None
         if match is None:
             raise UnknownNodeError(f'{name!r} is not a node name: expected n<column>_<row>, '
                                    f'e.g. n0_0')

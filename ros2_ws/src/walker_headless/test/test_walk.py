@@ -16,7 +16,7 @@ from walker_headless.recording import WalkRecording
 from walker_headless.runner import walk
 from walker_headless.sections import load_sections
 from walker_report.core.walk_data import load_walk
-from walker_supervisor.core.sequencer import Phase
+from walker_supervisor.core.phases import Phase
 
 TARGET = 'n1_2'
 STEP_PHASES = [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]

@@ -12,8 +12,8 @@ answers with the events the node would hear back:
   the only attached gripper: :meth:`~walker_sim.core.plant.WalkerPlant.command_gripper`),
   answered at once (:class:`GripperAnswered`);
 * a motion is planned by the planner core (:func:`~walker_planner.core.planning.plan`, the
-  request of :func:`~walker_supervisor.core.plan_requests.planner_request`; a motion planned
-  ahead is taken from :class:`~walker_supervisor.prepared_motions.PreparedMotions`), joined
+  request of :func:`~walker_supervisor.core.planner_calls.planner_call`; a motion planned
+  ahead is taken from :class:`~walker_supervisor.core.prepared_motions.PreparedMotions`), joined
   with the one it streams with (:func:`~walker_planner.core.chaining.chain`), checked against
   the joint limits and streamed by the planner's streamer: :class:`StreamStarted`, then
   :class:`StreamEnded` at the state where the stream ends (:meth:`take_stream_end`), or
@@ -40,11 +40,11 @@ from walker_planner.core.errors import PlanningError
 from walker_planner.core.planning import PlanningContext, plan
 from walker_planner.core.streamer import ActiveStream
 from walker_planner.core.streaming import SampledTrajectory
-from walker_supervisor.core.plan_requests import planner_request
-from walker_supervisor.core.sequencer import (
+from walker_supervisor.core.commands import (
     CancelTrajectory, GripperRequest, Notice, PrepareTrajectory, SetControlMode,
     TrajectoryRequest)
-from walker_supervisor.prepared_motions import PreparedMotions, stream_lead
+from walker_supervisor.core.planner_calls import planner_call
+from walker_supervisor.core.prepared_motions import PreparedMotions, stream_lead
 
 from walker_headless.loop import RobotLoop
 
@@ -85,7 +85,7 @@ class PlanAnswer:
     """The planner's answer to a motion (what ``plan_trajectory`` answers).
 
     It is also its own completed future (``done()``, ``result()``), the form
-    :class:`~walker_supervisor.prepared_motions.PreparedMotions` keeps answers in.
+    :class:`~walker_supervisor.core.prepared_motions.PreparedMotions` keeps answers in.
     """
 
     success: bool
@@ -227,7 +227,7 @@ class CommandExecutor:
     def plan_now(self, request: TrajectoryRequest) -> PlanAnswer:
         """Plan one motion (not its ``then``) as the planner node's service does."""
         try:
-            result = plan(planner_request(request, self.kinematics), self._planning)
+            result = plan(planner_call(request, self.kinematics), self._planning)
         except PlanningError as error:
             return PlanAnswer(False, str(error))
         trajectory = as_sent(result.times, *result.samples)

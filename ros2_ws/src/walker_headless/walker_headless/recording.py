@@ -35,7 +35,7 @@ _RELIABLE = QosProfile('reliable', 'volatile')
 _LATCHED = QosProfile('reliable', 'transient_local')
 
 #: The recorded topics (relative to the namespace, or absolute), their types and the QoS their
-#: publishers offer (walker_core.qos, docs/architecture.md), as the recorder stores it.
+#: publishers offer (walker_runtime.qos, docs/architecture.md), as the recorder stores it.
 TOPICS = {
     'joint_states': ('sensor_msgs/msg/JointState', _SENSOR),
     'tip_pose': ('geometry_msgs/msg/PoseStamped', _SENSOR),

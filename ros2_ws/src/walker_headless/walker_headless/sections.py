@@ -1,7 +1,7 @@
 """The parameter file read once into every typed section the headless loop needs.
 
 The same file, the same sections and the same validation as the nodes (each node reads its
-sections with :func:`walker_core.node_parameters.declare_section`): the ``/**`` section of a
+sections with :func:`walker_runtime.node_parameters.declare_section`): the ``/**`` section of a
 ``ros__parameters`` YAML file, with any ``-p``-style overrides on top.
 """
 
@@ -18,7 +18,7 @@ from walker_core.robot_parameters import WalkerParameters, default_parameter_fil
 from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
 from walker_planner.core.parameters import PlannerParameters
 from walker_sim.core.config import SimParameters, check_against_walker
-from walker_supervisor.core.sequencer import SupervisorParameters
+from walker_supervisor.core.parameters import SupervisorParameters
 
 __all__ = ['Sections', 'load_sections']
 

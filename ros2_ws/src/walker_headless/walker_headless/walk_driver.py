@@ -26,8 +26,9 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.truss import Truss, UnknownNodeError
 from walker_supervisor.core.route import (
     PlannedStep, Stance, UnreachableTargetError, plan_route)
-from walker_supervisor.core.sequencer import (
-    GripperRequest, Phase, SequencerError, StepOutcome, StepSequencer, TrajectoryRequest)
+from walker_supervisor.core.commands import GripperRequest, TrajectoryRequest
+from walker_supervisor.core.phases import Phase, SequencerError, StepOutcome
+from walker_supervisor.core.sequencer import StepSequencer
 from walker_supervisor.core.step_geometry import StepTargets, measure_step_targets
 from walker_supervisor.core.walk import VibrationMeter, Walk
 

@@ -8,10 +8,9 @@ import pytest
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, joint_of_role, roles_to_physical
 from walker_core.kinematics import WalkerKinematics
-from walker_core.parameter_schema import (
-    ParameterError, load_parameter_file, section_from_flat)
+from walker_core.parameter_schema import ParameterError, load_parameter_file, section_from_flat
 from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
-from walker_supervisor.core.sequencer import Phase
+from walker_supervisor.core.phases import Phase
 from walker_supervisor.core.teleop import (
     SettleDetector, Situation, TeleopParameters, TeleopRefusedError, TeleopRules, busy_reason,
     tip_heading)

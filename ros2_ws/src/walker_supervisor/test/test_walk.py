@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from walker_supervisor.core.route import PlannedStep, Stance
-from walker_supervisor.core.sequencer import StepOutcome
+from walker_supervisor.core.phases import StepOutcome
 from walker_supervisor.core.walk import VibrationMeter, Walk
 
 ROUTE = [PlannedStep('a', 'n1_1', 'n2_1', 'n0_1', math.pi),

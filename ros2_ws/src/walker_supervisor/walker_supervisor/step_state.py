@@ -1,36 +1,25 @@
 """The step under way, kept in a file so that a restarted supervisor can complete it.
 
 The supervisor writes the step (its nodes, its base gripper and the heading of the base frame)
-when the step starts and removes the file when it completes. A supervisor that starts with a
-gripper free reads it back; it takes the step up (in safe hold, for an operator's resume) only
-if the grippers are as the file says: the base attached in the base node, the other free.
-The file lives under ``$ROS_HOME`` (default ``~/.ros``) like ROS 2's own logs, one per robot
-namespace.
+when the step starts and removes the file when it completes
+(:class:`~walker_supervisor.core.commands.RecordStep`,
+:class:`~walker_supervisor.core.commands.ForgetRecordedStep`). A supervisor that starts reads
+it back, and takes the step up if the grippers are as the file says
+(:mod:`walker_supervisor.core.adoption`). The file lives under ``$ROS_HOME`` (default
+``~/.ros``) like ROS 2's own logs, one per robot namespace.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from pathlib import Path
 
 import yaml
 
+from walker_supervisor.core.adoption import RecordedStep
 from walker_supervisor.core.route import PlannedStep
 
-__all__ = ['StepState', 'step_state_path', 'write_step_state', 'read_step_state',
-           'clear_step_state']
-
-
-@dataclasses.dataclass(frozen=True)
-class StepState:
-    """What is needed to complete an interrupted step."""
-
-    base_gripper: str
-    base_node: str
-    from_node: str
-    to_node: str
-    heading: float  # [rad] of the base frame in the truss frame
+__all__ = ['step_state_path', 'write_step_state', 'read_step_state', 'clear_step_state']
 
 
 def step_state_path(namespace: str) -> Path:
@@ -50,12 +39,13 @@ def write_step_state(path: Path, step: PlannedStep, heading: float) -> None:
     os.replace(temporary, path)
 
 
-def read_step_state(path: Path) -> StepState | None:
+def read_step_state(path: Path) -> RecordedStep | None:
     """Read the recorded step; None when there is none or the file is not one of ours."""
     try:
         data = yaml.safe_load(path.read_text())
-        return StepState(str(data['base_gripper']), str(data['base_node']),
-                         str(data['from_node']), str(data['to_node']), float(data['heading']))
+        return RecordedStep(str(data['base_gripper']), str(data['base_node']),
+                            str(data['from_node']), str(data['to_node']),
+                            float(data['heading']))
     except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError):
         return None
 

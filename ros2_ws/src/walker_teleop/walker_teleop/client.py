@@ -29,10 +29,12 @@ from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
 from walker_runtime.qos import LATCHED_QOS
 from walker_runtime.spinning import destroy_actions, helper_node
+from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
 
-__all__ = ['TeleopClient', 'GraphUnavailableError', 'CommandInterruptedError']
+__all__ = ['TeleopClient', 'GraphUnavailableError', 'CommandInterruptedError',
+           'GoalRejectedError']
 
 _POLL = 0.1  # [s] longest wait before Ctrl-C is seen
 _LATCHED_GRACE = 0.5  # [s] wait for a latched topic that may never have been published
@@ -73,6 +75,7 @@ class TeleopClient:
                          'operate_gripper': create(GripperCommand, 'operate_gripper')}
         self.actions = {'step': ActionClient(self.node, Step, 'step'),
                         'walk_to': ActionClient(self.node, WalkTo, 'walk_to')}
+        self.rejections = GoalRejections(self.node)
 
     def close(self) -> None:
         """Destroy the node."""
@@ -186,6 +189,8 @@ class TeleopClient:
         ------
         GraphUnavailableError
             No action server within the timeout.
+        GoalRejectedError
+            The supervisor rejected the goal (its ``reason`` says why).
         CommandInterruptedError
             Ctrl-C before the goal was accepted, or twice.
         """
@@ -194,14 +199,19 @@ class TeleopClient:
             raise GraphUnavailableError(
                 f'the action {self.node.get_namespace().rstrip("/")}/{action} is not available '
                 f'(waited {self.timeout:g} s): {self.where()}')
+        # the reason of a rejection is heard only once the rejections are matched
+        self.spin_until(lambda: self.rejections.matched, min(self.timeout, _LATCHED_GRACE * 4))
         goal = (WalkTo.Goal if action == 'walk_to' else Step.Goal)(target_node=target)
+        sent_at = time.monotonic()
         sent = client.send_goal_async(goal, feedback_callback=lambda m: on_feedback(m.feedback))
         if not self._wait_interruptible(sent.done, None, self.timeout):
             raise GraphUnavailableError(f'the {action} goal was not answered within '
                                         f'{self.timeout:g} s: check with walkerctl status')
         handle = sent.result()
         if handle is None or not handle.accepted:
-            raise GraphUnavailableError(f'the {action} goal was rejected')
+            raise GoalRejectedError(action, target, self.rejections.reason(
+                action, target, sent_at, lambda seconds: self.spin_until(lambda: False,
+                                                                         seconds)))
         result = handle.get_result_async()
 
         def cancel() -> None:

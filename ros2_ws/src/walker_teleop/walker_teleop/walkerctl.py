@@ -262,7 +262,14 @@ def _goal(client, args) -> int:
         print('walkerctl: cancelling: the step under way finishes, then the walker stops with '
               'both grippers attached (Ctrl-C again to stop waiting)', file=sys.stderr)
 
-    status, result = client.run_goal(action, args.node, on_feedback, on_cancel)
+    from walker_teleop.client import GoalRejectedError
+
+    try:
+        status, result = client.run_goal(action, args.node, on_feedback, on_cancel)
+    except GoalRejectedError as rejection:
+        progress.end()
+        print(f'{args.command} {args.node} refused: {rejection.reason}')
+        return EXIT_REFUSED
     progress.end()
     if result.success:
         if action == 'walk_to':

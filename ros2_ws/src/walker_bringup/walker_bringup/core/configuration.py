@@ -27,9 +27,8 @@ from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
 from walker_planner.core.parameters import PlannerParameters
 from walker_sim.core.config import SimParameters
 from walker_sim.core.config import check_against_walker as check_sim_against_walker
-from walker_supervisor.core.parameter_rules import (
-    check_against_walker as check_supervisor_against_walker)
-from walker_supervisor.core.sequencer import SupervisorParameters
+from walker_supervisor.core.parameters import (
+    SupervisorParameters, check_with_control, check_with_gripper, check_with_planner)
 from walker_supervisor.core.teleop import TeleopParameters
 from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 
@@ -88,10 +87,14 @@ def check_cross_section_rules(configuration: WalkerConfiguration) -> None:
     ParameterError
         Naming the parameters and the rule: start nodes off the truss or a physics rate that
         is not a multiple of the control rate (``sim.*``), insertion regions wider than the
-        gripper's tolerance (``supervisor.*``).
+        gripper's tolerance, a coarse-start tolerance the planner's stream would refuse, a
+        relaxation wait shorter than the controllers' relaxation (``supervisor.*``).
     """
     check_sim_against_walker(configuration.sim, configuration.walker)
-    check_supervisor_against_walker(configuration.supervisor, configuration.walker)
+    supervisor = configuration.supervisor
+    check_with_gripper(supervisor, configuration.walker.gripper)
+    check_with_planner(supervisor, configuration.planner.stream.start_tolerance)
+    check_with_control(supervisor, configuration.controllers.control.relaxation.duration)
 
 
 def load_configuration(path: str | Path | None = None,

@@ -50,7 +50,7 @@ from walker_core.joint_roles import (
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.parameter_schema import ParameterError, parameter
 from walker_core.text import millimetres, unknown_choice, value_text
-from walker_supervisor.core.sequencer import Phase
+from walker_supervisor.core.phases import Phase
 
 __all__ = [
     'TeleopParameters', 'TeleopRefusedError', 'Situation', 'JointJog', 'TipJog', 'Correction',

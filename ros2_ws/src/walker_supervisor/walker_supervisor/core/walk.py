@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from walker_supervisor.core.route import PlannedStep, Stance
-from walker_supervisor.core.sequencer import StepOutcome
+from walker_supervisor.core.phases import StepOutcome
 
 __all__ = ['Walk', 'VibrationMeter']
 

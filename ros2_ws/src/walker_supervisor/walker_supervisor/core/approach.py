@@ -1,0 +1,128 @@
+"""COARSE and FINE: from above the old node to above the hole (paper sections 2 and 5).
+
+Coarse motion (controllers in COARSE mode: low gains, acceleration feedback) ends when the tip
+error, from the forward kinematics of the measured joints, enters ``coarse_to_fine_region``: the
+controllers then switch to FINE mode (higher gains, integral action) while the coarse trajectory
+runs on to its end, the point above the hole; the descent is planned then, so that it streams
+the moment FINE ends. A coarse motion that comes to rest outside the region goes on in FINE,
+with a fine line. Fine motion ends, once the trajectory has ended, as soon as the tip is within
+``descent_region`` (the insertion tolerance) of the point above the hole and still closing on
+it, joint 1 coming in behind its filter (not swinging through it), or within
+``insertion_alignment`` with every joint slower than ``settle_velocity``: the descent need not
+wait for the tip to come to rest, since the insertion settles at the mouth and checks the tip
+again, across the hole's axis, before anything screws in. A tip that settles (``settle_time``)
+anywhere else gets a constant-velocity fine line (paper section 5) from where it settled, up to
+:data:`MAX_FINE_LINES` times before insertion is tried anyway (the screw-in itself is the final
+check).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from walker_supervisor.core import insertion, recovery
+from walker_supervisor.core.commands import PrepareTrajectory, SetControlMode, TrajectoryRequest
+from walker_supervisor.core.phases import Phase, Stage
+from walker_supervisor.core.step_run import StepRun
+
+__all__ = ['MAX_FINE_LINES', 'coarse_request', 'enter_coarse', 'coarse_tick', 'enter_fine',
+           'fine_settling']
+
+#: Fine correction lines tried before insertion is attempted anyway.
+MAX_FINE_LINES = 3
+
+
+def coarse_request(run: StepRun) -> TrajectoryRequest:
+    """Return the coarse motion: the node-to-node sweep to above the target hole."""
+    t = run.targets
+    return run.request('coarse', t.above_from, t.above_to, t.point_above_from, t.point_above_to,
+                       t.sweep)
+
+
+def enter_coarse(run: StepRun, now: float) -> list:
+    """Enter COARSE: the controllers in COARSE mode, the sweep asked for."""
+    run.enter(Phase.COARSE, now, Stage.MOVING)
+    return [SetControlMode('coarse', run.step.base_gripper), run.issue(coarse_request(run))]
+
+
+def coarse_tick(run: StepRun, now: float, velocities: np.ndarray) -> list:
+    """Hand over to FINE inside the region, or once at rest outside it."""
+    if run.tip_error() < run.parameters.coarse_to_fine_region:
+        return enter_fine(run, now, correction=False)
+    if run.stage == Stage.ARRIVING and run.settled(now, velocities, run.parameters.settle_time):
+        # the coarse motion ended and the arm came to rest outside the region (friction,
+        # overshoot): fine motion, with its higher gains and a fine line, takes it there
+        return enter_fine(run, now, correction=True)
+    return []
+
+
+def enter_fine(run: StepRun, now: float, correction: bool) -> list:
+    """Switch the controllers to FINE; with ``correction``, also run a fine line.
+
+    Without a correction the coarse trajectory (if still streaming) runs on to its end, the
+    point above the hole; a correction starts from where the joints have settled.
+    """
+    commands = []
+    if run.phase != Phase.FINE:
+        running = run.motions.running
+        run.enter(Phase.FINE, now, Stage.ARRIVING if running else Stage.SETTLING)
+        run.deadline = run.deadline if running else now + run.parameters.phase_timeout
+        commands.append(SetControlMode('fine', run.step.base_gripper))
+        # the descent starts where every fine motion ends: plan it now, stream it when due
+        commands.append(PrepareTrajectory(insertion.descent_request(run)))
+    if not correction:
+        return commands
+    run.tries.fine_lines += 1
+    run.stage = Stage.MOVING
+    purpose = recovery.way_back_purpose(run, 'fine')
+    if purpose is None:
+        return commands + run.abort(recovery.no_way_back(run), now)
+    return commands + [recovery.way_back(run, purpose)]
+
+
+def fine_settling(run: StepRun, now: float, velocities: np.ndarray) -> list:
+    """FINE, the motion over: descend once over the hole, or a fine line once at rest."""
+    if _may_descend(run, velocities):
+        # the descent need not wait for the tip to come to rest: the insertion settles at the
+        # mouth and checks the tip against the axis again before it screws in
+        return insertion.enter(run, now)
+    if not run.settled(now, velocities, run.parameters.settle_time):
+        return []
+    if run.tip_error() <= run.parameters.insertion_alignment \
+            or run.tries.fine_lines >= MAX_FINE_LINES:
+        return insertion.enter(run, now)
+    return enter_fine(run, now, correction=True)  # settled, not aligned: a line
+
+
+def _may_descend(run: StepRun, velocities: np.ndarray) -> bool:
+    """Return True if the tip is over the hole closely enough to start the descent.
+
+    Either it is within ``descent_region`` of the point above the hole and closing on it
+    slowly enough not to get there within ``descent_arrival_time`` (joint 1 coming in behind
+    its filter: it arrives on the axis during the descent, 0.3 s; a tip swinging through the
+    point is not closing so), or within ``insertion_alignment`` with every joint slower than
+    ``settle_velocity`` (at rest there, or nearly).
+
+    The tip's velocity is the measured joint velocities through the Jacobian of eq (1), not
+    the change of its error between two ticks: a real-time supervisor's ticks come late and
+    then bunched up, and 2 ms apart a tip swinging through at half a metre a second looked as
+    if it were closing slowly (one went down 33 mm beside the hole).
+    """
+    error, parameters = run.tip_error_now, run.parameters
+    if error <= parameters.descent_region and _closing_slowly(run, velocities, error):
+        return True
+    return error <= parameters.insertion_alignment \
+        and bool(np.all(np.abs(velocities) < parameters.settle_velocity))
+
+
+def _closing_slowly(run: StepRun, velocities: np.ndarray, error: float) -> bool:
+    """Return True if the tip closes on the point above the hole, and slowly.
+
+    Slowly: slower than ``error / descent_arrival_time`` [m/s]; ``error`` [m] is the tip's
+    distance from the point, ``velocities`` [rad/s] the joints' in role order.
+    """
+    tip = run.tip()
+    tip_velocity = run.kinematics.jacobian(run.theta)[:3] @ np.asarray(velocities, float)
+    towards = float(np.dot(tip_velocity, run.targets.point_above_to - tip))
+    speed = float(np.linalg.norm(tip_velocity))
+    return towards > 0.0 and speed * run.parameters.descent_arrival_time < error

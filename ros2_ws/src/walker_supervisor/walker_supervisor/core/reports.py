@@ -1,0 +1,165 @@
+"""What the supervisor reports: the phase, each step's figures, a goal's feedback and result.
+
+:class:`PhaseAnnouncer` says when the phase is published again: on a change of phase, reason,
+base, step or walk, and within a phase each time its progress has grown by
+:data:`PROGRESS_STEP` (and when it reaches 1). :class:`StepFigures` keeps the figures of the
+step under way that the sequencer does not know: its time-optimal bound (the planner's bounds
+of its extraction, coarse motion and insertion, plus the two screw actions), and at the
+screw-in the tip's measured distance from the hole's axis and its residual vibration.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from walker_supervisor.core.commands import Feedback, GoalEnded, Notice, PhaseRecord, StepRecord
+from walker_supervisor.core.phases import Phase, StepOutcome
+from walker_supervisor.core.route import PlannedStep
+from walker_supervisor.core.walk import VibrationMeter, Walk
+
+__all__ = ['PhaseAnnouncer', 'StepFigures', 'goal_feedback', 'goal_ended', 'PROGRESS_STEP',
+           'BOUNDED_MOTIONS', 'MIN_VIBRATION_WINDOW']
+
+#: The phase is published again, within a phase, each time its progress has grown this much
+#: (and when it reaches 1): a few messages per phase.
+PROGRESS_STEP = 0.25
+#: The motions whose planner bounds make up a step's time-optimal bound.
+BOUNDED_MOTIONS = frozenset({'extraction', 'coarse', 'insertion'})
+#: [s] shortest window of the residual vibration figures (five poses at 100 Hz)
+MIN_VIBRATION_WINDOW = 0.05
+
+
+class PhaseAnnouncer:
+    """Decides when the phase is published, and what it says."""
+
+    def __init__(self) -> None:
+        self._last: tuple | None = None
+        self._published_progress = 0.0
+
+    def announce(self, now: float, sequencer, walk: Walk | None,
+                 grippers: Mapping[str, str]) -> list:
+        """Return the phase to publish at ``now`` [s] (with a log line on a change), or [].
+
+        Nothing is said before the grippers are known: a supervisor restarted in the middle of
+        a step would announce IDLE, then hold once it saw a gripper free.
+        """
+        if not grippers:
+            return []
+        step = sequencer.step
+        key = (sequencer.phase, sequencer.reason, sequencer.base_gripper,
+               walk.step_index if walk else 0, walk is not None, step)
+        progress = sequencer.phase_progress(now)
+        advanced = progress > self._published_progress \
+            and progress >= min(1.0, self._published_progress + PROGRESS_STEP)
+        if key == self._last and not advanced:
+            return []
+        out = []
+        if self._last is not None and key[0] != self._last[0]:
+            text = f'phase {sequencer.phase.name}' + (f': {sequencer.reason}'
+                                                      if sequencer.reason else '')
+            out.append(Notice(text, 'warning' if sequencer.phase == Phase.SAFE_HOLD else 'info'))
+        self._last, self._published_progress = key, progress
+        held = sequencer.phase == Phase.SAFE_HOLD and step is not None \
+            and grippers.get(step.moving_gripper) != 'attached'
+        shown = step if sequencer.busy or held else None
+        out.append(PhaseRecord(
+            sequencer.phase, sequencer.base_gripper, sequencer.reason, progress,
+            walk.step_index if walk else 0, len(walk.route) if walk else 0,
+            shown.from_node if shown else '', shown.to_node if shown else '',
+            shown.base_node if shown else '',
+            float(sequencer.targets.frame.heading) if shown else 0.0))
+        return out
+
+
+class StepFigures:
+    """The figures of the step under way that the walk summary reports.
+
+    Parameters
+    ----------
+    vibration_window : float
+        [s] window of the residual vibration (at least :data:`MIN_VIBRATION_WINDOW`).
+    screw_time : float
+        [s] a screw-in or unscrew (``gripper.screw_time``): two of them are in every step's
+        bound.
+    """
+
+    def __init__(self, vibration_window: float, screw_time: float) -> None:
+        self.vibration = VibrationMeter(window=max(vibration_window, MIN_VIBRATION_WINDOW))
+        self._screw_time = float(screw_time)
+        self.time_optimal_bound = 0.0
+        self._bounded: set[str] = set()
+        self.insertion_error = math.nan
+        self.residual_vibration = math.nan
+
+    def set_window(self, window: float) -> None:
+        """Take a new vibration window [s]."""
+        self.vibration.window = max(window, MIN_VIBRATION_WINDOW)
+
+    def start(self) -> None:
+        """Start a step: its bound is the two screw actions until its motions are planned."""
+        self.time_optimal_bound = 2.0 * self._screw_time
+        self._bounded = set()
+        self.insertion_error = math.nan
+
+    def planned(self, purpose: str, time_optimal_bound: float) -> None:
+        """Add a motion's bound [s]: its extraction, coarse motion and insertion, once each.
+
+        Fine corrections and retries are not in the bound.
+        """
+        if purpose in BOUNDED_MOTIONS and purpose not in self._bounded:
+            self._bounded.add(purpose)
+            self.time_optimal_bound += time_optimal_bound
+
+    def screw_in(self, hole: np.ndarray) -> None:
+        """Keep the tip's figures as the screw-in starts over ``hole`` [m].
+
+        The error is the tip's horizontal distance from the hole's axis where it is as the
+        screw-in starts (what the plant's thread checks), not a mean over the settle window,
+        which the ring biases when the window is short.
+        """
+        self.residual_vibration = self.vibration.amplitude()
+        tip = self.vibration.latest()
+        self.insertion_error = float(np.linalg.norm(tip[:2] - np.asarray(hole)[:2]))
+
+    def record(self, step_index: int, step_count: int, step: PlannedStep,
+               outcome: StepOutcome) -> StepRecord:
+        """Return the record of a step that ended."""
+        return StepRecord(step_index, step_count, step, outcome, float(self.time_optimal_bound),
+                          float(self.insertion_error), float(self.residual_vibration))
+
+
+def goal_feedback(goal: str, walk: Walk, sequencer, now: float) -> Feedback:
+    """Return the feedback of the goal under way at ``now`` [s]."""
+    step = sequencer.step if sequencer.busy else None
+    return Feedback(goal, walk.step_index, len(walk.route), sequencer.phase,
+                    sequencer.phase_progress(now), step.from_node if step else '',
+                    step.to_node if step else '', float(sequencer.tip_error()) if step else 0.0)
+
+
+def goal_ended(goal: str, walk: Walk, base: str, base_node: str,
+               figures: StepFigures) -> GoalEnded:
+    """Return the result of a goal whose walk is finished, its base and the base's node now.
+
+    Succeeded when every step did; canceled when a cancel stopped it with no step failed;
+    aborted otherwise, with the failed step's reason. A ``step`` goal carries its step's
+    figures.
+    """
+    if walk.reached:
+        status, message = 'succeeded', ''
+    elif walk.cancel_requested and not walk.failed:
+        status = 'canceled'
+        message = f'cancelled after {walk.step_index} of {len(walk.route)} steps'
+    else:
+        status = 'aborted'
+        message = walk.outcomes[-1].message if walk.failed else 'the walk did not finish'
+    ended = GoalEnded(goal, status, message, sum(o.success for o in walk.outcomes),
+                      float(sum(o.duration for o in walk.outcomes)), walk.path, base, base_node)
+    if goal == 'step' and walk.outcomes:
+        ended = dataclasses.replace(ended, step_duration=walk.outcomes[-1].duration,
+                                    insertion_error=figures.insertion_error,
+                                    time_optimal_bound=figures.time_optimal_bound)
+    return ended

@@ -1,0 +1,125 @@
+"""What the supervisor hears, handed to the walk runner (ROS layer).
+
+The plant's joint states (500 Hz), the tip pose and each controller's state are sampled at the
+decision rate, not handled message by message: a Python callback per message would cost more
+CPU than every decision the supervisor makes. The gripper states and the latched mode arrive by
+callback. A source silent for long has its subscription made anew, and again as often while
+the silence lasts (:class:`walker_runtime.core.resubscription.Resubscription`): a controller process
+restarted after a crash, or a graph frozen and resumed, can leave a subscription that no longer
+receives while its publisher lives on.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from geometry_msgs.msg import PoseStamped
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from walker_msgs.msg import ControllerState, ControlMode, GripperState, GripperStates
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_runtime.qos import LATCHED_QOS, SENSOR_QOS
+from walker_runtime.core.resubscription import Resubscription
+from walker_runtime.spinning import TopicSampler
+from walker_supervisor.clocks import Clocks
+from walker_supervisor.core.runner import PLANT_GRIPPER_STATES, PLANT_JOINT_STATES, WalkRunner
+from walker_supervisor.messages import (
+    controller_report, gripper_readings, joint_arrays, seconds)
+
+__all__ = ['SupervisorInputs', 'RESUBSCRIBE_AFTER_TIMEOUTS']
+
+# Poses are kept between two decisions (at 100 Hz, two or three per 50 Hz tick) for the
+# vibration figures.
+_POSES = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT,
+                    durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+_CONTROLLER_STATES = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE,
+                                durability=DurabilityPolicy.VOLATILE,
+                                history=HistoryPolicy.KEEP_LAST)
+#: A source silent for this many watchdog timeouts has its subscription made anew: the walker
+#: is in safe hold after one timeout; a second tells a dead or restarted publisher from a stall
+#: of a loaded machine.
+RESUBSCRIBE_AFTER_TIMEOUTS = 2.0
+
+
+class SupervisorInputs:
+    """The supervisor's subscriptions; they feed ``runner``, and ``execute`` its commands.
+
+    Attributes
+    ----------
+    gripper_messages : dict of str to GripperState
+        The newest state message of each gripper (an operator's gripper command answers it).
+    """
+
+    def __init__(self, node: Node, runner: WalkRunner, clocks: Clocks,
+                 execute: Callable[[list], None]) -> None:
+        self._node, self._runner, self._clocks, self._execute = node, runner, clocks, execute
+        self._sampler = TopicSampler(f'{node.get_name()}_sampler', node.get_namespace(),
+                                     node.context)
+        self._joint_states = self._sampler.subscribe(JointState, 'joint_states', SENSOR_QOS)
+        self._tip_poses = self._sampler.subscribe(PoseStamped, 'tip_pose', _POSES)
+        self._controllers = {
+            joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
+                                           _CONTROLLER_STATES)
+            for joint in PHYSICAL_JOINT_NAMES}
+        self._grippers = self._subscribe_grippers()
+        self.gripper_messages: dict[str, GripperState] = {}
+        node.create_subscription(ControlMode, 'control_mode',
+                                 lambda msg: runner.latched_mode(msg.base_gripper), LATCHED_QOS)
+        after = RESUBSCRIBE_AFTER_TIMEOUTS * runner.settings.watchdog_timeout
+        self._resubscriptions = {name: Resubscription(after) for name in runner.health.names}
+
+    def set_watchdog_timeout(self, timeout: float) -> None:
+        """Follow a new ``supervisor.watchdog_timeout`` [s] at once."""
+        for resubscription in self._resubscriptions.values():
+            resubscription.after = RESUBSCRIBE_AFTER_TIMEOUTS * timeout
+
+    def sample(self) -> None:
+        """Hand the runner what the sampled subscriptions received since the last call."""
+        runner, steady = self._runner, self._clocks.steady()
+        states = self._sampler.take(self._joint_states)
+        if states:
+            runner.joint_states(*joint_arrays(states[-1]), steady)
+        for pose in self._sampler.take(self._tip_poses):
+            p = pose.pose.position
+            runner.tip_pose(seconds(pose.header.stamp), (p.x, p.y, p.z))
+        reports = {}
+        for joint, subscription in self._controllers.items():
+            taken = self._sampler.take(subscription)
+            if taken:
+                reports[joint] = controller_report(taken[-1])
+        self._execute(runner.controller_states(reports, self._clocks.now(), steady))
+
+    def _subscribe_grippers(self):
+        return self._node.create_subscription(GripperStates, 'gripper_states',
+                                              self._on_grippers, LATCHED_QOS)
+
+    def _on_grippers(self, msg: GripperStates) -> None:
+        for state in msg.grippers:
+            self.gripper_messages[state.name] = state
+        self._execute(self._runner.gripper_states(gripper_readings(msg), self._clocks.now(),
+                                                  self._clocks.steady()))
+
+    def resubscribe_silent(self) -> None:
+        """Make anew the subscription of each source silent for long (see the module)."""
+        steady = self._clocks.steady()
+        for name, resubscription in self._resubscriptions.items():
+            last_heard = self._runner.health.last_heard(name)
+            if not resubscription.due(steady, last_heard):
+                continue
+            if name == PLANT_JOINT_STATES:
+                self._joint_states = self._sampler.renew(self._joint_states)
+            elif name == PLANT_GRIPPER_STATES:
+                self._node.destroy_subscription(self._grippers)
+                self._grippers = self._subscribe_grippers()
+            else:
+                joint = name.removeprefix('controller ')
+                self._controllers[joint] = self._sampler.renew(self._controllers[joint])
+            self._node.get_logger().warning(
+                f'{name}: silent for {steady - last_heard:.1f} s, subscription made anew '
+                '(a restarted or resumed publisher is matched again)')
+
+    def destroy(self) -> None:
+        """Destroy the sampled subscriptions."""
+        self._sampler.destroy()
