@@ -17,7 +17,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.node import Node
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 
-from walker_core.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
+from walker_core.qos import COMMAND_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
 from walker_core.resubscription import Resubscription
 
 from walker_control.core.config import ControllerSettings
@@ -29,8 +29,8 @@ from walker_control.core.joint_controller import (
     RoleChangeError)
 from walker_control.core.modes import Mode
 
-__all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel',
-           'seconds']
+__all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'MODE_SUBSCRIPTION_QOS',
+           'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel', 'seconds']
 
 #: joint_states and joint_accelerations: best effort, newest only (walker_core.qos)
 STATE_QOS = SENSOR_QOS

@@ -45,7 +45,9 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.node_parameters import declare_section, guard_section_updates
 from walker_core.parameter_schema import ParameterError
-from walker_core.qos import COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos
+from walker_core.mode_command import mode_command_refusal
+from walker_core.qos import (
+    COMMAND_QOS, LATCHED_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS, latched_qos)
 from walker_core.realtime import log_realtime_request
 from walker_core.resubscription import Resubscription
 from walker_core.robot_parameters import WalkerParameters
@@ -181,7 +183,8 @@ class SupervisorNode(TeleopServer, Node):
         self._joint_states = self._sampler.subscribe(JointState, 'joint_states', SENSOR_QOS)
         self._tip_poses = self._sampler.subscribe(PoseStamped, 'tip_pose', _POSES)
         self._gripper_states = self._subscribe_gripper_states()
-        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, LATCHED_QOS)
+        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
+                                 MODE_SUBSCRIPTION_QOS)
         self._state_file = step_state_path(self.get_namespace())
         self.plan_client = self.create_client(PlanTrajectory, 'plan_trajectory')
         self.gripper_client = self.create_client(GripperCommand, 'gripper_command')
@@ -324,7 +327,9 @@ class SupervisorNode(TeleopServer, Node):
         self.vibration.add(stamp, np.array([p.x, p.y, p.z]))
 
     def _on_control_mode(self, msg: ControlMode) -> None:
-        # A restarted supervisor takes the base back from the latched mode.
+        # A restarted supervisor takes the base back from the latched mode (its own only).
+        if mode_command_refusal(msg.commander, msg.base_gripper, self.get_namespace()):
+            return
         if not self._base_known and not self.sequencer.busy and msg.base_gripper in ('a', 'b'):
             self.sequencer.base_gripper = msg.base_gripper
             self._base_known = True
@@ -858,7 +863,8 @@ class SupervisorNode(TeleopServer, Node):
 
     def _publish_mode(self, mode: str, base: str) -> None:
         self._commanded_mode, self._commanded_base = mode, base
-        msg = ControlMode(mode=_MODES[mode], base_gripper=base)
+        msg = ControlMode(mode=_MODES[mode], base_gripper=base,
+                          commander=self.get_fully_qualified_name())
         stamp = self.get_clock().now()
         self._mode_commanded_at = stamp.nanoseconds * 1e-9
         msg.header.stamp = stamp.to_msg()

@@ -28,7 +28,8 @@ from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
-from walker_core.qos import LATCHED_QOS
+from walker_core.mode_command import mode_command_refusal
+from walker_core.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS
 from walker_core.spinning import destroy_actions
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
@@ -221,10 +222,15 @@ class TeleopClient:
         def keep(name: str) -> Callable[[object], None]:
             return lambda msg: received.__setitem__(name, msg)
 
+        def keep_mode(msg: ControlMode) -> None:
+            # the supervisor's commands only: a stray publisher's is not what the controllers do
+            if not mode_command_refusal(msg.commander, msg.base_gripper, self.namespace):
+                received['control_mode'] = msg
+
         subscriptions = [
             self.node.create_subscription(StepPhase, 'phase', keep('phase'), LATCHED_QOS),
-            self.node.create_subscription(ControlMode, 'control_mode', keep('control_mode'),
-                                          LATCHED_QOS),
+            self.node.create_subscription(ControlMode, 'control_mode', keep_mode,
+                                          MODE_SUBSCRIPTION_QOS),
             self.node.create_subscription(GripperStates, 'gripper_states', keep('gripper_states'),
                                           LATCHED_QOS),
             self.node.create_subscription(JointState, 'joint_states', keep('joint_states'),
