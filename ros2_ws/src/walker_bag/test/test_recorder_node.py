@@ -64,6 +64,14 @@ def flushed_counts(bag_dir):
     return {t.topic_metadata.name: t.message_count for t in metadata.topics_with_message_count}
 
 
+def files_of(bag_dir):
+    """Return the files the flushed metadata.yaml lists (() before it is readable)."""
+    try:
+        return read_metadata(bag_dir).relative_file_paths
+    except MetadataError:
+        return ()
+
+
 def wait_until(condition, timeout, what):
     deadline = time.monotonic() + timeout
     while not condition():
@@ -369,3 +377,32 @@ def test_a_stalled_recorder_loses_no_reliable_message_held_for_it_and_reports_th
         assert f'{topic}: ' in log and ' lost (' in log
     assert int(metadata.custom_data['messages_lost']) == sum(lost.values())
     assert 'messages lost: /walker/gripper_states' in diagnostics
+
+
+def test_the_bag_is_split_by_duration_keeps_its_newest_files_and_is_continued_on_restart(
+        ros_env, tmp_path):
+    bag = tmp_path / 'split'
+    with publisher(ros_env, 'stream') as stream:
+        assert stream.wait_for_output('streaming', START_TIMEOUT), stream.output
+        with recorder(ros_env, bag, 'recorder.max_bag_duration:=0.5',
+                      'recorder.max_bag_files:=2') as rec:
+            wait_until(lambda: len(files_of(bag)) == 2 and files_of(bag)[0] != 'split_0.mcap',
+                       START_TIMEOUT, 'the oldest file rotated away')
+            rec.stop()
+            assert rec.process.returncode == 0, rec.output
+        first = read_metadata(bag)
+        assert sorted(p.name for p in bag.glob('*.mcap')) == sorted(first.relative_file_paths)
+        # a recorder started again on the same bag goes on in its next file
+        with recorder(ros_env, bag, 'recorder.append:=true') as rec:
+            wait_until(lambda: len(files_of(bag)) == 3 and read_metadata(bag).message_count
+                       > first.message_count,
+                       START_TIMEOUT, 'messages in the next file')
+            rec.stop()
+            assert rec.process.returncode == 0, rec.output
+    metadata = read_metadata(bag)
+    assert metadata.relative_file_paths[:2] == first.relative_file_paths
+    for name in metadata.relative_file_paths:
+        with open(bag / name, 'rb') as file:
+            assert make_reader(file).get_summary().statistics.message_count > 0
+    with BagReader(bag) as reader:
+        assert reader.message_count == metadata.message_count
