@@ -191,7 +191,8 @@ def _run(args: argparse.Namespace, rate: float) -> dict:
             else:
                 raise RuntimeError('the controllers did not answer within 60 s:\n'
                                    + '\n'.join(c.output[-500:] for c in controllers))
-            plant.mode_pub.publish(ControlMode(mode=ControlMode.COARSE, base_gripper='a'))
+            plant.mode_pub.publish(ControlMode(mode=ControlMode.COARSE, base_gripper='a',
+                                               commander='/walker/supervisor'))
             print(f'[benchmark] running {args.warmup:g} s warm-up + {args.duration:g} s at '
                   f'{rate:g} Hz against the stand-in plant')
             total = int((args.warmup + args.duration) * rate)
@@ -427,7 +428,8 @@ def _run_real_plant(args: argparse.Namespace, rate: float) -> dict:
                 raise RuntimeError('the loop did not close within 90 s:\n' + plant.output[-2000:]
                                    + '\n'.join(c.output[-500:] for c in controllers))
             node.create_publisher(ControlMode, 'control_mode', MODE_QOS).publish(
-                ControlMode(mode=ControlMode.COARSE, base_gripper='a'))
+                ControlMode(mode=ControlMode.COARSE, base_gripper='a',
+                            commander='/walker/supervisor'))
             print(f'[benchmark] running {args.warmup:g} s warm-up + {args.duration:g} s at '
                   f'{rate:g} Hz with the real plant (real time)')
             time.sleep(args.warmup)

@@ -219,3 +219,75 @@ def test_jogs_out_of_limits_or_in_the_wrong_phase_are_refused_and_valid_ones_mov
     assert lift.position_error < 0.002  # [m] corrected while beyond insertion_alignment, 1 mm
     assert _moved(after, graph.positions()) > 0.005
     assert graph.grippers() == {'a': 'attached', 'b': 'free'}
+
+
+def test_the_controllers_mode_is_the_supervisors_alone(graph):
+    """An operator's control_mode commands move nothing: the supervisor commands the mode.
+
+    The sequence a hostile test once sent with gripper b free: HOLD with the free gripper as
+    base, then a, b, a. Each base change started the controllers' relaxation dither with the
+    chain open, and the free gripper ended 13 mm off, tilted and below the surface.
+    """
+    from geometry_msgs.msg import PoseStamped
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from walker_msgs.msg import ControlMode, StepPhase
+
+    assert graph.grippers() == {'a': 'attached', 'b': 'free'}
+    node = graph.client.node
+    poses = []
+    node.create_subscription(PoseStamped, 'gripper_b_pose', poses.append,
+                             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+    operator = node.create_publisher(ControlMode, 'control_mode', QoSProfile(
+        depth=10, reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    graph.wait_for(lambda: operator.get_subscription_count() >= 6, 30.0,
+                   'the controllers and the planner to match the operator')
+    before, phase = graph.positions(), graph.client.phase.phase
+
+    def tip() -> list[float]:
+        graph.client.spin_for(0.3)
+        p = poses[-1].pose.position
+        return [p.x, p.y, p.z]
+
+    start = tip()
+    for base in ('b', 'a', 'b', 'a'):
+        operator.publish(ControlMode(mode=ControlMode.HOLD, base_gripper=base))
+        graph.client.spin_for(0.5)  # longer than the relaxation dither (control.relaxation)
+    for mode, base in ((ControlMode.OFF, 'a'), (ControlMode.HOLD, ''),
+                       (ControlMode.FINE, 'b')):
+        operator.publish(ControlMode(mode=mode, base_gripper=base))
+        graph.client.spin_for(0.5)
+    node.destroy_publisher(operator)
+    moved = max(abs(a - b) for a, b in zip(start, tip(), strict=True))
+    assert moved < 2e-4, f'the free gripper moved {moved * 1e3:.2f} mm'
+    assert _moved(before, graph.positions()) < STILL
+    assert graph.client.phase.phase == phase == StepPhase.SAFE_HOLD
+    assert graph.grippers() == {'a': 'attached', 'b': 'free'}
+
+
+def test_status_shows_the_mode_the_controllers_are_in_now(graph):
+    """A late joiner of control_mode (walkerctl status) gets the mode commanded now.
+
+    Each jog commands FINE, then HOLD once it has settled: after five the supervisor's last
+    ten commands alternate, the oldest of them FINE. The controllers hold, with gripper a as
+    base.
+    """
+    for delta in (0.05, -0.05, 0.05, -0.05, 0.05):
+        answer = graph.jog('b_yaw_joint', delta, max_velocity=0.2)
+        assert answer.success, answer.message
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from walker_msgs.msg import ControlMode
+
+    # a late subscriber of the usual depth 10 (`ros2 topic echo --once --qos-depth 10`) takes
+    # the first message it gets
+    first = []
+    late = graph.client.node.create_subscription(
+        ControlMode, 'control_mode', lambda m: first.append(m) if not first else None,
+        QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                   durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    graph.wait_for(lambda: bool(first), 30.0, 'the latched control_mode')
+    graph.client.node.destroy_subscription(late)
+    assert (first[0].mode, first[0].base_gripper) == (ControlMode.HOLD, 'a')
+    run = graph.walkerctl('status')
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert 'controllers  HOLD, roles from gripper a' in run.stdout, run.stdout

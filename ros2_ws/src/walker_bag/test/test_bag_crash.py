@@ -21,7 +21,7 @@ from rosbags.highlevel import AnyReader
 
 from walker_bag.core.bag_metadata import read_metadata
 from walker_bag.core.bag_reader import BagReader
-from walker_bag.core.bag_recovery import recover_bag
+from walker_bag.core.bag_recovery import recover_abandoned_bags, recover_bag, recover_in_place
 from walker_bag.core.bag_writer import BagWriter
 from walker_bag.core.errors import BagExistsError, BagPathError
 
@@ -153,3 +153,43 @@ def test_recovery_refuses_an_existing_destination_and_non_bags(walk_bag, tmp_pat
         recover_bag(path, tmp_path / 'taken')
     with pytest.raises(BagPathError, match='not a bag directory'):
         recover_bag(tmp_path / 'nothing_here')
+
+
+def test_recovery_in_place_opens_the_killed_bag_to_every_reader_and_keeps_the_cut_file(
+        killed_bag):
+    flushed = FLUSHED_ROUNDS * len(WALK_TOPICS)
+    original = (killed_bag / 'killed_0.mcap').read_bytes()
+    report = recover_in_place(killed_bag)
+    assert report.destination == killed_bag and not report.complete
+    assert report.message_count == flushed
+    assert (killed_bag / 'killed_0.mcap.incomplete').read_bytes() == original
+    with open(killed_bag / 'killed_0.mcap', 'rb') as stream:
+        assert len(list(make_reader(stream).iter_messages())) == flushed
+    with AnyReader([killed_bag]) as reader:
+        assert len(list(reader.messages())) == flushed
+    assert read_metadata(killed_bag).message_count == flushed
+    again = recover_in_place(killed_bag)  # nothing left to do
+    assert again.complete and again.files == () and again.message_count == flushed
+
+
+def test_a_file_cut_inside_a_chunk_is_recovered_in_place(killed_bag):
+    """A kill in the middle of a write: the standard reader reads nothing of the cut file."""
+    path = killed_bag / 'killed_0.mcap'
+    data = path.read_bytes()
+    path.write_bytes(data + data[len(data) // 2:len(data) // 2 + 5000])  # half a chunk more
+    with pytest.raises(Exception), open(path, 'rb') as stream:  # noqa: B017
+        list(make_reader(stream).iter_messages())
+    report = recover_in_place(killed_bag)
+    assert report.message_count == FLUSHED_ROUNDS * len(WALK_TOPICS)
+    with open(path, 'rb') as stream:
+        assert len(list(make_reader(stream).iter_messages())) == report.message_count
+
+
+def test_a_bag_being_written_is_left_alone_and_cut_ones_beside_it_are_recovered(
+        killed_bag, tmp_path):
+    with BagWriter(tmp_path / 'live') as live:
+        assert recover_in_place(live.path) is None
+        reports = recover_abandoned_bags(tmp_path)
+        assert [r.source for r in reports] == [killed_bag]
+        assert not (live.path / 'live_0.mcap.incomplete').exists()
+    assert recover_abandoned_bags(tmp_path) == []

@@ -64,6 +64,14 @@ def flushed_counts(bag_dir):
     return {t.topic_metadata.name: t.message_count for t in metadata.topics_with_message_count}
 
 
+def files_of(bag_dir):
+    """Return the files the flushed metadata.yaml lists (() before it is readable)."""
+    try:
+        return read_metadata(bag_dir).relative_file_paths
+    except MetadataError:
+        return ()
+
+
 def wait_until(condition, timeout, what):
     deadline = time.monotonic() + timeout
     while not condition():
@@ -248,6 +256,16 @@ def test_a_killed_recorder_leaves_a_bag_readable_up_to_its_last_flush(ros_env, t
     assert report.message_count == messages
     with BagReader(report.destination) as reader:
         assert reader.message_count == messages
+    # The next recorder started in the same directory completes the cut bag in place: the
+    # standard readers open it, the cut file is kept beside it.
+    with recorder(ros_env, tmp_path / 'next') as rec:
+        assert rec.wait_for_output(f'{bag}: left cut by a killed recorder', START_TIMEOUT), \
+            rec.output
+    assert (bag / 'killed_0.mcap.incomplete').exists()
+    with BagReader(bag) as reader:
+        assert reader.message_count == messages == read_metadata(bag).message_count
+    with open(bag / 'killed_0.mcap', 'rb') as stream:
+        assert sum(1 for _ in make_reader(stream).iter_messages()) == messages
 
 
 def test_in_sim_time_messages_are_stamped_with_the_simulation_clock(ros_env, tmp_path):
@@ -260,7 +278,7 @@ def test_in_sim_time_messages_are_stamped_with_the_simulation_clock(ros_env, tmp
         rec.stop()
         assert rec.process.returncode == 0, rec.output
     metadata = read_metadata(bag)
-    assert metadata.custom_data == {'clock': 'sim_time'}
+    assert metadata.custom_data == {'clock': 'sim_time', 'messages_lost': '0'}
     with BagReader(bag) as reader:
         assert '/clock' in reader.topics  # the default selection records the clock too
         states = list(reader.messages(['/walker/joint_states']))
@@ -298,3 +316,93 @@ def test_the_command_line_is_that_of_ros2_run_with_the_overrides(tmp_path):
     assert command[1:] == ['--ros-args', '-r', '__ns:=/walker', '--params-file', 'walker.yaml',
                            '-p', f'recorder.directory:={tmp_path}', '-p', 'recorder.bag_name:=b',
                            '-p', 'use_sim_time:=true', '-p', "recorder.topics:=['x']"]
+
+
+DIAGNOSTICS_PROBE = """
+import rclpy, sys
+from diagnostic_msgs.msg import DiagnosticArray
+rclpy.init()
+node = rclpy.create_node('diagnostics_probe')
+def seen(message):
+    for status in message.status:
+        if status.name == '/walker/recorder: recording' and status.level == b'\\x01':
+            print('WARN', status.message, flush=True)
+node.create_subscription(DiagnosticArray, '/diagnostics', seen, 10)
+rclpy.spin(node)
+"""
+
+
+def test_a_stalled_recorder_loses_no_reliable_message_held_for_it_and_reports_the_rest(
+        ros_env, tmp_path):
+    """SIGSTOP freezes the recorder for 3 s while its publishers go on.
+
+    The controller states' publisher keeps every message for it (a history as deep as the
+    stream): all are recorded. Joint states are best effort; gripper states reliable but
+    latched with a history of one (what a late subscriber must get): those the recorder could
+    not take are lost, and every loss is counted, per topic, in its log, on /diagnostics and
+    in the bag's custom_data: recorded + lost = published.
+    """
+    bag = tmp_path / 'stalled'
+    with recorder(ros_env, bag) as rec, NodeProcess.python(DIAGNOSTICS_PROBE, ros_env,
+                                                           'probe') as probe:
+        assert rec.wait_for_output('recording', START_TIMEOUT), rec.output
+        with publisher(ros_env, 'stall', 8.0) as stall:
+            assert stall.wait_for_output('streaming', START_TIMEOUT), stall.output
+            time.sleep(1.0)
+            os.kill(rec.process.pid, signal.SIGSTOP)
+            time.sleep(3.0)  # the stall injected
+            os.kill(rec.process.pid, signal.SIGCONT)
+            assert stall.wait_for_output('done', START_TIMEOUT), stall.output
+            published = {line.split()[1]: int(line.split()[2])
+                         for line in stall.output.splitlines() if line.startswith('published')}
+            wait_until(lambda: flushed_counts(bag).get('/walker/controllers/a_yaw_joint/state')
+                       == published['/walker/controllers/a_yaw_joint/state'],
+                       START_TIMEOUT, 'every controller state in the bag')
+            assert probe.wait_for_output('WARN', START_TIMEOUT), probe.output
+            rec.stop()
+            assert rec.process.returncode == 0, rec.output
+            log, diagnostics = rec.output, probe.output
+    metadata = read_metadata(bag)
+    recorded = {t.topic_metadata.name: t.message_count for t in metadata.topics_with_message_count}
+    lost = {topic[len('messages_lost '):]: int(count)
+            for topic, count in metadata.custom_data.items() if topic.startswith('messages_lost ')}
+    assert '/walker/controllers/a_yaw_joint/state' not in lost
+    with BagReader(bag) as reader:
+        indices = [index_of('walker_msgs/msg/ControllerState', m.message)
+                   for m in reader.messages(['/walker/controllers/a_yaw_joint/state'])]
+    assert indices == list(range(published['/walker/controllers/a_yaw_joint/state']))
+    for topic in ('/walker/joint_states', '/walker/gripper_states'):
+        assert lost.get(topic, 0) > 0, (topic, recorded, published)
+        assert recorded[topic] + lost[topic] == published[topic], topic
+        assert f'{topic}: ' in log and ' lost (' in log
+    assert int(metadata.custom_data['messages_lost']) == sum(lost.values())
+    assert 'messages lost: /walker/gripper_states' in diagnostics
+
+
+def test_the_bag_is_split_by_duration_keeps_its_newest_files_and_is_continued_on_restart(
+        ros_env, tmp_path):
+    bag = tmp_path / 'split'
+    with publisher(ros_env, 'stream') as stream:
+        assert stream.wait_for_output('streaming', START_TIMEOUT), stream.output
+        with recorder(ros_env, bag, 'recorder.max_bag_duration:=0.5',
+                      'recorder.max_bag_files:=2') as rec:
+            wait_until(lambda: len(files_of(bag)) == 2 and files_of(bag)[0] != 'split_0.mcap',
+                       START_TIMEOUT, 'the oldest file rotated away')
+            rec.stop()
+            assert rec.process.returncode == 0, rec.output
+        first = read_metadata(bag)
+        assert sorted(p.name for p in bag.glob('*.mcap')) == sorted(first.relative_file_paths)
+        # a recorder started again on the same bag goes on in its next file
+        with recorder(ros_env, bag, 'recorder.append:=true') as rec:
+            wait_until(lambda: len(files_of(bag)) == 3 and read_metadata(bag).message_count
+                       > first.message_count,
+                       START_TIMEOUT, 'messages in the next file')
+            rec.stop()
+            assert rec.process.returncode == 0, rec.output
+    metadata = read_metadata(bag)
+    assert metadata.relative_file_paths[:2] == first.relative_file_paths
+    for name in metadata.relative_file_paths:
+        with open(bag / name, 'rb') as file:
+            assert make_reader(file).get_summary().statistics.message_count > 0
+    with BagReader(bag) as reader:
+        assert reader.message_count == metadata.message_count

@@ -12,6 +12,11 @@ QoS of docs/architecture.md:
   the recorder. Message ``i`` carries ``i`` in a field, so a test can check what arrived.
 - ``stream``: publishes joint states at 500 Hz and controller states at 100 Hz until
   interrupted; prints ``streaming`` after the first of each.
+- ``stall <seconds>``: waits until the recorder is matched on every topic, prints
+  ``streaming``, then for ``seconds`` publishes joint states (best effort) at 500 Hz,
+  controller states (reliable, a history of every message: none is ever overwritten) at
+  100 Hz and gripper states (latched, depth 1, as the plant) at 10 Hz; then prints
+  ``published <topic> <n>`` for each and ``done``.
 - ``simclock``: publishes ``/clock`` from ``SIM_START`` seconds on, one control period per
   step, and joint states stamped with it, as the plant does in sim-time mode; prints
   ``streaming`` once it runs.
@@ -138,6 +143,45 @@ def stream(node):
     rclpy.spin(node)
 
 
+def stall(node, seconds):
+    topics = {'joint_states': (JointState, qos_profile_sensor_data, joint_state, 1),
+              'controllers/a_yaw_joint/state': (ControllerState, QoSProfile(
+                  depth=int(seconds * 100) + 10, reliability=ReliabilityPolicy.RELIABLE),
+                  controller_state, 5),
+              'gripper_states': (GripperStates, LATCHED, gripper_states, 50)}
+    publishers = {topic: node.create_publisher(msg_type, topic, qos)
+                  for topic, (msg_type, qos, _, _) in topics.items()}
+    deadline = time.monotonic() + MATCH_TIMEOUT
+    while any(p.get_subscription_count() == 0 for p in publishers.values()):
+        if time.monotonic() > deadline:
+            print('no subscriber matched', flush=True)
+            return
+        time.sleep(0.05)
+    counts = dict.fromkeys(topics, 0)
+    tick = {'k': 0}
+    end = time.monotonic() + seconds
+
+    def publish():
+        if time.monotonic() > end:
+            return
+        for topic, (_, _, build, every) in topics.items():
+            if tick['k'] % every == 0:
+                publishers[topic].publish(build(node, counts[topic]))
+                counts[topic] += 1
+        tick['k'] += 1
+        if tick['k'] == 1:
+            print('streaming', flush=True)
+
+    timer = node.create_timer(CONTROL_PERIOD, publish)
+    while time.monotonic() <= end + 0.1:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    timer.cancel()
+    for topic, count in counts.items():
+        print(f'published {node.resolve_topic_name(topic)} {count}', flush=True)
+    print('done', flush=True)
+    rclpy.spin(node)
+
+
 def simclock(node):
     clock = node.create_publisher(Clock, '/clock', QoSProfile(depth=1))
     states = node.create_publisher(JointState, 'joint_states', qos_profile_sensor_data)
@@ -166,6 +210,8 @@ def main():
             latched(node)
         elif mode == 'burst':
             burst(node, int(sys.argv[2]))
+        elif mode == 'stall':
+            stall(node, float(sys.argv[2]))
         elif mode == 'simclock':
             simclock(node)
         else:

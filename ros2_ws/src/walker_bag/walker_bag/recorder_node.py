@@ -19,7 +19,17 @@ middleware's receive timestamp; the publish time is the publisher's source times
 Nothing received is lost on the way out: SIGINT (Ctrl-C) and SIGTERM stop the spinning, the
 messages already received are taken and written, and the bag is closed (summary, footer,
 ``metadata.yaml``). Received messages are written out every ``recorder.flush_period``, so
-even a SIGKILL loses at most that much. All bag logic is in :mod:`walker_bag.core`.
+even a SIGKILL loses at most that much; at its start the recorder completes, in place, every
+bag of its directory that a killed recorder left cut (:mod:`walker_bag.core.bag_recovery`).
+The bag goes on in a new file at ``recorder.max_bag_size`` or ``recorder.max_bag_duration``
+and keeps ``recorder.max_bag_files`` files; with ``recorder.append`` the recorder continues an
+existing bag in its next file (a recorder started again).
+
+Messages the middleware reports lost on the way (the recorder stalled while publishers went on:
+best-effort ones dropped, reliable ones overwritten in the publisher's history) are counted per
+topic (:mod:`walker_bag.core.losses`) and said in the log, on ``/diagnostics`` (the status
+``<node>: recording``, 1 Hz on the steady clock) and in the bag's ``custom_data``
+(``messages_lost``). All bag logic is in :mod:`walker_bag.core`.
 """
 
 from __future__ import annotations
@@ -32,7 +42,9 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import EventHandler, QoSSubscriptionEventType
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (
@@ -44,8 +56,10 @@ from walker_runtime.node_main import run_node
 from walker_runtime.spinning import TopicSampler, freeze_start_up_objects
 
 from walker_bag.core.bag_metadata import TopicMetadata
+from walker_bag.core.bag_recovery import recover_abandoned_bags
 from walker_bag.core.bag_writer import BagWriter
-from walker_bag.core.errors import MessageDefinitionError
+from walker_bag.core.errors import BagError, MessageDefinitionError
+from walker_bag.core.losses import LossLedger
 from walker_bag.core.message_definitions import message_definition, type_description_hash
 from walker_bag.core.qos import QosProfile, subscription_policies
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
@@ -60,6 +74,8 @@ _SPIN_TIMEOUT = 0.1
 #: Wait of one drain step [s]; two idle steps in a row mean nothing is left to take.
 _DRAIN_STEP = 0.02
 _INVALID_HASH = 'INVALID'
+_DIAGNOSTICS_PERIOD = 1.0  # [s] steady clock
+_OK, _WARN = bytes([0]), bytes([1])  # diagnostic_msgs/DiagnosticStatus levels
 
 
 def offered_qos(endpoint: TopicEndpointInfo) -> QosProfile:
@@ -98,10 +114,18 @@ class RecorderNode(Node):
             self, RecorderParameters, RECORDER_PREFIX)
         self._selection = TopicSelection(self._settings.topics, self.get_namespace())
         self._use_sim_time = bool(self.get_parameter('use_sim_time').value)
+        for report in recover_abandoned_bags(self._settings.directory):
+            self.get_logger().warning(
+                f'{report.source}: left cut by a killed recorder; completed in place, '
+                f'{report.message_count} messages (the cut files kept as *.incomplete)')
+        self._losses = LossLedger()
         self._writer = BagWriter(
             self._settings.bag_path(datetime.datetime.now()),
             max_chunk_size=self._settings.max_chunk_size,
-            custom_data={'clock': 'sim_time' if self._use_sim_time else 'system_time'})
+            custom_data={'clock': 'sim_time' if self._use_sim_time else 'system_time',
+                         **self._losses.custom_data()},
+            split=self._settings.split, append=self._settings.append)
+        self._loss_handlers: list[EventHandler] = []
         self._subscriptions_by_topic: dict[str, Any] = {}
         # the subscriptions live on a node no executor spins: taken every take_period
         self._sampler = TopicSampler(f'{self.get_name()}_reader', self.get_namespace(),
@@ -116,6 +140,8 @@ class RecorderNode(Node):
                 self._settings.flush_period, self._writer.flush, clock=steady)
             self._take_timer = self.create_timer(
                 self._settings.take_period, self.take_received, clock=steady)
+            self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+            self.create_timer(_DIAGNOSTICS_PERIOD, self._publish_diagnostics, clock=steady)
             self.get_logger().info(
                 f'recording {self._selection!r} to {self._writer.path} '
                 f'({"sim" if self._use_sim_time else "system"} time)')
@@ -176,10 +202,48 @@ class RecorderNode(Node):
                          reliability=ReliabilityPolicy[reliability.upper()],
                          durability=DurabilityPolicy[durability.upper()])
         self._writer.add_topic(TopicMetadata(topic, type_name, offers, type_hash), definition)
-        self._subscriptions_by_topic[topic] = self._sampler.subscribe(type_class, topic,
-                                                                      qos, raw=True)
+        subscription = self._sampler.subscribe(type_class, topic, qos, raw=True)
+        self._subscriptions_by_topic[topic] = subscription
+        self._watch_losses(topic, subscription, reliability == 'reliable')
         self.get_logger().info(f'recording {topic} [{type_name}] ({reliability}, {durability}, '
                                f'{len(offers)} publisher(s))')
+
+    def _watch_losses(self, topic: str, subscription, reliable: bool) -> None:
+        """Count what the middleware reports lost on ``topic`` (this node's executor serves it)."""
+        handler = EventHandler(
+            callback_group=self.default_callback_group,
+            callback=lambda info: self._on_lost(topic, info.total_count_change, reliable),
+            event_type=QoSSubscriptionEventType.RCL_SUBSCRIPTION_MESSAGE_LOST,
+            parent_impl=subscription.handle)
+        self.add_waitable(handler)
+        self._loss_handlers.append(handler)
+
+    def _on_lost(self, topic: str, count: int, reliable: bool) -> None:
+        line = self._losses.lost(topic, count, reliable, self.get_clock().now().nanoseconds)
+        if line:
+            self.get_logger().warning(line)
+            for key, value in self._losses.custom_data().items():
+                self._writer.set_custom_data(key, value)
+
+    @property
+    def losses(self) -> LossLedger:
+        """The messages reported lost so far, per topic."""
+        return self._losses
+
+    def _publish_diagnostics(self) -> None:
+        status = DiagnosticStatus(
+            name=f'{self.get_fully_qualified_name()}: recording',
+            hardware_id=self.get_namespace(), level=_WARN if self._losses.total else _OK,
+            message=f'{self._writer.path}: {self._received} messages, '
+                    f'{self._losses.summary()}')
+        status.values = [KeyValue(key='bag', value=str(self._writer.path)),
+                         KeyValue(key='file', value=self._writer.storage_file.name),
+                         KeyValue(key='messages', value=str(self._received))]
+        status.values += [KeyValue(key=key, value=value)
+                          for key, value in self._losses.custom_data().items()]
+        message = DiagnosticArray(status=[status])
+        message.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(message)
 
     def take_received(self) -> int:
         """Take every message received on every topic, write them in log-time order.
@@ -213,6 +277,10 @@ class RecorderNode(Node):
 
     def destroy_node(self) -> None:
         """Destroy the node and the one its subscriptions live on."""
+        for handler in self._loss_handlers:
+            self.remove_waitable(handler)
+            handler.destroy()
+        self._loss_handlers.clear()
         self._sampler.destroy()
         super().destroy_node()
 
@@ -226,7 +294,8 @@ class RecorderNode(Node):
                 self.get_logger().info(f'{name} was asked for but never had a publisher')
         self.get_logger().info(
             f'closed {self._writer.path}: {metadata.message_count} messages on '
-            f'{len(metadata.topics_with_message_count)} topics')
+            f'{len(metadata.topics_with_message_count)} topics in '
+            f'{len(metadata.relative_file_paths)} file(s); {self._losses.summary()}')
 
 
 def _spin_then_drain(node: RecorderNode, stop) -> None:

@@ -254,3 +254,66 @@ def test_walk_progress_names_the_step_under_way_and_counts_the_steps_done_betwee
         'step 5/5 n3_2 -> n4_3: fine, tip error 5.9 mm (46 s)'
     after_the_last = WalkTo.Feedback(step_index=5, step_count=5, phase=0)
     assert walk_feedback_text(after_the_last, 50.0) == '5 of 5 steps done: idle (50 s)'
+
+
+@pytest.mark.parametrize('target, reason', [
+    ('n99_99', "node 'n99_99' is not on the truss"),
+    ('elsewhere', "'elsewhere' is not a node name")])
+def test_a_target_that_is_no_node_is_refused_before_anything_starts(tmp_path, capsys, target,
+                                                                     reason):
+    from walker_bringup.run import main
+
+    out = tmp_path / 'out'
+    code = main(['--sim-time', '--quiet', '--target', target, '--out', str(out)])
+    printed = capsys.readouterr().out
+    assert code == 2
+    assert f"[walker] error: --target '{target}': {reason}" in printed
+    assert not out.exists()  # no bag, no report, no log
+
+
+def test_serve_records_in_files_of_bounded_size_and_age_and_keeps_the_newest():
+    from walker_bringup.run import SERVE_SPLIT, _graph_parameters, parse_arguments
+
+    walk = parse_arguments([])
+    assert (walk.max_bag_size, walk.max_bag_duration, walk.max_bag_files) == (0, 0.0, 0)
+    serve = parse_arguments(['--serve'])
+    assert (serve.max_bag_size, serve.max_bag_duration, serve.max_bag_files) == SERVE_SPLIT
+    chosen = parse_arguments(['--serve', '--max-bag-files', '0', '--max-bag-duration', '60'])
+    assert dict(_graph_parameters(chosen)) == {
+        'recorder.max_bag_size': str(SERVE_SPLIT[0]), 'recorder.max_bag_duration': '60.0',
+        'recorder.max_bag_files': '0'}
+
+
+@pytest.mark.parametrize('option, value', [('--max-bag-size', '-1'),
+                                           ('--max-bag-duration', 'nan'),
+                                           ('--max-bag-files', '1.5')])
+def test_a_bad_split_limit_is_refused_by_the_command_line(option, value, capsys):
+    from walker_bringup.run import parse_arguments
+
+    with pytest.raises(SystemExit) as exit_:
+        parse_arguments([option, value])
+    assert exit_.value.code == 2
+    assert option in capsys.readouterr().err
+
+
+def test_a_bag_its_recorder_left_cut_is_completed_once_the_graph_is_down(tmp_path):
+    from mcap.reader import make_reader
+
+    from walker_bag.core.bag_metadata import TopicMetadata
+    from walker_bag.core.bag_writer import BagWriter
+    from walker_bringup.run import _recover_bags
+
+    bag = tmp_path / 'bag'
+    with BagWriter(bag) as writer:
+        writer.add_topic(TopicMetadata('/walker/x', 'std_msgs/msg/Empty'), None)
+        for i in range(5):
+            writer.write('/walker/x', b'\x00\x01\x00\x00', 10**9 + i)
+        writer.flush()
+        cut = (bag / 'bag_0.mcap').read_bytes()  # what a recorder killed now leaves
+    (bag / 'bag_0.mcap').write_bytes(cut)
+    said = _recover_bags([bag, tmp_path / 'never_recorded'])
+    assert said == [f'[walker] the recorder of {bag} did not close it: its cut file completed '
+                    'in place, 5 messages (the cut file kept as bag_0.mcap.incomplete)']
+    with open(bag / 'bag_0.mcap', 'rb') as stream:
+        assert len(list(make_reader(stream).iter_messages())) == 5
+    assert _recover_bags([bag]) == []  # complete now: nothing to say

@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime
+import math
 import os
 import signal
 import sys
@@ -48,6 +49,9 @@ SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead 
 REALTIME_PRIORITY = 50
 #: Port of the Foxglove WebSocket server with --foxglove (foxglove_bridge's default).
 FOXGLOVE_PORT = 8765
+#: --serve's recording: files of at most 256 MiB or 15 min, the newest 8 kept (an idle sim-time
+#: graph records about 6 MiB a minute: without a limit a long session fills the disk)
+SERVE_SPLIT = (256 * 2**20, 900.0, 8)
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -78,7 +82,25 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='bring the graph up, report it ready, and shut it down')
     parser.add_argument('--serve', action='store_true',
                         help='bring the graph up and keep it running, without walking, until '
-                             'Ctrl-C: for an operator with walkerctl or the ros2 tools')
+                             'Ctrl-C: for an operator with walkerctl or the ros2 tools. It '
+                             'records all along, split as --max-bag-size, --max-bag-duration '
+                             'and --max-bag-files say (by default files of at most '
+                             f'{SERVE_SPLIT[0] // 2**20} MiB or {SERVE_SPLIT[1]:g} s, the newest '
+                             f'{SERVE_SPLIT[2]} kept: at most about '
+                             f'{SERVE_SPLIT[0] * SERVE_SPLIT[2] // 2**30} GiB and '
+                             f'{SERVE_SPLIT[1] * SERVE_SPLIT[2] / 3600:g} h of recording)')
+    parser.add_argument('--max-bag-size', type=_non_negative_int, default=None, metavar='BYTES',
+                        help='the bag goes on in a new file once its file holds this many '
+                             'bytes, as ros2 bag record --max-bag-size; 0: never (default: 0, '
+                             f'with --serve {SERVE_SPLIT[0]})')
+    parser.add_argument('--max-bag-duration', type=_non_negative_float, default=None,
+                        metavar='SECONDS',
+                        help='the bag goes on in a new file once its file spans this many '
+                             'seconds, as ros2 bag record --max-bag-duration; 0: never '
+                             f'(default: 0, with --serve {SERVE_SPLIT[1]:g})')
+    parser.add_argument('--max-bag-files', type=_non_negative_int, default=None, metavar='N',
+                        help='the bag keeps its newest N files, deleting older ones; 0: every '
+                             f'file (default: 0, with --serve {SERVE_SPLIT[2]})')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
@@ -130,6 +152,11 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
         if graph_only:
             parser.error(f'--headless runs no graph: leave {", ".join(graph_only)} out')
     args.grouped_controllers = args.grouped_controllers or args.composed_loop
+    serving = (SERVE_SPLIT if args.serve else (0, 0.0, 0))
+    for name, default in zip(('max_bag_size', 'max_bag_duration', 'max_bag_files'), serving,
+                             strict=True):
+        if getattr(args, name) is None:
+            setattr(args, name, default)
     return args
 
 
@@ -152,6 +179,24 @@ def _port(text: str) -> int:
         raise argparse.ArgumentTypeError(f'expected a TCP port 0..65535 (0: any free one), got '
                                          f'{text!r}')
     return port
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f'expected a whole number >= 0, got {text!r}')
+    return value
+
+
+def _non_negative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f'expected a number of seconds >= 0, got {text!r}')
+    return value
 
 
 def _walker_count(text: str) -> int:
@@ -266,13 +311,16 @@ def _bag_paths(walkers: list[_Walker]) -> list[Path]:
 
 
 def _graph_parameters(args) -> tuple[tuple[str, str], ...]:
-    """Return the overrides for every node: the real-time priority asked for, and the gate.
+    """Return the overrides for every node: the recorder's splits, the real-time priority
+    asked for, and the gate.
 
     With the loop composed in sim time: at two to three times real time the supervisor,
     outside the lock-step, decides late in simulated time; the plant then waits for its
     release (``sim.wait_for_decisions``).
     """
-    overrides = ()
+    overrides = (('recorder.max_bag_size', str(args.max_bag_size)),
+                 ('recorder.max_bag_duration', repr(float(args.max_bag_duration))),
+                 ('recorder.max_bag_files', str(args.max_bag_files)))
     if args.realtime and not args.sim_time:
         overrides += (('timing.realtime_priority', str(args.realtime)),)
     if args.composed_loop and args.sim_time:
@@ -311,18 +359,26 @@ def main(argv: list[str] | None = None) -> int:
         return run_headless(args)
     from walker_bringup.core.configuration import load_configuration
     from walker_core.parameter_schema import ParameterError
+    from walker_core.truss import Truss
 
     progress = _Progress(args.quiet)
-    try:  # every section and every rule between them, before anything is started or written
+    # Everything the command line names is checked before anything is started or written:
+    # every section and every rule between them, the target.
+    try:
         configuration = load_configuration(args.params_file)
     except ParameterError as error:
         progress.error(f'[walker] error: {args.params_file or "the installed walker.yaml"}: '
                        f'{error}')
         return 2
+    if args.walk and not args.serve:
+        try:
+            Truss.from_parameters(configuration.walker).index(args.target)
+        except ValueError as error:
+            progress.error(f'[walker] error: --target {args.target!r}: {error}')
+            return 2
     params_file = configuration.path
     stamp = datetime.datetime.now().strftime('%Y%m%d-%H%M%S')
     out = Path(args.out or Path('runs') / stamp).resolve()
-    out.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     if args.walkers > 1 and args.namespace != '/walker':
@@ -352,6 +408,7 @@ def main(argv: list[str] | None = None) -> int:
         progress.error(f'[walker] error: {", ".join(map(str, taken))} already exists and a '
                        'recording never overwrites a bag: choose another --out, or --no-record')
         return 2
+    out.mkdir(parents=True, exist_ok=True)
     context = init_context()
     busy = _namespaces_in_use(walkers, context)
     if busy:
@@ -442,6 +499,8 @@ def main(argv: list[str] | None = None) -> int:
                          'stopped (' + ', '.join(f'{n}: {c}' for n, c in codes.items()) + ')')
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        for line in _recover_bags(_bag_paths(walkers)):
+            progress.error(line)
     walked = args.walk and code not in (3, 130)  # the graph came up and nobody hit Ctrl-C
     if args.record and args.report and walked and (out / 'bag').is_dir():
         if not write_report(out / 'bag', out / 'report', params_file, args.quiet):
@@ -449,6 +508,29 @@ def main(argv: list[str] | None = None) -> int:
     return code
 
 
+def _recover_bags(bags: list[Path]) -> list[str]:
+    """Complete, in place, the bags a killed recorder left cut; say what was done.
+
+    The graph is down: no recorder holds a bag's lock any more
+    (:func:`walker_bag.core.bag_recovery.recover_in_place`).
+    """
+    from walker_bag.core.bag_recovery import recover_in_place
+    from walker_bag.core.errors import BagError
+
+    said = []
+    for bag in bags:
+        if not bag.is_dir():
+            continue
+        try:
+            report = recover_in_place(bag)
+        except (BagError, OSError) as error:
+            said.append(f'[walker] error: the bag {bag} cannot be recovered: {error}')
+            continue
+        if report is not None and report.files:
+            said.append(f'[walker] the recorder of {bag} did not close it: its cut file '
+                        f'completed in place, {report.message_count} messages (the cut file '
+                        f'kept as {report.files[0].path.name}.incomplete)')
+    return said
 def _foxglove_layout() -> Path:
     """Return the installed Foxglove layout of walker_viz."""
     from ament_index_python.packages import get_package_share_directory

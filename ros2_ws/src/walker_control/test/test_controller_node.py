@@ -135,7 +135,8 @@ class StandInPlant:
     def command(self, mode, base='a'):
         from walker_msgs.msg import ControlMode
 
-        self.mode_pub.publish(ControlMode(mode=mode, base_gripper=base))
+        self.mode_pub.publish(ControlMode(mode=mode, base_gripper=base,
+                                          commander='/walker/supervisor'))
 
     def setpoint(self, stamp_ns, position, velocity=0.0):
         from walker_msgs.msg import JointCommand

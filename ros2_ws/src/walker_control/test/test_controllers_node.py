@@ -127,7 +127,8 @@ class StandIn:
         from walker_msgs.msg import ControlMode
 
         for ns in self.namespaces:
-            self.pubs[ns]['mode'].publish(ControlMode(mode=mode, base_gripper=base))
+            self.pubs[ns]['mode'].publish(ControlMode(mode=mode, base_gripper=base,
+                                                      commander=f'{ns}/supervisor'))
 
     def setpoint(self, joint, stamp_ns, position, velocity=0.0):
         from walker_msgs.msg import JointCommand

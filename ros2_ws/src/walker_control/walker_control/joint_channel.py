@@ -17,7 +17,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from walker_msgs.msg import ControlMode, ControllerState, JointCommand
 
-from walker_runtime.qos import COMMAND_QOS, MODE_QOS, SENSOR_QOS
+from walker_runtime.qos import COMMAND_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
 from walker_runtime.watched_subscription import WatchedSubscription
 
 from walker_control.core.channel import CLOCK_SLACK_PERIODS, ControllerChannel
@@ -25,8 +25,8 @@ from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import ControlOutput, Measurement
 
-__all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel',
-           'CLOCK_SLACK_PERIODS', 'seconds']
+__all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'MODE_SUBSCRIPTION_QOS',
+           'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel', 'CLOCK_SLACK_PERIODS', 'seconds']
 
 #: joint_states and joint_accelerations: best effort, newest only (walker_runtime.qos)
 STATE_QOS = SENSOR_QOS

@@ -36,6 +36,7 @@ from sensor_msgs.msg import JointState
 from walker_msgs.msg import ControlMode, JointAccelerations
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
+from walker_core.mode_command import mode_command_refusal
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_runtime.realtime import log_realtime_request
 from walker_runtime.node_main import run_node
@@ -43,7 +44,8 @@ from walker_runtime.watched_subscription import WatchedSubscription
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
 from walker_control.joint_channel import (
-    COMMAND_QOS, MODE_QOS, RESUBSCRIBE_AFTER_TIMEOUTS, STATE_QOS, JointChannel, seconds)
+    COMMAND_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, RESUBSCRIBE_AFTER_TIMEOUTS, STATE_QOS,
+    JointChannel, seconds)
 
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'ControllerNode', 'JointControllerNode',
            'default_node_name', 'run_controller_node', 'main']
@@ -102,7 +104,8 @@ class ControllerNode(Node):
         several = len(self._joints) > 1
         # The executor serves ready subscriptions in creation order: the mode, the setpoints
         # and the acceleration that arrived with a state are taken before the state itself.
-        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, MODE_QOS)
+        self.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
+                                 MODE_SUBSCRIPTION_QOS)
         self._channels = [JointChannel(self, joint, self._settings, self._steady_now,
                                        self._sim_clock_now, f'{joint}: ' if several else '',
                                        after_setpoint=self._answer_waiting_state)
@@ -262,6 +265,10 @@ class ControllerNode(Node):
 
     # -------------------------------------------------------------------------- callbacks
     def _on_control_mode(self, msg: ControlMode) -> None:
+        refusal = mode_command_refusal(msg.commander, msg.base_gripper, self.get_namespace())
+        if refusal:
+            self.get_logger().error(f'{refusal}; nothing changed')
+            return
         for channel in self._channels:
             channel.on_control_mode(msg)
         self._answer_waiting_state()

@@ -172,9 +172,10 @@ class WalkRecording:
             header=self._header(stamp), grippers=grippers), stamp)
 
     def control_mode(self, stamp: int, mode: int, base_gripper: str) -> None:
-        """``control_mode`` as the supervisor commands it."""
+        """``control_mode`` as the supervisor commands it (in its name)."""
         self._serialize('control_mode', self._types['walker_msgs/msg/ControlMode'](
-            header=self._header(stamp), mode=mode, base_gripper=base_gripper), stamp)
+            header=self._header(stamp), mode=mode, base_gripper=base_gripper,
+            commander=f'{self.namespace.rstrip("/")}/supervisor'), stamp)
 
     def phase(self, record) -> None:
         """``phase`` of a :class:`~walker_headless.records.PhaseRecord`."""

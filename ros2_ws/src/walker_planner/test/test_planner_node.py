@@ -103,7 +103,8 @@ class Probe:
         from walker_msgs.msg import ControlMode
 
         value = {'hold': ControlMode.HOLD, 'fine': ControlMode.FINE}[mode]
-        self.mode_publisher.publish(ControlMode(mode=value, base_gripper='a'))
+        self.mode_publisher.publish(ControlMode(mode=value, base_gripper='a',
+                                                commander='/walker/supervisor'))
 
     def call(self, **fields):
         future = self.planner.call_async(self.Request(**fields))

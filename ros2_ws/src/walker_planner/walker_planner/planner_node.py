@@ -38,8 +38,9 @@ from walker_msgs.msg import ControlMode, JointCommand
 from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.mode_command import mode_command_refusal
 from walker_runtime.node_parameters import declare_section, guard_section_updates
-from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
+from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
 from walker_runtime.realtime import log_realtime_request, request_thread_priority
 from walker_runtime.core.resubscription import clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
@@ -132,7 +133,7 @@ class PlannerNode(Node):
         self._stream_node.create_timer(_RESUBSCRIBE_AFTER / 4, self._resubscribe_if_silent,
                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._stream_node.create_subscription(ControlMode, 'control_mode',
-                                              self._on_control_mode, LATCHED_QOS)
+                                              self._on_control_mode, MODE_SUBSCRIPTION_QOS)
         self.create_timer(_RELAY_PERIOD, self._relay,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.create_service(PlanTrajectory, 'plan_trajectory', self._on_plan)
@@ -262,6 +263,9 @@ class PlannerNode(Node):
                 self._streamer.on_state(stamp, positions)
 
     def _on_control_mode(self, message: ControlMode) -> None:
+        if mode_command_refusal(message.commander, message.base_gripper,
+                                self.get_namespace()):
+            return  # the controllers refuse it too, and say so
         tracking = message.mode in (ControlMode.COARSE, ControlMode.FINE)
         with self._lock:
             self._streamer.on_control_mode(tracking)

@@ -261,7 +261,7 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
         for time_, mode, base in (MODES if not safe_hold else MODES[:6]):
             messages.append((time_, 3, lambda time_=time_, mode=mode, base=base: w.write(
                 'control_mode', time_, t_['walker_msgs/msg/ControlMode'](
-                    w.header(time_), mode, base))))
+                    w.header(time_), mode, base, '/walker/supervisor'))))
         for step in steps if reports else ():
             if step.insertion_start is None:
                 continue

@@ -4,14 +4,16 @@ import pytest
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, ReliabilityPolicy
 
 from walker_runtime.qos import (
-    CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, MODE_QOS, SENSOR_QOS, latched_qos)
+    CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS,
+    latched_qos)
 
 
 @pytest.mark.parametrize('profile, reliability, durability, depth', [
     (SENSOR_QOS, ReliabilityPolicy.BEST_EFFORT, DurabilityPolicy.VOLATILE, 1),
     (COMMAND_QOS, ReliabilityPolicy.RELIABLE, DurabilityPolicy.VOLATILE, 10),
     (LATCHED_QOS, ReliabilityPolicy.RELIABLE, DurabilityPolicy.TRANSIENT_LOCAL, 1),
-    (MODE_QOS, ReliabilityPolicy.RELIABLE, DurabilityPolicy.TRANSIENT_LOCAL, 10),
+    (MODE_QOS, ReliabilityPolicy.RELIABLE, DurabilityPolicy.TRANSIENT_LOCAL, 1),
+    (MODE_SUBSCRIPTION_QOS, ReliabilityPolicy.RELIABLE, DurabilityPolicy.TRANSIENT_LOCAL, 10),
     (CLOCK_QOS, ReliabilityPolicy.RELIABLE, DurabilityPolicy.VOLATILE, 1),
 ])
 def test_each_kind_of_topic_has_the_documented_profile(profile, reliability, durability,
@@ -39,8 +41,10 @@ def test_the_nodes_share_the_profiles():
     from walker_control import joint_channel
     from walker_planner import planner_node
     from walker_sim import messages
-    from walker_supervisor import supervisor_node
+    from walker_supervisor import inputs, supervisor_node
     assert joint_channel.STATE_QOS is SENSOR_QOS is messages.SENSOR_QOS
     assert joint_channel.COMMAND_QOS is COMMAND_QOS is messages.COMMAND_QOS \
         is planner_node.COMMAND_QOS
     assert joint_channel.MODE_QOS is MODE_QOS is supervisor_node.MODE_QOS
+    assert joint_channel.MODE_SUBSCRIPTION_QOS is MODE_SUBSCRIPTION_QOS \
+        is planner_node.MODE_SUBSCRIPTION_QOS is inputs.MODE_SUBSCRIPTION_QOS

@@ -11,8 +11,12 @@ offer. So every node takes its profiles from here:
   setpoints, the controller states, ``/diagnostics``): reliable, keep last 10.
 * :data:`LATCHED_QOS`: latched state (``gripper_states``, ``robot_description``,
   ``planned_trajectory``): reliable, transient local, depth 1.
-* :data:`MODE_QOS`: ``control_mode``: latched with depth 10, since a step's final HOLD and the
-  next step's mode follow each other within milliseconds and each must reach every controller.
+* :data:`MODE_QOS`: the supervisor's ``control_mode`` publisher: latched, depth 1, so that a late
+  subscriber gets the mode commanded now; :data:`MODE_SUBSCRIPTION_QOS`, its receivers (the
+  controllers, the planner): latched with depth 10, since a step's final HOLD and the next
+  step's mode follow each other within milliseconds and each must be handled, none overwritten
+  in the receiver's queue before its callback took it (publication is synchronous: each
+  command leaves the supervisor as it is published).
 * :data:`CLOCK_QOS`: ``/clock``: reliable, keep last 1.
 * :func:`latched_qos`: latched with a history (the phase, the step reports).
 * :data:`TF_QOS` and :data:`TF_STATIC_QOS`: ``/tf`` and ``/tf_static`` as tf2_ros offers them
@@ -25,8 +29,8 @@ from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'CLOCK_QOS', 'TF_QOS',
-           'TF_STATIC_QOS', 'latched_qos']
+__all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'MODE_SUBSCRIPTION_QOS',
+           'CLOCK_QOS', 'TF_QOS', 'TF_STATIC_QOS', 'latched_qos']
 
 
 def latched_qos(depth: int) -> QoSProfile:
@@ -51,7 +55,8 @@ COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.VOLATILE)
 LATCHED_QOS = latched_qos(1)
-MODE_QOS = latched_qos(10)
+MODE_QOS = latched_qos(1)
+MODE_SUBSCRIPTION_QOS = latched_qos(10)
 CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                        reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)

@@ -208,6 +208,40 @@ def test_a_gripper_leaves_its_hole_straight_up_before_it_moves_sideways():
     RULES.tip_jog(situation(IN_HOLE), [0.5 * TOLERANCE, 0.0, 0.0], 0.0)
 
 
+#: Where a fault once left the free gripper (mode commands that moved the arm with its chain
+#: open): 13.1 mm off its hole, 4.1 mm below the truss surface, tilted 2.1 deg.
+SUNK = KIN.inverse([0.0131, SPACING, -0.0041, 0.0367, 0.0])
+SUNK_LEVEL = KIN.inverse([0.0131, SPACING, -0.0041, 0.0, 0.0])
+
+
+def test_a_gripper_below_the_surface_is_brought_out_by_jogs_that_lift_it():
+    lift = RULES.joint_jog(situation(SUNK), 'a_pitch_joint', -0.05, 0.0)
+    path = np.linspace(0.0, 1.0, 41)[:, None] * (lift.goal - lift.start) + lift.start
+    heights = np.array([KIN.forward(q)[2] for q in path])
+    assert heights[0] < -TOLERANCE and heights[-1] > TELEOP.clearance
+    assert np.all(np.diff(heights) >= 0.0)
+    # turning it about its own axis moves its contact point nowhere: allowed too
+    RULES.joint_jog(situation(SUNK), 'b_yaw_joint', 0.1, 0.0)
+    # a level gripper rises out of it along its axis
+    up = RULES.tip_jog(situation(SUNK_LEVEL), [0.0, 0.0, 0.02], 0.0)
+    assert up.goal_point[2] == pytest.approx(0.02 - 0.0041)
+
+
+@pytest.mark.parametrize('joint, delta, match', [
+    ('a_pitch_joint', 0.02, r'would take it down to 22.1 mm below it'),
+    ('b_pitch_joint', 0.05, r'would take it down to 4.2 mm below it'),
+    ('a_yaw_joint', 0.1, r'would move it 2.3 mm sideways while it rises 0.0 mm'),
+])
+def test_from_below_the_surface_a_jog_that_sinks_or_drags_sideways_is_refused(joint, delta,
+                                                                                match):
+    refused(r'gripper b is 4.1 mm below the truss surface and moving ' + joint + '.*' + match
+            + r': from below the surface a jog may only move it up, and sideways by no more '
+            r'than it rises, until it is teleop.clearance = 10 mm above it',
+            RULES.joint_jog, situation(SUNK), joint, delta, 0.0)
+    refused(r'4.1 mm below the truss surface and the jog would take it down',
+            RULES.tip_jog, situation(SUNK_LEVEL), [0.0, 0.0, -0.001], 0.0)
+
+
 def test_a_tilted_gripper_must_be_levelled_before_a_tip_jog():
     tilted = LIFTED.copy()
     tilted[3] -= 0.05  # alpha = pi - (th2 + th3 + th4) grows by 0.05

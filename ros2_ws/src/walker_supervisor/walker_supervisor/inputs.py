@@ -20,7 +20,8 @@ from sensor_msgs.msg import JointState
 from walker_msgs.msg import ControllerState, ControlMode, GripperState, GripperStates
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
-from walker_runtime.qos import LATCHED_QOS, SENSOR_QOS
+from walker_core.mode_command import mode_command_refusal
+from walker_runtime.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
 from walker_runtime.core.resubscription import Resubscription
 from walker_runtime.spinning import TopicSampler
 from walker_supervisor.clocks import Clocks
@@ -65,8 +66,8 @@ class SupervisorInputs:
             for joint in PHYSICAL_JOINT_NAMES}
         self._grippers = self._subscribe_grippers()
         self.gripper_messages: dict[str, GripperState] = {}
-        node.create_subscription(ControlMode, 'control_mode',
-                                 lambda msg: runner.latched_mode(msg.base_gripper), LATCHED_QOS)
+        node.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
+                                 MODE_SUBSCRIPTION_QOS)
         after = RESUBSCRIBE_AFTER_TIMEOUTS * runner.settings.watchdog_timeout
         self._resubscriptions = {name: Resubscription(after) for name in runner.health.names}
 
@@ -90,6 +91,13 @@ class SupervisorInputs:
             if taken:
                 reports[joint] = controller_report(taken[-1])
         self._execute(runner.controller_states(reports, self._clocks.now(), steady))
+
+    def _on_control_mode(self, msg: ControlMode) -> None:
+        # A restarted supervisor takes the base back from the latched mode: its own commands
+        # only, never a stray publisher's (walker_core.mode_command).
+        if not mode_command_refusal(msg.commander, msg.base_gripper,
+                                    self._node.get_namespace()):
+            self._runner.latched_mode(msg.base_gripper)
 
     def _subscribe_grippers(self):
         return self._node.create_subscription(GripperStates, 'gripper_states',

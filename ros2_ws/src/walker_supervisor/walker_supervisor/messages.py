@@ -66,9 +66,14 @@ def controller_report(msg: ControllerState) -> ControllerReport:
                             msg.mode == ControllerState.HOLD)
 
 
-def mode_message(command: SetControlMode, stamp) -> ControlMode:
-    """Return the ``control_mode`` message of a mode command, stamped ``stamp``."""
-    message = ControlMode(mode=MODES[command.mode], base_gripper=command.base_gripper)
+def mode_message(command: SetControlMode, stamp, commander: str) -> ControlMode:
+    """Return the ``control_mode`` message of a mode command, stamped ``stamp``.
+
+    ``commander``: the supervisor's fully qualified node name, the one the controllers and the
+    planner take mode commands from (:mod:`walker_core.mode_command`).
+    """
+    message = ControlMode(mode=MODES[command.mode], base_gripper=command.base_gripper,
+                          commander=commander)
     message.header.stamp = stamp
     return message
 

@@ -140,7 +140,8 @@ class SupervisorNode(Node):
             if self.links.handles(command):
                 self.links.execute(command)
             elif isinstance(command, SetControlMode):
-                self.mode_pub.publish(mode_message(command, self.clocks.stamp()))
+                self.mode_pub.publish(mode_message(command, self.clocks.stamp(),
+                                                    self.get_fully_qualified_name()))
             elif isinstance(command, PhaseRecord):
                 message = phase_message(command, self.clocks.stamp())
                 self.phase_pub.publish(message)

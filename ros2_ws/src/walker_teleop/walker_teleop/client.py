@@ -27,7 +27,8 @@ from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
-from walker_runtime.qos import LATCHED_QOS
+from walker_core.mode_command import mode_command_refusal
+from walker_runtime.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS
 from walker_runtime.spinning import destroy_actions, helper_node
 from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 from walker_teleop.core.status import (
@@ -230,10 +231,15 @@ class TeleopClient:
         def keep(name: str) -> Callable[[object], None]:
             return lambda msg: received.__setitem__(name, msg)
 
+        def keep_mode(msg: ControlMode) -> None:
+            # the supervisor's commands only: a stray publisher's is not what the controllers do
+            if not mode_command_refusal(msg.commander, msg.base_gripper, self.namespace):
+                received['control_mode'] = msg
+
         subscriptions = [
             self.node.create_subscription(StepPhase, 'phase', keep('phase'), LATCHED_QOS),
-            self.node.create_subscription(ControlMode, 'control_mode', keep('control_mode'),
-                                          LATCHED_QOS),
+            self.node.create_subscription(ControlMode, 'control_mode', keep_mode,
+                                          MODE_SUBSCRIPTION_QOS),
             self.node.create_subscription(GripperStates, 'gripper_states', keep('gripper_states'),
                                           LATCHED_QOS),
             self.node.create_subscription(JointState, 'joint_states', keep('joint_states'),

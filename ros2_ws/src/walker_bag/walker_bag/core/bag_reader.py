@@ -30,7 +30,8 @@ __all__ = ['RecordedMessage', 'BagReader', 'read_messages', 'walker_typestore']
 #: The walker's custom message types, registered for bags without stored definitions.
 _WALKER_MESSAGE_TYPES = (
     'walker_msgs/msg/ControlMode', 'walker_msgs/msg/ControllerState',
-    'walker_msgs/msg/GripperState', 'walker_msgs/msg/GripperStates',
+    'walker_msgs/msg/GoalRejection', 'walker_msgs/msg/GripperState',
+    'walker_msgs/msg/GripperStates',
     'walker_msgs/msg/JointAccelerations', 'walker_msgs/msg/JointCommand',
     'walker_msgs/msg/StepPhase', 'walker_msgs/msg/StepReport')
 

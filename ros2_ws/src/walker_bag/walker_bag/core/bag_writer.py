@@ -1,87 +1,52 @@
 """The bag writer: a rosbag2 bag in MCAP storage, written as ROS 2 Jazzy's recorder writes it.
 
-A bag is a new directory ``<name>/`` holding ``<name>_0.mcap`` and ``metadata.yaml``. The MCAP
-file follows the ``ros2`` profile exactly as Jazzy's ``rosbag2_storage_mcap`` writes it:
+A bag is a directory ``<name>/`` holding its storage files ``<name>_0.mcap``, ``<name>_1.mcap``,
+... (:mod:`walker_bag.core.mcap_file`: the ``ros2`` MCAP profile exactly as Jazzy's
+``rosbag2_storage_mcap`` writes it) and ``metadata.yaml``. A bag goes on in a new file when
+its current one reaches a size or a duration, and may keep only its newest files
+(:class:`~walker_bag.core.bag_split.SplitPolicy`, as ``ros2 bag record --max-bag-size /
+--max-bag-duration``); a finished file has its summary and footer, so every reader opens it.
 
-- one *schema* per message type: name ``pkg/msg/Type``, encoding ``ros2msg``, data the
-  concatenated ``.msg`` text (:mod:`walker_bag.core.message_definitions`);
-- one *channel* per topic: message encoding ``cdr`` and the metadata keys
-  ``offered_qos_profiles`` (the publishers' QoS, version-9 YAML text) and ``topic_type_hash``
-  (``RIHS01_...``);
-- *messages* holding the CDR bytes exactly as received, with log time = receive time and
-  publish time = the publisher's source time [ns];
-- a ``rosbag2`` metadata record with key ``serialized_metadata`` (the bag's metadata as YAML),
-  written when the bag opens and again when it closes, and on close the summary section
-  (schemas, channels, statistics, chunk and metadata indexes) and footer;
-- chunks without compression (Jazzy's default), up to ``max_chunk_size`` bytes each
-  (768 KiB by default, the chunk size of Jazzy's writer), with message indexes.
+What this writer adds for crash safety: received messages are written out in complete chunks
+whenever a chunk is full *or* :meth:`BagWriter.flush` is called (the recorder calls it
+periodically), and every flush replaces ``metadata.yaml`` atomically with what the files then
+hold. A process killed at any moment therefore leaves files whose complete chunks hold every
+message up to the last flush, and a ``metadata.yaml`` that describes exactly those messages.
+The writer holds a lock on the bag directory (:class:`~walker_bag.core.bag_files.BagLock`)
+while it writes, which ends with its process: :mod:`walker_bag.core.bag_recovery` completes
+the last file of a bag whose writer is gone, in place, and a writer opened with ``append``
+does that first, then continues the bag in a new file (a recorder started again after a
+crash).
 
-What this writer adds for crash safety: a chunk is written out as soon as it is full *or*
-:meth:`BagWriter.flush` is called (the recorder calls it periodically), and every flush
-replaces ``metadata.yaml`` atomically with the counts of the messages written out so far. A
-process killed at any moment therefore leaves an MCAP file whose complete chunks hold every
-message up to the last flush (a streaming MCAP reader reads them; the summary and footer are
-missing), and a ``metadata.yaml`` that describes exactly those messages.
-:func:`walker_bag.core.bag_recovery.recover_bag` turns such a file into a complete bag.
-
-Not implemented (not needed by the walker): splitting into several files, compression.
+Not implemented (not needed by the walker): compression.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Mapping
 from pathlib import Path
 
-from mcap import __version__ as mcap_version
-from mcap.writer import CompressionType, Writer
-
+from walker_bag.core.bag_files import (
+    BagLock, StoredTopic, combine_summaries, file_index, storage_files, summarize_file)
 from walker_bag.core.bag_metadata import (
-    BagMetadata, FileInformation, NO_MESSAGE_TIME_NS, ROS_DISTRO, TopicInformation,
-    TopicMetadata, write_metadata)
+    ROS_DISTRO, BagMetadata, FileInformation, TopicMetadata, write_metadata)
+from walker_bag.core.bag_recovery import recover_file
+from walker_bag.core.bag_split import NO_SPLIT, SplitPolicy
 from walker_bag.core.errors import (
     BagClosedError, BagError, BagExistsError, BagPathError, TopicConflictError,
     UnknownTopicError)
+from walker_bag.core.mcap_file import (
+    DEFAULT_CHUNK_SIZE, LIBRARY, MCAP_PROFILE, McapFile, check_times)
 from walker_bag.core.message_definitions import MessageDefinition
-from walker_bag.core.qos import qos_profiles_to_yaml
 
 __all__ = ['DEFAULT_CHUNK_SIZE', 'MCAP_PROFILE', 'LIBRARY', 'BagWriter']
 
-#: Chunk size of ROS 2 Jazzy's MCAP writer (libmcap's default) [bytes].
-DEFAULT_CHUNK_SIZE = 768 * 1024
-MCAP_PROFILE = 'ros2'
-#: The MCAP header's library string: who wrote the file.
-LIBRARY = f'walker_bag 0.1.0 (mcap-python {mcap_version})'
-_MESSAGE_RECORD_OVERHEAD = 1 + 8 + 2 + 4 + 8 + 8  # opcode, length, channel, sequence, 2 times
-_RECORD_OVERHEAD = 64  # opcode, length, ids and string lengths of a schema or channel record
-_UINT32 = 2**32
 
-
-@dataclasses.dataclass
-class _TopicState:
-    metadata: TopicMetadata
-    channel_id: int
-    written: int = 0
-    flushed: int = 0
-
-
-@dataclasses.dataclass
-class _Span:
-    """Message count and log-time span of a set of messages [ns]."""
-
-    count: int = 0
-    start: int = NO_MESSAGE_TIME_NS
-    end: int = 0
-
-    def add(self, log_time: int) -> None:
-        self.count += 1
-        self.start = min(self.start, log_time)
-        self.end = max(self.end, log_time)
-
-    @property
-    def duration(self) -> int:
-        return self.end - self.start if self.count else 0
+@dataclasses.dataclass(frozen=True)
+class _FinishedFile:
+    information: FileInformation
+    counts: Mapping[str, int]
 
 
 class BagWriter:
@@ -90,20 +55,26 @@ class BagWriter:
     Parameters
     ----------
     bag_dir : str or Path
-        The bag directory to create; its parents are created as needed. It must not exist.
+        The bag directory to create; its parents are created as needed. It must not exist,
+        unless ``append``.
     max_chunk_size : int
         A chunk is written out when its messages reach this many bytes [bytes].
     custom_data : mapping of str to str, optional
         rosbag2's ``custom_data``: free key-value pairs stored in the metadata.
     ros_distro : str
         The ``ros_distro`` of the metadata.
+    split : SplitPolicy
+        When the bag goes on in a new file, and how many files it keeps.
+    append : bool
+        Continue an existing bag in a new file (after completing its last file, if its writer
+        was killed); a bag that does not exist yet is created.
 
     Raises
     ------
     BagExistsError
-        If ``bag_dir`` exists (a bag is never overwritten).
+        If ``bag_dir`` exists and not ``append`` (a bag is never overwritten).
     BagPathError
-        If the directory or its files cannot be created.
+        If the directory or its files cannot be created, or another process writes the bag.
     BagError
         If ``max_chunk_size`` is not a positive integer or ``custom_data`` not string pairs.
 
@@ -115,7 +86,8 @@ class BagWriter:
 
     def __init__(self, bag_dir: str | Path, *, max_chunk_size: int = DEFAULT_CHUNK_SIZE,
                  custom_data: Mapping[str, str] | None = None,
-                 ros_distro: str = ROS_DISTRO) -> None:
+                 ros_distro: str = ROS_DISTRO, split: SplitPolicy = NO_SPLIT,
+                 append: bool = False) -> None:
         if isinstance(max_chunk_size, bool) or not isinstance(max_chunk_size, int) \
                 or max_chunk_size <= 0:
             raise BagError(f'max_chunk_size must be a positive integer [bytes], '
@@ -123,38 +95,31 @@ class BagWriter:
         custom_data = dict(custom_data or {})
         if not all(isinstance(k, str) and isinstance(v, str) for k, v in custom_data.items()):
             raise BagError('custom_data must map strings to strings')
+        if not isinstance(split, SplitPolicy):
+            raise BagError(f'split must be a SplitPolicy, got {type(split).__name__}')
         self._dir = Path(bag_dir)
-        if self._dir.exists() or self._dir.is_symlink():
-            raise BagExistsError(f'bag directory {self._dir} already exists; a recording never '
-                                 f'overwrites a bag: choose another name')
         if not self._dir.name or self._dir.name in ('.', '..'):
             raise BagPathError(f'{str(bag_dir)!r} does not name a bag directory')
-        try:
-            self._dir.mkdir(parents=True)
-        except OSError as error:
-            raise BagPathError(
-                f'cannot create the bag directory {self._dir}: {error.strerror}') from None
-        self._file_name = f'{self._dir.name}_0.mcap'
-        try:
-            self._stream = open(self._dir / self._file_name, 'xb')
-        except OSError as error:
-            self._dir.rmdir()
-            raise BagPathError(f'cannot create {self._dir / self._file_name}: '
-                               f'{error.strerror}') from None
         self._max_chunk_size = max_chunk_size
-        self._custom_data = custom_data
         self._ros_distro = ros_distro
-        # Chunks are cut here, not by the library, so that every write-out is known.
-        self._mcap = Writer(self._stream, chunk_size=2**62, compression=CompressionType.NONE)
-        self._topics: dict[str, _TopicState] = {}
-        self._schemas: dict[str, int] = {}
-        self._pending_bytes = 0
-        self._written = _Span()
-        self._flushed = _Span()
+        self._split = split
+        self._topics: dict[str, StoredTopic] = {}
+        self._finished: list[_FinishedFile] = []
+        self._custom_data: dict[str, str] = {}
+        self._metadata_changed = False
+        if append and self._dir.is_dir():
+            self._lock = self._take_lock()
+            self._continue_bag()
+        else:
+            self._lock = self._create_bag()
+        self._custom_data.update(custom_data)
         self._closed = False
-        self._mcap.start(profile=MCAP_PROFILE, library=LIBRARY)
-        self._write_metadata_record()
-        self._stream.flush()
+        self._current: McapFile | None = None
+        try:
+            self._current = self._open_file()
+        except BaseException:
+            self._lock.release()
+            raise
         write_metadata(self._dir, self._metadata(flushed_only=True))
 
     # -- properties -------------------------------------------------------------------------
@@ -166,8 +131,13 @@ class BagWriter:
 
     @property
     def storage_file(self) -> Path:
-        """The MCAP file inside the bag directory."""
-        return self._dir / self._file_name
+        """The MCAP file being written now."""
+        return self._current.path
+
+    @property
+    def files(self) -> list[str]:
+        """The bag's storage files now, oldest first (relative to the bag directory)."""
+        return [f.information.path for f in self._finished] + [self._current.name]
 
     @property
     def closed(self) -> bool:
@@ -176,22 +146,29 @@ class BagWriter:
 
     @property
     def message_count(self) -> int:
-        """Messages written so far (including those not yet flushed)."""
-        return self._written.count
+        """Messages in the bag's files (including those not yet flushed)."""
+        return sum(f.information.message_count for f in self._finished) \
+            + self._current.written.count
 
     @property
     def flushed_message_count(self) -> int:
-        """Messages written out to the file (what survives a crash now)."""
-        return self._flushed.count
+        """Messages written out to the files (what survives a crash now)."""
+        return sum(f.information.message_count for f in self._finished) \
+            + self._current.flushed.count
 
     @property
     def topics(self) -> dict[str, TopicMetadata]:
         """The topics added so far, by name."""
-        return {name: state.metadata for name, state in self._topics.items()}
+        return {name: stored.metadata for name, stored in self._topics.items()}
+
+    @property
+    def custom_data(self) -> dict[str, str]:
+        """rosbag2's ``custom_data`` (a copy)."""
+        return dict(self._custom_data)
 
     def message_counts(self) -> dict[str, int]:
-        """Messages written so far per topic."""
-        return {name: state.written for name, state in self._topics.items()}
+        """Messages per topic in the bag's files (including those not yet flushed)."""
+        return self._counts(flushed_only=False)
 
     # -- writing ----------------------------------------------------------------------------
 
@@ -233,24 +210,8 @@ class BagWriter:
                     f'topic {topic.name} is recorded as {known.metadata.type}; it cannot also '
                     f'be {topic.type}')
             return False
-        if definition is not None and definition.type_name != topic.type:
-            raise TopicConflictError(f'topic {topic.name} has type {topic.type} but the '
-                                     f'definition given is of {definition.type_name}')
-        schema_id = self._schemas.get(topic.type)
-        if schema_id is None:
-            encoding, text = ('', '') if definition is None else (definition.encoding,
-                                                                  definition.text)
-            schema_id = self._mcap.register_schema(topic.type, encoding, text.encode())
-            self._schemas[topic.type] = schema_id
-            self._pending_bytes += len(text) + len(topic.type) + _RECORD_OVERHEAD
-        channel_metadata = {
-            'offered_qos_profiles': qos_profiles_to_yaml(topic.offered_qos_profiles),
-            'topic_type_hash': topic.type_description_hash}
-        channel_id = self._mcap.register_channel(
-            topic.name, topic.serialization_format, schema_id, channel_metadata)
-        self._pending_bytes += len(topic.name) + sum(
-            len(k) + len(v) for k, v in channel_metadata.items()) + _RECORD_OVERHEAD
-        self._topics[topic.name] = _TopicState(topic, channel_id)
+        self._current.add_topic(topic, definition)
+        self._topics[topic.name] = StoredTopic(topic, definition)
         return True
 
     def write(self, topic_name: str, data: bytes | bytearray | memoryview, log_time_ns: int,
@@ -280,41 +241,53 @@ class BagWriter:
             If the bag is closed.
         """
         self._check_open()
-        state = self._topics.get(topic_name)
-        if state is None:
+        if topic_name not in self._topics:
             raise UnknownTopicError(f'topic {topic_name!r} was not added to the bag; add it '
                                     f'with add_topic() before writing')
         publish_time_ns = log_time_ns if publish_time_ns is None else publish_time_ns
-        for name, value in (('log_time_ns', log_time_ns), ('publish_time_ns', publish_time_ns)):
-            if isinstance(value, bool) or not isinstance(value, int) or not (
-                    0 <= value < 2**64):
-                raise BagError(f'{name} must be a non-negative integer [ns], got {value!r}')
+        check_times(log_time_ns, publish_time_ns)
         if not isinstance(data, (bytes, bytearray, memoryview)):
             raise BagError(f'message data must be bytes, got {type(data).__name__}')
-        data = bytes(data)
-        self._mcap.add_message(state.channel_id, log_time=log_time_ns, data=data,
-                               publish_time=publish_time_ns, sequence=sequence % _UINT32)
-        state.written += 1
-        self._written.add(log_time_ns)
-        self._pending_bytes += len(data) + _MESSAGE_RECORD_OVERHEAD
-        if self._pending_bytes >= self._max_chunk_size:
+        current = self._current
+        if self._split.split_due(current.size, current.written.start
+                                 if current.written.count else None, log_time_ns):
+            self.split()
+        self._current.write(topic_name, bytes(data), log_time_ns, publish_time_ns, sequence)
+        if self._current.chunk_full:
             self.flush()
 
-    def flush(self) -> None:
-        """Write out the chunk in progress and replace ``metadata.yaml`` to match the file.
+    def set_custom_data(self, key: str, value: str) -> None:
+        """Set one ``custom_data`` entry; it reaches ``metadata.yaml`` at the next flush."""
+        if not isinstance(key, str) or not isinstance(value, str):
+            raise BagError('custom_data must map strings to strings')
+        if self._custom_data.get(key) != value:
+            self._custom_data[key] = value
+            self._metadata_changed = True
 
-        After it returns, every message written so far is in the file (in the operating
+    def flush(self) -> None:
+        """Write out the chunk in progress and replace ``metadata.yaml`` to match the files.
+
+        After it returns, every message written so far is in the files (in the operating
         system's hands: it survives the process being killed). Does nothing when nothing was
-        written since the last flush.
+        written (nor custom data set) since the last flush.
         """
         self._check_open()
-        if self._flushed.count == self._written.count:
-            return
-        self._mcap.flush()
-        self._pending_bytes = 0
-        self._flushed = dataclasses.replace(self._written)
-        for state in self._topics.values():
-            state.flushed = state.written
+        if self._current.flush() or self._metadata_changed:
+            self._metadata_changed = False
+            write_metadata(self._dir, self._metadata(flushed_only=True))
+
+    def split(self) -> None:
+        """Finish the current file and go on in the next one (then keep ``max_files``)."""
+        self._check_open()
+        finished, self._current = self._current, None
+        finished.finish()
+        self._finished.append(_FinishedFile(finished.information(flushed_only=False),
+                                            dict(finished.counts)))
+        self._current = self._open_file()
+        total = len(self._finished) + 1
+        for _ in range(min(self._split.files_to_delete(total), len(self._finished))):
+            oldest = self._finished.pop(0)
+            (self._dir / oldest.information.path).unlink(missing_ok=True)
         write_metadata(self._dir, self._metadata(flushed_only=True))
 
     def close(self) -> BagMetadata:
@@ -325,17 +298,11 @@ class BagWriter:
         if self._closed:
             return self._metadata(flushed_only=False)
         self._closed = True
-        self._flushed = dataclasses.replace(self._written)
-        for state in self._topics.values():
-            state.flushed = state.written
+        if self._current is not None:
+            self._current.finish()
         metadata = self._metadata(flushed_only=False)
-        self._mcap.flush()
-        self._write_metadata_record()
-        self._mcap.finish()
-        self._stream.flush()
-        os.fsync(self._stream.fileno())
-        self._stream.close()
         write_metadata(self._dir, metadata)
+        self._lock.release()
         return metadata
 
     def __enter__(self) -> 'BagWriter':
@@ -350,19 +317,68 @@ class BagWriter:
         if self._closed:
             raise BagClosedError(f'the bag {self._dir} is closed')
 
-    def _metadata(self, flushed_only: bool) -> BagMetadata:
-        span = self._flushed if flushed_only else self._written
-        topics = tuple(
-            TopicInformation(state.metadata, state.flushed if flushed_only else state.written)
-            for state in self._topics.values())
-        start = span.start if span.count else NO_MESSAGE_TIME_NS
-        files = (FileInformation(self._file_name, start, span.duration, span.count),)
-        return BagMetadata(relative_file_paths=(self._file_name,), files=files,
-                           topics_with_message_count=topics, message_count=span.count,
-                           starting_time_ns=start, duration_ns=span.duration,
-                           custom_data=self._custom_data, ros_distro=self._ros_distro)
+    def _create_bag(self) -> BagLock:
+        if self._dir.exists() or self._dir.is_symlink():
+            raise BagExistsError(f'bag directory {self._dir} already exists; a recording never '
+                                 f'overwrites a bag: choose another name')
+        try:
+            self._dir.mkdir(parents=True)
+        except OSError as error:
+            raise BagPathError(
+                f'cannot create the bag directory {self._dir}: {error.strerror}') from None
+        self._next_index = 0
+        return self._take_lock()
 
-    def _write_metadata_record(self) -> None:
-        """Write the ``rosbag2`` metadata record, as Jazzy's plugin does on open and close."""
-        self._mcap.add_metadata('rosbag2', {
-            'serialized_metadata': self._metadata(flushed_only=False).dump(root=False)})
+    def _take_lock(self) -> BagLock:
+        lock = BagLock.take(self._dir)
+        if lock is None:
+            raise BagPathError(f'{self._dir} is being written by another process')
+        return lock
+
+    def _continue_bag(self) -> None:
+        """Take in the files of an existing bag, completing a cut one first."""
+        try:
+            files = storage_files(self._dir)
+            for path in files:
+                recover_file(path)
+            summaries = [summarize_file(path) for path in files]
+        except BaseException:
+            self._lock.release()
+            raise
+        for summary in summaries:
+            self._finished.append(_FinishedFile(summary.information, summary.counts))
+            self._custom_data.update(summary.custom_data)
+            for stored in summary.topics:
+                self._topics.setdefault(stored.metadata.name, stored)
+        self._next_index = file_index(files[-1].name) + 1 if files else 0
+
+    def _open_file(self) -> McapFile:
+        path = self._dir / f'{self._dir.name}_{self._next_index}.mcap'
+        self._next_index += 1
+        current = McapFile(path, self._max_chunk_size,
+                           lambda: self._metadata(flushed_only=False).dump(root=False))
+        for stored in self._topics.values():
+            current.add_topic(stored.metadata, stored.definition)
+        return current
+
+    def _counts(self, flushed_only: bool) -> dict[str, int]:
+        counts = dict.fromkeys(self._topics, 0)
+        for finished in self._finished:
+            for name, count in finished.counts.items():
+                counts[name] = counts.get(name, 0) + count
+        current = self._current.flushed_counts if flushed_only else self._current.counts
+        for name, count in current.items():
+            counts[name] = counts.get(name, 0) + count
+        return counts
+
+    def _metadata(self, flushed_only: bool) -> BagMetadata:
+        current = self._current
+        files = [f.information for f in self._finished]
+        if current is not None:
+            files.append(current.information(flushed_only))
+            counts = self._counts(flushed_only)
+        else:
+            counts = dict.fromkeys(self._topics, 0)
+        return combine_summaries(files, [(stored.metadata, counts.get(name, 0))
+                                         for name, stored in self._topics.items()],
+                                 self._custom_data, self._ros_distro)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from walker_core.parameter_schema import ParameterError, parameter
 
+from walker_bag.core.bag_split import SplitPolicy
 from walker_bag.core.errors import TopicNameError
 from walker_bag.core.topic_selection import TopicSelection
 
@@ -49,6 +50,17 @@ class RecorderParameters:
         1024, 64 * 1024 * 1024)
     queue_depth: int = parameter(
         'messages each subscription holds while the recorder is busy', '', 1, 100000)
+    max_bag_size: int = parameter(
+        'size at which the bag goes on in its next file (ros2 bag record --max-bag-size); 0: '
+        'no split by size', 'B', 0, 2**62)
+    max_bag_duration: float = parameter(
+        'log-time span at which the bag goes on in its next file (ros2 bag record '
+        '--max-bag-duration); 0: no split by duration', 's', 0.0, 1e9)
+    max_bag_files: int = parameter(
+        'files the bag keeps, the oldest deleted beyond; 0: every file', '', 0, 10**6)
+    append: bool = parameter(
+        'continue an existing bag of the same name in its next file (its last file completed '
+        'first if a killed recorder left it cut); false: a bag that exists is refused')
     take_period: float = parameter(
         'period at which received messages are taken from the middleware, all topics at '
         'once, and handed to the bag (steady clock); in sim time their log time is the '
@@ -65,6 +77,12 @@ class RecorderParameters:
             TopicSelection(self.topics)
         except TopicNameError as error:
             raise ParameterError(f'recorder.topics: {error}') from None
+
+    @property
+    def split(self) -> SplitPolicy:
+        """The bag's split and rotation limits."""
+        return SplitPolicy(self.max_bag_size, int(round(self.max_bag_duration * 1e9)),
+                           self.max_bag_files)
 
     def bag_path(self, now: datetime.datetime) -> Path:
         """Return the bag directory to write: ``directory/bag_name`` (or a time-stamped name)."""

@@ -25,7 +25,9 @@ Rules
   ``z >= -surface_tolerance`` in the base frame, the tolerance being the hole's insertion
   tolerance), and wherever it has moved sideways by more than that tolerance it must be at least
   ``teleop.clearance`` above the surface: a gripper leaves and enters a hole straight along its
-  axis, as the steps' extraction and insertion do.
+  axis, as the steps' extraction and insertion do. A gripper that a fault left below the
+  surface is brought out by a jog that only rises (it never sinks on the way, sideways motion
+  allowed) until it is ``teleop.clearance`` above the surface.
 * A jog that settles farther from its goal than ``teleop.joint_tolerance`` (a joint jog) or
   ``supervisor.insertion_alignment`` (a tip jog) gets a correction, a joint move from where it
   settled to the jog's goal configuration, checked against the surface as the jog was.
@@ -61,6 +63,7 @@ __all__ = [
 #: Points at which a jog's path is checked against the truss surface and the joint limits.
 PATH_SAMPLES = 41
 _NO_MOTION = 1e-9  # [rad or m] a jog shorter than this moves nothing
+_SINK_SLACK = 1e-6  # [m] a path from below the surface may dip this much between two samples
 
 
 class TeleopRefusedError(ValueError):
@@ -598,12 +601,47 @@ class TeleopRules:
                                      f'{largest:g} {unit}')
         return requested or default
 
+    def _check_way_out(self, points: np.ndarray, free: str, what: str) -> np.ndarray | None:
+        """Refuse a path from below the surface that does not lead straight out of it.
+
+        A gripper a fault left below the truss surface is brought out by a path that rises,
+        never sinking on the way, and moves sideways by no more than it has risen (plus the
+        surface tolerance) until it is ``teleop.clearance`` above the surface. Returns the
+        rest of the path from there (None when it never gets there).
+        """
+        tolerance, clearance = self.surface_tolerance, self.parameters.clearance
+        out = np.flatnonzero(points[:, 2] >= clearance)
+        way = points[:(out[0] + 1 if out.size else len(points))]
+        depth = f'gripper {free} is {-points[0, 2] * 1e3:.1f} mm below the truss surface'
+        rule = (f'from below the surface a jog may only move it up, and sideways by no more '
+                f'than it rises, until it is teleop.clearance = {clearance * 1e3:g} mm above it')
+        sinks = np.flatnonzero(np.diff(way[:, 2]) < -_SINK_SLACK)
+        if sinks.size:
+            deepest = float(np.min(way[sinks[0] + 1:, 2]))
+            raise TeleopRefusedError(f'{depth} and {what} would take it down to '
+                                     f'{-deepest * 1e3:.1f} mm below it: {rule}')
+        sideways = np.hypot(*(way[:, :2] - way[0, :2]).T)
+        rise = way[:, 2] - way[0, 2]
+        dragged = np.flatnonzero(sideways > rise + tolerance)
+        if dragged.size:
+            index = int(dragged[0])
+            raise TeleopRefusedError(
+                f'{depth} and {what} would move it {sideways[index] * 1e3:.1f} mm sideways '
+                f'while it rises {rise[index] * 1e3:.1f} mm: {rule}')
+        return points[out[0]:] if out.size else None
+
     def _check_surface(self, points: np.ndarray, free: str, what: str) -> None:
         """Refuse a path of the free gripper's contact point that breaks a surface rule.
 
         ``points`` are the contact point's positions along the path [m], base frame, in order.
+        A path that starts below the surface is a way out (:meth:`_check_way_out`); from
+        where it is ``teleop.clearance`` above the surface the ordinary rules apply.
         """
         tolerance, clearance = self.surface_tolerance, self.parameters.clearance
+        if points[0, 2] < -tolerance:
+            points = self._check_way_out(points, free, what)
+            if points is None:
+                return
         lowest = int(np.argmin(points[:, 2]))
         if points[lowest, 2] < -tolerance:
             raise TeleopRefusedError(
