@@ -29,7 +29,8 @@ FOXGLOVE_NODE = 'foxglove_bridge'
 #: ``control.state_rate``, and recording every message of the 500 Hz loop would take about a
 #: core of CPU on its own.
 RECORDED_TOPICS = ('joint_states', 'tip_pose', 'gripper_a_pose', 'gripper_b_pose',
-                   'gripper_states', 'phase', 'step_reports', 'control_mode',
+                   'gripper_states', 'phase', 'phase_history', 'goal_rejections',
+                   'step_reports', 'control_mode',
                    'controllers/*/state', 'planned_trajectory', 'robot_description',
                    'markers', '/tf', '/tf_static', '/diagnostics', '/clock')
 
