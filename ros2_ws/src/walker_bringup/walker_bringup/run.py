@@ -311,8 +311,9 @@ def _bag_paths(walkers: list[_Walker]) -> list[Path]:
 
 
 def _graph_parameters(args) -> tuple[tuple[str, str], ...]:
-    """Return the overrides for every node: the recorder's splits, the real-time priority
-    asked for, and the gate.
+    """Return the overrides for every node.
+
+    The recorder's splits, the real-time priority asked for, and the gate.
 
     With the loop composed in sim time: at two to three times real time the supervisor,
     outside the lock-step, decides late in simulated time; the plant then waits for its

@@ -398,7 +398,7 @@ def test_a_controller_that_fell_back_to_hold_in_a_step_is_told_its_mode_again():
 
 # ---------------------------------------------------------------------- its own stall
 def _stall(world, seconds: float) -> None:
-    """The runner's process stands still ``seconds``; on waking its watchdog runs first."""
+    """Stand the runner's process still ``seconds``; on waking its watchdog runs first."""
     world.now = round(world.now + seconds, 9)
     world.next_watch = world.now + WATCH_PERIOD
     world.execute(world.runner.watch(world.now, world.now))
