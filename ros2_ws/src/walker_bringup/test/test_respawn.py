@@ -132,3 +132,15 @@ def test_a_child_that_keeps_dying_is_given_up_and_handed_back(tmp_path):
     assert respawner.summary()['crasher']['deaths'] == 3
     assert respawner.summary()['crasher']['restarts'] == 2
     assert 'is not started again: it died 3 times in a row' in lines[-1]
+
+
+def test_a_recorder_started_again_continues_its_bag_and_other_nodes_run_as_before(tmp_path):
+    from walker_bringup.processes import ManagedProcess
+    from walker_bringup.respawning import rejoin_command
+
+    recorder = NodeSpec('walker_bag', 'recorder_node', 'recorder', '/walker', 'walker.yaml')
+    plant = NodeSpec('walker_sim', 'plant_node', 'plant', '/walker', 'walker.yaml')
+    once = rejoin_command(ManagedProcess(recorder, None, tmp_path, 0.0, command=['rec']))
+    assert once == ['rec', '-p', 'recorder.append:=true']
+    assert rejoin_command(ManagedProcess(recorder, None, tmp_path, 0.0, command=once)) == once
+    assert rejoin_command(ManagedProcess(plant, None, tmp_path, 0.0, command=['p'])) == ['p']

@@ -15,7 +15,11 @@ from collections.abc import Callable
 from walker_bringup.core.respawn import RespawnBook, RespawnPolicy
 from walker_bringup.processes import ManagedProcess, ProcessGroup
 
-__all__ = ['RespawningGroup', 'exit_text']
+__all__ = ['RespawningGroup', 'exit_text', 'rejoin_command']
+
+#: What a recorder started again is given: it continues its bag in a new file (the file the
+#: killed one left cut completed first) instead of refusing a bag that exists.
+_RECORDER_APPEND = ['-p', 'recorder.append:=true']
 
 
 def exit_text(code: int | None) -> str:
@@ -28,6 +32,17 @@ def exit_text(code: int | None) -> str:
         except ValueError:
             return f'killed by signal {-code}'
     return f'exit code {code}'
+
+
+def rejoin_command(process: ManagedProcess) -> list[str]:
+    """Return the command line a dead node is started again with.
+
+    Its own; a recorder's continues its bag (``recorder.append``).
+    """
+    command = list(process.command or process.spec.command())
+    if process.spec.executable == 'recorder_node' and command[-2:] != _RECORDER_APPEND:
+        command += _RECORDER_APPEND
+    return command
 
 
 class RespawningGroup:
@@ -80,7 +95,8 @@ class RespawningGroup:
                 self._say(f'[walker] node {self._prefix}{name} died ({exit_text(code)}) and is '
                           f'not started again: {decision.gave_up}')
         for name in self.book.due(now):
-            process = self.group.restart(self._waiting.pop(name))
+            dead = self._waiting.pop(name)
+            process = self.group.restart(dead, rejoin_command(dead))
             self.book.on_restart(name)
             self._say(f'[walker] node {self._prefix}{name} started again (pid '
                       f'{process.popen.pid}, restart {self.book.record(name).restarts})')

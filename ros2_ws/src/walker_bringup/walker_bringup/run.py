@@ -59,6 +59,8 @@ FOXGLOVE_PORT = 8765
 #: --serve's recording: files of at most 256 MiB or 15 min, the newest 8 kept (an idle sim-time
 #: graph records about 6 MiB a minute: without a limit a long session fills the disk)
 SERVE_SPLIT = (256 * 2**20, 900.0, 8)
+#: The plant's state snapshot in the output directory (a plant started again restores it).
+PLANT_STATE_FILE = 'plant_state.json'
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -305,12 +307,13 @@ def _describe_walkers(args, configuration, out: Path, env: dict) -> list[_Walker
                              record=args.record, bag_path=out / 'bag',
                              parameters=_graph_parameters(args),
                              grouped_controllers=args.grouped_controllers,
-                             foxglove_port=args.foxglove_port if args.foxglove else None)
+                             foxglove_port=args.foxglove_port if args.foxglove else None,
+                             plant_state_file=out / PLANT_STATE_FILE)
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
     graphs = several_walkers(configuration, args.walkers, args.sim_time, args.record, out,
                              _graph_parameters(args),
-                             grouped_controllers=args.grouped_controllers)
+                             grouped_controllers=args.grouped_controllers, state_dir=out)
     targets = walker_targets(configuration, args.target, [start for _, start, _ in graphs])
     walkers = []
     for index, ((namespace, start, nodes), target) in enumerate(zip(graphs, targets,
@@ -431,6 +434,8 @@ def main(argv: list[str] | None = None) -> int:
                        'recording never overwrites a bag: choose another --out, or --no-record')
         return 2
     out.mkdir(parents=True, exist_ok=True)
+    for stale in out.glob('plant_state*.json'):  # an earlier run's robot is not this one's
+        stale.unlink()
     context = init_context()
     busy = _namespaces_in_use(walkers, context)
     if busy:
