@@ -8,7 +8,7 @@ can be said to have taken, e.g., 2.3 times the bound.
 
 It is the minimum over the paper's family of bang-bang profiles (each axis switching as in
 Figure 8, one of the two torques at its limit), not a proof of global time optimality; and the
-joint velocity limits, which it ignores, can make real steps much slower (see the README).
+joint velocity limits, which it ignores, can make real steps much slower (see docs/planner.md).
 
 :func:`sweep_rate_bound` is the other lower bound of a sweep: the base yaw cannot turn faster
 than its velocity limit, nor speed up faster than its available torque over the smallest yaw
