@@ -27,6 +27,7 @@ from walker_bringup.loop_health import (
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
 from walker_runtime.spinning import (
     TopicSampler, destroy_actions, helper_node, hidden_name)
+from walker_teleop.goal_monitor import GoalLostError, GoalMonitor
 from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'GoalRejectedError',
@@ -140,11 +141,15 @@ class GraphClient:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=min(_POLL, max(0.0, deadline - time.monotonic())))
 
-    def _wait(self, future, timeout: float, should_stop: Callable[[], bool] | None, what: str):
+    def _wait(self, future, timeout: float, should_stop: Callable[[], bool] | None, what: str,
+              answered_otherwise: Callable[[], bool] | None = None):
+        """Spin until ``future`` is done (its result) or ``answered_otherwise()`` (None)."""
         deadline = time.monotonic() + timeout
         while not future.done():
             if should_stop is not None and should_stop():
                 raise WalkInterruptedError(f'interrupted while waiting for {what}')
+            if answered_otherwise is not None and answered_otherwise():
+                return None
             if time.monotonic() > deadline:
                 raise TimeoutError(f'no answer to {what} within {timeout:.0f} s')
             self.executor.spin_until_future_complete(future, timeout_sec=_POLL)
@@ -257,12 +262,27 @@ class GraphClient:
             action = 'walk_to' if client is self.walk_client else 'step'
             raise GoalRejectedError(action, goal.target_node, self.rejections.reason(
                 action, goal.target_node, sent_at, self.spin_for))
+        result = handle.get_result_async()
+        monitor = GoalMonitor(self.node, self.namespace, what)
+        probed: list = []
+
+        def stop() -> bool:  # a supervisor dead or started again cannot answer: stop waiting
+            end = None if result.done() else monitor.check(handle, result)
+            if end is not None:
+                probed.append(end)
+            return should_stop is not None and should_stop()
+
         try:
-            wrapped = self._wait(handle.get_result_async(), timeout, should_stop, what)
+            wrapped = self._wait(result, timeout, stop, what, lambda: bool(probed))
+        except GoalLostError as error:
+            raise GraphNotReadyError(str(error)) from None
         except (WalkInterruptedError, TimeoutError):
             handle.cancel_goal_async()
             self.spin_for(0.2)
             raise
+        finally:
+            monitor.close()
+        wrapped = wrapped if wrapped is not None else probed[0]
         return wrapped.status, wrapped.result
 
     def call_trigger(self, which: str, timeout: float = 5.0) -> Trigger.Response:

@@ -34,6 +34,7 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -56,6 +57,7 @@ from walker_sim.core.config import SimParameters
 from walker_sim.core.grippers import GripperMode
 from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
+from walker_sim.core.snapshot import SnapshotKeeper
 from walker_sim.messages import (
     CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, accelerations_msg, clock_msg,
     flexible_joint_state_msg,
@@ -92,6 +94,12 @@ class PlantNode(Node):
         self.params = declare_section(self, WalkerParameters)
         self.sim = declare_section(self, SimParameters, 'sim.')
         self.plant = WalkerPlant(self.params, self.sim)
+        # the physical state a killed plant had, restored as a driver re-reads its encoders
+        self._snapshots = SnapshotKeeper(self.declare_parameter(
+            'state_file', '', ParameterDescriptor(description=(
+                "file of the plant's state snapshot: restored from when it exists, kept up "
+                "to date ('' : none)"), read_only=True)).value)
+        restored = self._snapshots.restore_into(self.plant)
         self.period = 1.0 / self.params.timing.control_rate
         self.period_ns = seconds_to_ns(self.period)
         self.commands = EffortCommands(self.sim.command_timeout)
@@ -140,6 +148,11 @@ class PlantNode(Node):
         self._last_sent = self._steady_now()
         self._last_warning = -math.inf
         self._stamp = 0 if self.sim_time else self._system.now().nanoseconds
+        if restored is not None:
+            self.get_logger().info(f'plant state restored from {self._snapshots.path} at '
+                                   f't={restored.time:.3f} s, base gripper {restored.base}')
+            if self.sim_time:
+                self._stamp = round(restored.time / self.period) * self.period_ns
         self._publish(self.plant.state())
         self.create_timer(_REPORT_PERIOD, self._report, clock=self._steady)
         self.create_timer(1.0 / self.sim.gripper_state_rate, self._heartbeat,
@@ -362,6 +375,7 @@ class PlantNode(Node):
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
         key = gripper_states_key(state)
+        self._snapshots.keep(self.plant, self._steady_now(), key)
         if force or key != self._gripper_key:
             self._grippers.publish(gripper_states_msg(state, self._stamp))
             self._gripper_key = key

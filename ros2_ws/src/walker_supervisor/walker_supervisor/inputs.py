@@ -4,9 +4,9 @@ The plant's joint states (500 Hz), the tip pose and each controller's state are 
 decision rate, not handled message by message: a Python callback per message would cost more
 CPU than every decision the supervisor makes. The gripper states and the latched mode arrive by
 callback. A source silent for long has its subscription made anew, and again as often while
-the silence lasts (:class:`walker_runtime.core.resubscription.Resubscription`): a controller process
-restarted after a crash, or a graph frozen and resumed, can leave a subscription that no longer
-receives while its publisher lives on.
+the silence lasts (:class:`walker_runtime.core.resubscription.Resubscription`): a controller
+process restarted after a crash, or a graph frozen and resumed, can leave a subscription that
+no longer receives while its publisher lives on.
 """
 
 from __future__ import annotations
