@@ -12,7 +12,7 @@ import pytest
 from walker_bringup.core.respawn import REFUSED_EXIT_CODE, RespawnBook, RespawnPolicy
 from walker_bringup.graph import NodeSpec
 from walker_bringup.processes import ProcessGroup
-from walker_bringup.respawning import RespawningGroup, exit_text
+from walker_bringup.respawning import ERROR, OK, WARN, RespawningGroup, exit_text
 
 KILLED = -9  # exit code of a process ended by SIGKILL
 
@@ -123,15 +123,21 @@ def test_a_killed_child_is_started_again_with_the_same_command_and_reported(tmp_
 
 def test_a_child_that_keeps_dying_is_given_up_and_handed_back(tmp_path):
     spec = NodeSpec('pkg', 'exe', 'crasher', '/walker', 'walker.yaml')
-    lines = []
+    lines, reports = [], []
     with ProcessGroup(tmp_path, ENV) as group:
         group.start(spec, [sys.executable, '-c', 'import sys; sys.exit(1)'])
-        respawner = RespawningGroup(group, RespawnPolicy(delay=0.0, limit=2), lines.append)
+        respawner = RespawningGroup(group, RespawnPolicy(delay=0.0, limit=2), lines.append,
+                                    report=lambda *status: reports.append(status))
         given_up = _poll_until(respawner, bool)
     assert [p.spec.name for p in given_up] == ['crasher']
     assert respawner.summary()['crasher']['deaths'] == 3
     assert respawner.summary()['crasher']['restarts'] == 2
     assert 'is not started again: it died 3 times in a row' in lines[-1]
+    # each death and restart is the node's status on /diagnostics (the bag records it): a
+    # death to be answered WARN, a restart OK, the death given up on ERROR, last
+    assert [level for _, level, _ in reports] == [WARN, OK, WARN, OK, ERROR]
+    assert {node for node, _, _ in reports} == {'/walker/crasher'}
+    assert reports[-1][2].startswith('died (exit code 1) and is not started again')
 
 
 def test_a_recorder_started_again_continues_its_bag_and_other_nodes_run_as_before(tmp_path):

@@ -18,7 +18,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
@@ -103,6 +103,7 @@ class GraphClient:
         self._supervisor_status = f'{namespace.rstrip("/")}/supervisor{SUPERVISOR_STATUS_SUFFIX}'
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
                                       COMMAND_QOS)
+        self._process_status = None  # the /diagnostics publisher of report_process
 
     def _on_phase(self, msg: StepPhase) -> None:
         self.phase = msg
@@ -126,6 +127,21 @@ class GraphClient:
         self.joint_stamps = (self.joint_stamps + taken)[-10:]
         stamps = self.joint_stamps
         return len(stamps) >= 2 and stamps[-1] > stamps[0]
+
+    def report_process(self, node: str, level: int, message: str) -> None:
+        """Publish a node process's status on ``/diagnostics`` (its death, its restart).
+
+        ``level`` as ``diagnostic_msgs/DiagnosticStatus`` (0 OK, 1 WARN, 2 ERROR); the status
+        is named ``<node> (process)``, so that the bag records which node died and when.
+        """
+        if self._process_status is None:
+            self._process_status = self.node.create_publisher(DiagnosticArray, '/diagnostics',
+                                                              COMMAND_QOS)
+        array = DiagnosticArray(status=[DiagnosticStatus(
+            level=bytes([level]), name=f'{node} (process)', message=message,
+            hardware_id='walker_bringup')])
+        array.header.stamp = self.node.get_clock().now().to_msg()
+        self._process_status.publish(array)
 
     def close(self) -> None:
         """Destroy the client node."""

@@ -52,6 +52,7 @@ from walker_teleop.core.progress import walk_progress
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 
 SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
+_DEATH_REPORT_LEAD = 0.5  # [s] between a death's report on /diagnostics and the hold it asks
 #: SCHED_FIFO priority of the control loop with --realtime (ros2_control's thread_priority).
 REALTIME_PRIORITY = 50
 #: Port of the Foxglove WebSocket server with --foxglove (foxglove_bridge's default).
@@ -465,8 +466,10 @@ def main(argv: list[str] | None = None) -> int:
 
     policy = RespawnPolicy(args.respawn_delay, args.respawn_limit)
     for walker in walkers:
-        walker.respawner = RespawningGroup(walker.group, policy, progress.error,
-                                           walker.label if len(walkers) > 1 else '')
+        walker.respawner = RespawningGroup(
+            walker.group, policy, progress.error, walker.label if len(walkers) > 1 else '',
+            report=lambda node, level, message, w=walker: w.client is not None
+            and w.client.report_process(node, level, message))
 
     def should_stop() -> bool:
         with lock:
@@ -705,6 +708,8 @@ def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
                        f'{process.log_tail()}')
     if signum is not None:
         progress.say(f'[walker] interrupted ({signal.Signals(signum).name}): stopping safely')
+    elif deaths:  # the death was reported on /diagnostics: let it reach the supervisor first,
+        time.sleep(_DEATH_REPORT_LEAD)  # which names the dead node in the hold's reason
     for client in clients:
         try:
             response = client.call_trigger('hold', timeout=2.0)
