@@ -47,6 +47,7 @@ from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_supervisor.core.controller_watch import ControllerReport
 
 from walker_headless.sections import Sections
+from walker_headless.viz import HeadlessViz
 
 __all__ = ['RobotLoop', 'stamp_seconds', 'MODES']
 
@@ -89,6 +90,8 @@ class RobotLoop:
                                            stream.start_tolerance, self._take_setpoints)
         self.commands = EffortCommands(sections.sim.command_timeout)
         self.recording = recording
+        #: the viz node's TF and markers, drawn into the bag (None without one)
+        self.viz = HeadlessViz(sections, recording) if recording is not None else None
         self._clock_rate = StampedRate(sections.sim.clock_rate)
         self._pose_rate = StampedRate(sections.sim.pose_rate)
         # the node's heartbeat of the gripper states runs on the steady clock; here on the
@@ -136,6 +139,15 @@ class RobotLoop:
         if self.grippers_out and recording is not None:
             recording.gripper_states(stamp, state)
         self._gripper_key = key
+        viz = self.viz
+        if viz is not None:
+            if self.grippers_out:
+                viz.grippers(self.gripper_readings())
+            if not viz.flexible:
+                viz.joint_state(stamp, self.positions)
+            elif self.poses_out:  # the plant's flexible joint states go out with the poses
+                viz.joint_state(stamp, self.positions + self.plant.bending().tolist())
+            viz.tick(stamp)
         if all(map(math.isfinite, self.positions)):  # the planner takes finite states only
             self.streamer.on_state(stamp, state.position)
 
@@ -191,6 +203,7 @@ class RobotLoop:
         self.streamer.on_control_mode(self.tracking)
         if self.recording is not None:
             self.recording.control_mode(self.stamp, int(value), base_gripper)
+            self.viz.base(self.stamp, base_gripper)
 
     def _take_setpoints(self, stamp: int, positions, velocities, accelerations) -> None:
         seconds = stamp_seconds(stamp)

@@ -86,8 +86,7 @@ class HeadlessPlanner:
         except PlanningError as error:
             return PlanAnswer(False, str(error))
         trajectory = as_sent(result.times, *result.samples)
-        if self.loop.recording is not None:
-            self.loop.recording.planned_trajectory(self.loop.stamp, trajectory)
+        self._publish(trajectory)
         return PlanAnswer(True, '', result.duration, result.time_optimal_bound or 0.0,
                           trajectory)
 
@@ -119,9 +118,15 @@ class HeadlessPlanner:
             active = streamer.start(goal, ticket)
         except PlanningError as error:
             return True, str(error)
-        if self.loop.recording is not None:
-            self.loop.recording.planned_trajectory(self.loop.stamp, goal, active.stream.origin)
+        self._publish(goal, active.stream.origin)
         return True, None
+
+    def _publish(self, trajectory: SampledTrajectory, start: int = 0) -> None:
+        """``planned_trajectory``: to the bag, and the viz node that draws it."""
+        loop = self.loop
+        if loop.recording is not None:
+            loop.recording.planned_trajectory(loop.stamp, trajectory, start)
+            loop.viz.plan(loop.stamp, trajectory.positions)
 
     def cancel(self, ticket: int) -> None:
         """Cancel the stream of ``ticket``, if it runs: it ends where its sent setpoints end."""

@@ -161,6 +161,7 @@ class WalkShell:
                 self.phases.append(record)
                 if loop.recording is not None:
                     loop.recording.phase(record)
+                    loop.viz.phase(loop.stamp, record.base_gripper, record.to_node)
             elif isinstance(command, PlanMotion):
                 runner.request_sent(command.ticket, now)
                 answer = self.planner.plan(command.call)
