@@ -43,6 +43,8 @@ TOPICS = {
     'gripper_b_pose': ('geometry_msgs/msg/PoseStamped', _SENSOR),
     'gripper_states': ('walker_msgs/msg/GripperStates', _LATCHED),
     'phase': ('walker_msgs/msg/StepPhase', _LATCHED),
+    'phase_history': ('walker_msgs/msg/StepPhase', _LATCHED),
+    'goal_rejections': ('walker_msgs/msg/GoalRejection', _LATCHED),
     'step_reports': ('walker_msgs/msg/StepReport', _LATCHED),
     'control_mode': ('walker_msgs/msg/ControlMode', _LATCHED),
     **{f'controllers/{joint}/state': ('walker_msgs/msg/ControllerState', _RELIABLE)
@@ -183,10 +185,19 @@ class WalkRecording:
             commander=f'{self.namespace.rstrip("/")}/supervisor'), stamp)
 
     def phase(self, record) -> None:
-        """``phase`` of a :class:`~walker_headless.records.PhaseRecord`."""
+        """``phase`` and ``phase_history`` of a :class:`~walker_headless.records.PhaseRecord`."""
         fields = {k: v for k, v in vars(record).items() if k != 'stamp'}
-        self.serialize('phase', self.types['walker_msgs/msg/StepPhase'](
-            header=self.header(record.stamp), **fields), record.stamp)
+        message = self.types['walker_msgs/msg/StepPhase'](header=self.header(record.stamp),
+                                                           **fields)
+        data = bytes(self._store.serialize_cdr(message, 'walker_msgs/msg/StepPhase'))
+        for relative in ('phase', 'phase_history'):
+            self._write(self.names[relative], data, record.stamp)
+
+    def goal_rejection(self, stamp: int, action: str, target_node: str, reason: str) -> None:
+        """``goal_rejections``: a goal refused, and why."""
+        self.serialize('goal_rejections', self.types['walker_msgs/msg/GoalRejection'](
+            header=self.header(stamp), action=action, target_node=target_node,
+            reason=reason), stamp)
 
     def step_report(self, record) -> None:
         """``step_reports`` of a :class:`~walker_headless.records.StepReportRecord`."""

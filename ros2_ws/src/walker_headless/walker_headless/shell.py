@@ -145,6 +145,8 @@ class WalkShell:
             except GoalRefusedError as error:
                 self.refusal = str(error)
                 self._say('warning', f'{goal[0]} to {goal[1]!r} rejected: {error}')
+                if loop.recording is not None:
+                    loop.recording.goal_rejection(loop.stamp, *goal, self.refusal)
                 return
         self._carry_out(runner.tick(now, now))
 
