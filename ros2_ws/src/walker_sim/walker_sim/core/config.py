@@ -16,6 +16,7 @@ from walker_core.parameter_schema import (
     ParameterError, load_parameter_file, parameter, section_from_flat)
 from walker_core.robot_parameters import default_parameter_file
 from walker_core.truss import Truss, UnknownNodeError
+from walker_sim.core.imperfections import Imperfections
 
 __all__ = ['CLOCK_MODES', 'StartConfiguration', 'SimParameters', 'load_sim_parameters',
            'check_against_walker']
@@ -90,6 +91,7 @@ class SimParameters:
         'fault injection: this many coming screw-ins jam whatever the alignment (a fouled '
         'thread); the plant counts it down as they jam', '', 0, 100, read_only=False)
     start: StartConfiguration
+    imperfections: Imperfections
 
     @classmethod
     def from_flat(cls, flat: Mapping[str, Any]) -> 'SimParameters':
