@@ -130,7 +130,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                  record: bool = False, bag_path: str | Path | None = None,
                  start: StartStance | None = None, clock_topic: str | None = None,
                  parameters: tuple[tuple[str, str], ...] = (),
-                 grouped_controllers: bool = False) -> list[NodeSpec]:
+                 grouped_controllers: bool = False,
+                 plant_params_file: str | Path | None = None) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, five controllers, planner, supervisor.
 
     Parameters
@@ -158,6 +159,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         Run the five joint controllers in one node (``joint_controllers_node``, named
         ``controllers``: one state in, one effort message out per period) instead of one
         ``joint_controller_node`` each.
+    plant_params_file : str or Path, optional
+        A parameter file of the plant's own (default: ``params_file``): the robot as it
+        really is, where the other nodes work on the model (a campaign's dispersed runs).
     """
     params_file = str(params_file)
     parameters = tuple(parameters)
@@ -175,8 +179,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     plant = common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)
     if start is not None:
         plant += start.parameters()
-    nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
-                          plant + parameters, remaps))
+    nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace,
+                          str(plant_params_file or params_file), plant + parameters, remaps))
     # The controllers run on the plant's state stream and its stamps (watchdogs on the steady
     # clock); use_sim_time tells them they are lock-stepped: a state then waits for the
     # setpoint the planner's stream owes it, and no real-time priority is asked for.

@@ -59,6 +59,10 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='truss node to walk to (default: %(default)s)')
     parser.add_argument('--params-file', default=None,
                         help='parameter file (default: the installed walker.yaml)')
+    parser.add_argument('--plant-params-file', default=None,
+                        help="the plant's own parameter file (default: --params-file): the "
+                             'robot as it really is, while the controllers, the planner and '
+                             'the supervisor keep the model (a campaign run)')
     parser.add_argument('--sim-time', action='store_true',
                         help='run on the plant clock, lock-stepped, as fast as the graph allows '
                              '(default: real time, like hardware)')
@@ -101,6 +105,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error('--composed-loop composes the loop only; --composed the whole graph: '
                      'choose one')
     args.grouped_controllers = args.grouped_controllers or args.composed_loop
+    if args.plant_params_file is not None and args.walkers > 1:
+        parser.error('--plant-params-file is for one walker: leave --walkers out')
     return args
 
 
@@ -187,7 +193,8 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
         nodes = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                              record=args.record, bag_path=out / 'bag',
                              parameters=_graph_parameters(args),
-                             grouped_controllers=args.grouped_controllers)
+                             grouped_controllers=args.grouped_controllers,
+                             plant_params_file=_plant_file(args))
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
     graphs = several_walkers(params_file, args.walkers, args.sim_time, args.record, out,
@@ -201,6 +208,11 @@ def _describe_walkers(args, params_file: Path, out: Path, env: dict) -> list[_Wa
         walkers.append(_Walker(namespace, start if index else None, nodes,
                                ProcessGroup(logs, env), target))
     return walkers
+
+
+def _plant_file(args) -> Path | None:
+    """Return the plant's own parameter file, resolved (``None``: the graph's one file)."""
+    return Path(args.plant_params_file).resolve() if args.plant_params_file else None
 
 
 def _bag_paths(walkers: list[_Walker]) -> list[Path]:
@@ -238,7 +250,8 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
                                bool(bags) and loop is None,
                                bags[0] if bags and loop is None else None, walker.start,
                                dict(plant.remaps).get('/clock'), _graph_parameters(args),
-                               grouped_controllers=args.grouped_controllers, only=loop)
+                               grouped_controllers=args.grouped_controllers, only=loop,
+                               plant_params_file=_plant_file(args))
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
                                 'graph' if loop is None else 'loop', walker.namespace,
                                 str(params_file)), command)
@@ -270,6 +283,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         walkers = _describe_walkers(args, params_file, out, env)
         args.control_rate = load_walker_parameters(params_file).timing.control_rate
+        if args.plant_params_file is not None:
+            load_walker_parameters(_plant_file(args))
     except ValueError as error:
         progress.error(f'[walker] error: {error}')
         return 2
