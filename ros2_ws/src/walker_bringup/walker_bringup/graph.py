@@ -136,7 +136,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                  start: StartStance | None = None, clock_topic: str | None = None,
                  parameters: tuple[tuple[str, str], ...] = (),
                  grouped_controllers: bool = False,
-                 foxglove_port: int | None = None) -> list[NodeSpec]:
+                 foxglove_port: int | None = None,
+                 plant_params_file: str | Path | None = None) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, controllers, planner, supervisor, viz.
 
     Parameters
@@ -169,6 +170,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     foxglove_port : int, optional
         Also serve the graph's topics to Foxglove (``walker_viz foxglove_bridge``) on this
         port of 127.0.0.1.
+    plant_params_file : str or Path, optional
+        A parameter file of the plant's own (default: ``params_file``): the robot as it
+        really is, where the other nodes work on the model (a campaign's dispersed runs).
     """
     params_file = str(params_file)
     parameters = tuple(parameters)
@@ -190,8 +194,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     plant = common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)
     if start is not None:
         plant += start.parameters()
-    nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
-                          plant + parameters, remaps))
+    nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace,
+                          str(plant_params_file or params_file), plant + parameters, remaps))
     # The controllers run on the plant's state stream and its stamps (watchdogs on the steady
     # clock); use_sim_time tells them they are lock-stepped: a state then waits for the
     # setpoint the planner's stream owes it, and no real-time priority is asked for.
