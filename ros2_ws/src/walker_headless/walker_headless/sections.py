@@ -41,6 +41,10 @@ class Sections:
         ``planner.*``.
     supervisor : SupervisorParameters
         ``supervisor.*``.
+    plant : tuple of (WalkerParameters, SimParameters)
+        The plant's robot and ``sim.*``: from a parameter file of the plant's own (the robot
+        as it really is, where the rest works on the model: a campaign's run), or the same
+        as ``walker`` and ``sim``.
     """
 
     path: Path
@@ -49,13 +53,22 @@ class Sections:
     control: ControllerSettings
     planner: PlannerParameters
     supervisor: SupervisorParameters
+    plant: tuple[WalkerParameters, SimParameters] | None = None
+
+    def __post_init__(self) -> None:
+        if self.plant is None:
+            object.__setattr__(self, 'plant', (self.walker, self.sim))
 
 
 def load_sections(path: str | Path | None = None,
-                  overrides: Mapping[str, Any] | None = None) -> Sections:
+                  overrides: Mapping[str, Any] | None = None,
+                  plant_path: str | Path | None = None) -> Sections:
     """Read and validate every section of a parameter file (default: the installed one).
 
     ``overrides`` maps dotted parameter names to values, as ``-p name:=value`` would.
+    ``plant_path`` is a parameter file of the plant's own (``run_all.py
+    --plant-params-file``), read and checked the same way; its robot and ``sim.*`` go to the
+    plant alone.
 
     Raises
     ------
@@ -69,8 +82,13 @@ def load_sections(path: str | Path | None = None,
     check_against_walker(sim, walker)
     supervisor = section_from_flat(SupervisorParameters, flat, 'supervisor.')
     _check_alignment(supervisor, walker)
+    plant = None
+    if plant_path is not None:
+        truth = load_sections(plant_path, overrides)
+        plant = (truth.walker, truth.sim)
     return Sections(path, walker, sim, ControllerSettings.from_flat(flat),
-                    section_from_flat(PlannerParameters, flat, PLANNER_PREFIX), supervisor)
+                    section_from_flat(PlannerParameters, flat, PLANNER_PREFIX), supervisor,
+                    plant)
 
 
 def _check_alignment(supervisor: SupervisorParameters, walker: WalkerParameters) -> None:
