@@ -36,8 +36,8 @@ from walker_report.progress import ProgressLine
 
 __all__ = ['main', 'parse_arguments', 'DEFAULT_WALK']
 
-#: The walk function campaigns use unless ``--graph`` is given.
-DEFAULT_WALK = 'graph'
+#: The walk function campaigns use unless ``--graph`` is given: the fast path.
+DEFAULT_WALK = 'headless'
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:

@@ -51,7 +51,7 @@ class RunTask:
     plan: RunPlan
     target: str
     walk_timeout: float
-    walk: Any = 'graph'
+    walk: Any = 'headless'
     record_dir: str | None = None
 
 

@@ -3,12 +3,15 @@
 A *walk function* takes a :class:`WalkRequest` and returns the walk's summary, the mapping
 ``run_all.py`` writes as ``summary.json`` (``steps``, ``reached``, ``message``; ``timed_out``
 when it ran out of wall-clock time). It raises :class:`WalkError` when the walk could not be
-carried out at all. Two are provided:
+carried out at all. Two are provided, each running ``run_all.py`` in a process of its own that
+ends with its caller (a worker that dies takes its walk down with it), the plant given the
+truth's file (``--plant-params-file``) and everything else the model's:
 
-* ``graph``: the full sim-time ROS graph (``run_all.py --sim-time --composed-loop``), the
-  plant given the truth's file and every other node the model's, in a ROS domain of its own
-  taken on the machine that runs it (:func:`walker_bringup.domains.isolated_domain`), in a
-  process that ends with its caller (a worker that dies takes its walk down with it).
+* ``headless`` (the default): the cores in one lock-step loop (``run_all.py --headless``), no
+  DDS, many times faster than real time;
+* ``graph``: the full sim-time ROS graph (``run_all.py --sim-time --composed-loop``), in a ROS
+  domain of its own taken on the machine that runs it
+  (:func:`walker_bringup.domains.isolated_domain`).
 
 Any callable with the same signature serves, named ``module:function`` (the tests use a
 fast stand-in).
@@ -27,7 +30,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ['WalkRequest', 'WalkError', 'WalkFunction', 'graph_walk', 'BACKENDS', 'walk_function']
+__all__ = ['WalkRequest', 'WalkError', 'WalkFunction', 'graph_walk', 'headless_walk', 'BACKENDS',
+           'walk_function']
 
 _STOP_GRACE = 60.0  # [s] for a walk told to stop to shut its graph down before it is killed
 _STARTUP_ALLOWANCE = 300.0  # [s] beyond the walk's own timeout: bringing the graph up and down
@@ -75,31 +79,29 @@ _RUN_ALL = ('import ctypes, signal, sys; ctypes.CDLL(None).prctl(1, signal.SIGTE
             'from walker_bringup.run import main; sys.exit(main(sys.argv[1:]))')
 
 
-def graph_walk(request: WalkRequest) -> dict[str, Any]:
-    """Walk on the sim-time ROS graph, in a ROS domain of its own (see the module's docstring).
+def _run_all_command(request: WalkRequest, options: list[str]) -> list[str]:
+    """Return the ``run_all.py`` command of a walk: the two files, the target, the output."""
+    command = [sys.executable, '-c', _RUN_ALL, *options, '--quiet',
+               '--params-file', str(request.model_file),
+               '--plant-params-file', str(request.truth_file),
+               '--target', request.target, '--out', str(Path(request.out_dir) / 'walk'),
+               '--walk-timeout', f'{request.walk_timeout:g}']
+    return command + (['--no-report'] if request.record else ['--no-record'])
+
+
+def _walk_in_process(request: WalkRequest, command: list[str], env: dict[str, str],
+                     what: str) -> dict[str, Any]:
+    """Run a walk's process to its end (stopped when it outlives its time); its summary.
 
     Raises
     ------
     WalkError
-        The graph did not write a summary (it did not come up, a node refused its
-        parameters): the message ends with the end of its output.
+        The walk wrote no summary: the message ends with the end of its output.
     """
-    from walker_bringup.domains import isolated_domain
-
     out = Path(request.out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    command = [sys.executable, '-c', _RUN_ALL, '--sim-time', '--composed-loop', '--quiet',
-               '--params-file', str(request.model_file), '--plant-params-file',
-               str(request.truth_file),
-               '--target', request.target, '--out', str(out / 'walk'),
-               '--walk-timeout', f'{request.walk_timeout:g}']
-    command += ['--no-report'] if request.record else ['--no-record']
     log_path = out / 'walk.log'
     timed_out = False
-    with isolated_domain() as domain, open(log_path, 'w') as log:
-        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                   ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', ROS_HOME=str(out / 'ros_home'),
-                   PYTHONUNBUFFERED='1')
+    with open(log_path, 'w') as log:
         process = subprocess.Popen(command, env=env, stdout=log, stderr=subprocess.STDOUT)
         try:
             process.wait(timeout=request.walk_timeout + _STARTUP_ALLOWANCE)
@@ -114,15 +116,50 @@ def graph_walk(request: WalkRequest) -> dict[str, Any]:
     summary_path = out / 'walk' / 'summary.json'
     if not summary_path.is_file():
         tail = log_path.read_text(errors='replace')[-_LOG_TAIL:]
-        raise WalkError(f'the graph wrote no summary (exit code {process.returncode}'
+        raise WalkError(f'the {what} wrote no summary (exit code {process.returncode}'
                         f'{", timed out" if timed_out else ""}); its output ends:\n{tail}')
     summary = json.loads(summary_path.read_text())
-    summary['timed_out'] = timed_out
+    summary['timed_out'] = timed_out or bool(summary.get('timed_out'))
     return summary
 
 
-#: The walk functions a campaign can name (``--graph``: ``graph``).
-BACKENDS: dict[str, WalkFunction] = {'graph': graph_walk}
+def headless_walk(request: WalkRequest) -> dict[str, Any]:
+    """Walk in the headless lock-step loop (see the module's docstring).
+
+    Raises
+    ------
+    WalkError
+        The runner wrote no summary (a parameter refused, a crash).
+    """
+    Path(request.out_dir).mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, PYTHONUNBUFFERED='1')
+    return _walk_in_process(request, _run_all_command(request, ['--headless']), env,
+                            'headless runner')
+
+
+def graph_walk(request: WalkRequest) -> dict[str, Any]:
+    """Walk on the sim-time ROS graph, in a ROS domain of its own (see the module's docstring).
+
+    Raises
+    ------
+    WalkError
+        The graph did not write a summary (it did not come up, a node refused its
+        parameters): the message ends with the end of its output.
+    """
+    from walker_bringup.domains import isolated_domain
+
+    out = Path(request.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    command = _run_all_command(request, ['--sim-time', '--composed-loop'])
+    with isolated_domain() as domain:
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                   ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', ROS_HOME=str(out / 'ros_home'),
+                   PYTHONUNBUFFERED='1')
+        return _walk_in_process(request, command, env, 'graph')
+
+
+#: The walk functions a campaign can name (the default ``headless``; ``--graph``: ``graph``).
+BACKENDS: dict[str, WalkFunction] = {'headless': headless_walk, 'graph': graph_walk}
 
 
 def walk_function(name: str) -> WalkFunction:
