@@ -10,7 +10,9 @@
 * **A cluster** (``address``): joins it as a driver. Its nodes are started from the walker
   environment (so that their workers can import the walker): on one machine with
   ``python -m walker_campaign.ray_node`` (loopback only), across machines with ``ray start``
-  (see ``docs/campaigns.md``); the driver needs the cluster's token if it has one.
+  (see ``docs/campaigns.md``); the driver needs the cluster's token if it has one. A
+  loopback address is kept as given (the same switch as a local Ray): Ray would otherwise
+  look for the cluster at the machine's own address, where a loopback cluster is not.
 
 Either way usage statistics stay off (``RAY_USAGE_STATS_ENABLED=0``, set before Ray is
 imported). Each run is one task of one CPU running :func:`walker_campaign.execution.
@@ -34,21 +36,29 @@ from typing import Any
 
 from walker_campaign.execution import RunTask, execute_run
 
-__all__ = ['RayCampaign', 'LOOPBACK', 'ray_environment']
+__all__ = ['RayCampaign', 'LOOPBACK', 'ray_environment', 'is_loopback']
 
 LOOPBACK = '127.0.0.1'
 _POLL = 0.5  # [s] longest wait for a result before the driver looks again
 _RESOURCE_PERIOD = 10.0  # [s] how often the window follows the cluster's size
 
 
-def ray_environment(local: bool) -> None:
-    """Set what Ray must see before it is imported.
+def is_loopback(address: str) -> bool:
+    """Whether a ``host:port`` address names this machine's loopback interface."""
+    host = address.rsplit(':', 1)[0].strip('[]')
+    return host == 'localhost' or host == '::1' or host.startswith('127.')
 
-    No usage statistics; for a local Ray, loopback only and a token of its own.
+
+def ray_environment(address: str | None) -> None:
+    """Set what Ray must see before it is imported, for a local Ray or one at ``address``.
+
+    No usage statistics; for a local Ray, loopback only and a token of its own; for a
+    cluster on loopback, loopback only.
     """
     os.environ['RAY_USAGE_STATS_ENABLED'] = '0'
-    if local:
+    if address is None or is_loopback(address):
         os.environ['RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER'] = '0'
+    if address is None:
         os.environ['RAY_AUTH_MODE'] = 'token'
         os.environ['RAY_AUTH_TOKEN'] = secrets.token_hex(32)
 
@@ -79,7 +89,7 @@ class RayCampaign:
 
     def __init__(self, address: str | None = None, workers: int | None = None,
                  max_retries: int = 3, resubmissions: int = 2) -> None:
-        ray_environment(local=address is None)
+        ray_environment(address)
         import ray
 
         self._ray = ray
