@@ -13,13 +13,14 @@
 Results go to ``<out>/results.jsonl`` (``--out``, default ``runs/campaigns/<name>``), the
 report to ``<out>/report/``. Exit codes: 0 complete, 1 a re-run differs from its row, 2 a bad
 spec or option, 3 runs left to do (lost workers: run the same command again to resume),
-130 interrupted (resumable too).
+130 interrupted (Ctrl-C or SIGTERM; resumable too).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 import time
 from pathlib import Path
@@ -133,6 +134,7 @@ def _run_campaign(spec: CampaignSpec, args, results_path: Path, walk: str) -> in
 
         try:
             with RayCampaign(args.address, args.workers, args.max_retries) as ray:
+                signal.signal(signal.SIGTERM, _interrupt)  # again: Ray's start replaced it
                 _say(f'Ray: {ray.cpus} CPUs' + (f' at {args.address}' if args.address
                                                  else ' on this machine (127.0.0.1)'))
                 lost = ray.run([_task(spec, i, walk) for i in pending], spec.document, on_rows)
@@ -196,9 +198,14 @@ def _walk_report(record_dir: Path) -> None:
     _say(f'walk report: {result.markdown}')
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit code."""
     args = parse_arguments(sys.argv[1:] if argv is None else argv)
+    signal.signal(signal.SIGTERM, _interrupt)  # a scheduler's stop: as Ctrl-C, resumable
     try:
         spec = load_spec(find_spec(args.spec))
         out = Path(args.out or Path('runs') / 'campaigns' / spec.name).resolve()
