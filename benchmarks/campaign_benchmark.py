@@ -12,8 +12,9 @@ campaign runner (:class:`walker_campaign.ray_runner.RayCampaign`) on:
 1. a local Ray with one worker (``num_cpus=1``);
 2. a local Ray with two workers;
 3. a two-node Ray cluster on loopback that the benchmark starts itself: a head and a worker
-   node as separate ``ray start`` processes (127.0.0.1, one CPU each, temp directories of
-   their own, no dashboard, no usage statistics), stopped by their process groups at the end.
+   node as separate ``ray start`` processes (:mod:`walker_campaign.ray_node`: 127.0.0.1 only,
+   one CPU each, temp directories and a token of their own, no dashboard, no usage
+   statistics), stopped by their process groups at the end.
 
 Each configuration's workers are warmed first (one task per CPU imports the walker), so the
 figure is the steady pace of walks, not Ray's start-up. Walks per hour = walks / wall time
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import secrets
 import shutil
 import signal
 import socket
@@ -84,13 +86,14 @@ def _free_port() -> int:
         return probe.getsockname()[1]
 
 
-def _ray_start(args: list[str], log: Path) -> subprocess.Popen:
-    ray = Path(sys.executable).with_name('ray')
-    command = [str(ray), 'start', '--block', '--node-ip-address', '127.0.0.1', '--num-cpus',
-               '1', '--object-store-memory', str(80 * 2**20), '--disable-usage-stats', *args]
+def _ray_start(args: list[str], log: Path, token: str) -> subprocess.Popen:
+    command = [sys.executable, '-m', 'walker_campaign.ray_node', '--block',
+               '--node-ip-address', '127.0.0.1', '--num-cpus', '1', '--object-store-memory',
+               str(80 * 2**20), '--disable-usage-stats', *args]
     return subprocess.Popen(command, stdout=open(log, 'w'), stderr=subprocess.STDOUT,
                             start_new_session=True,
-                            env=dict(os.environ, RAY_USAGE_STATS_ENABLED='0'))
+                            env=dict(os.environ, RAY_USAGE_STATS_ENABLED='0',
+                                     RAY_AUTH_MODE='token', RAY_AUTH_TOKEN=token))
 
 
 def _wait_for(log: Path, text: str, process: subprocess.Popen, timeout: float) -> None:
@@ -123,14 +126,16 @@ def two_node_cluster(tasks, document) -> dict:
 
     scratch = Path(tempfile.mkdtemp(prefix='wr-bench-'))
     port = _free_port()
+    token = secrets.token_hex(32)
     head = _ray_start(['--head', '--port', str(port), '--include-dashboard', 'false',
-                       '--temp-dir', str(scratch / 'head')], scratch / 'head.log')
+                       '--temp-dir', str(scratch / 'head')], scratch / 'head.log', token)
     worker = None
     try:
         _wait_for(scratch / 'head.log', 'Ray runtime started', head, 180)
         worker = _ray_start(['--address', f'127.0.0.1:{port}', '--temp-dir',
-                             str(scratch / 'worker')], scratch / 'worker.log')
+                             str(scratch / 'worker')], scratch / 'worker.log', token)
         _wait_for(scratch / 'worker.log', 'Ray runtime started', worker, 180)
+        os.environ.update(RAY_AUTH_MODE='token', RAY_AUTH_TOKEN=token)  # the driver's
         with RayCampaign(address=f'127.0.0.1:{port}') as ray_campaign:
             deadline = time.monotonic() + 60
             while ray_campaign.cpus < 2 and time.monotonic() < deadline:
