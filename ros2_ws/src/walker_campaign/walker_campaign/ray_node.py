@@ -29,6 +29,8 @@ def main(argv: list[str] | None = None) -> int:
     if '--node-ip-address' not in argv:
         argv = ['--node-ip-address', LOOPBACK, *argv]
     os.environ['RAY_USAGE_STATS_ENABLED'] = '0'
+    # a node of a cluster: not a campaign's own Ray, whose switch a caller may pass on
+    os.environ.pop('RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER', None)
     from ray._private import services
     from ray.scripts.scripts import main as ray_main
 

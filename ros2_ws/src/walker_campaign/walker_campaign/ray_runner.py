@@ -59,8 +59,9 @@ def ray_environment(address: str | None) -> None:
     if address is None or is_loopback(address):
         os.environ['RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER'] = '0'
     if address is None:
+        # one token for the process: Ray reads it once, and a second local Ray needs the same
         os.environ['RAY_AUTH_MODE'] = 'token'
-        os.environ['RAY_AUTH_TOKEN'] = secrets.token_hex(32)
+        os.environ.setdefault('RAY_AUTH_TOKEN', secrets.token_hex(32))
 
 
 def _execute_on_ray(task: RunTask, document: dict[str, Any]) -> list[dict[str, Any]]:
