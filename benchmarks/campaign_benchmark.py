@@ -64,7 +64,11 @@ def measure(ray_campaign, tasks, document) -> dict:
     outcomes: dict[str, int] = {}
     nodes: set[str] = set()
 
+    errors: list[str] = []
+
     def on_rows(rows):
+        if rows[-1]['outcome'] == 'error':
+            errors.append(rows[-1]['message'])
         finished.append(time.monotonic())
         outcomes[rows[-1]['outcome']] = outcomes.get(rows[-1]['outcome'], 0) + 1
         nodes.add(rows[-1].get('exec.node', ''))
@@ -73,6 +77,9 @@ def measure(ray_campaign, tasks, document) -> dict:
     started = time.monotonic()
     lost = ray_campaign.run(tasks, document, on_rows)
     wall = time.monotonic() - started
+    if errors:
+        raise RuntimeError(f'{len(errors)} walks could not be carried out, so there is no pace '
+                           f'to measure; the first: {errors[0]}')
     return {'walks': len(finished), 'lost': len(lost), 'wall_s': round(wall, 2),
             'walks_per_hour': round(3600.0 * len(finished) / wall, 1) if wall > 0 else None,
             'outcomes': outcomes, 'nodes': len(nodes), 'cpus': ray_campaign.cpus,
@@ -126,7 +133,7 @@ def two_node_cluster(tasks, document) -> dict:
 
     scratch = Path(tempfile.mkdtemp(prefix='wr-bench-'))
     port = _free_port()
-    token = secrets.token_hex(32)
+    token = os.environ.get('RAY_AUTH_TOKEN') or secrets.token_hex(32)  # read once by Ray
     head = _ray_start(['--head', '--port', str(port), '--include-dashboard', 'false',
                        '--temp-dir', str(scratch / 'head')], scratch / 'head.log', token)
     worker = None
