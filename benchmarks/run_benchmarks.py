@@ -13,7 +13,7 @@ Usage::
 It sets up the environment like the other scripts, runs the parts, prints one table of the
 figures with their targets, and writes ``benchmarks/results/summary.json`` (the table, the
 machine, the load average before and after) and one JSON file per part in
-``benchmarks/results/suite/``. The README's performance section quotes ``summary.json``.
+``benchmarks/results/suite/``. ``docs/performance.md`` quotes ``summary.json``.
 
 Parts (each brings up what it needs with :mod:`graph_runner`: the graph ``run_all.py``
 starts, in a ROS domain of its own, discovery on loopback, the plant timed from the inside by

@@ -63,7 +63,7 @@ class FaultGraph:
         # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
         # planner's interpreter, and with it its setpoint stream, for up to a second there): a
         # healthy node is never taken for a dead one, and a dead one is still named within
-        # seconds. The shipped values are shorter (README).
+        # seconds. The shipped values are shorter (docs/faults.md).
         for name, spec in list(self.specs.items()):
             extra = INPUT_TIMEOUTS if name.startswith('controller') else \
                 (('supervisor.watchdog_timeout', str(WATCHDOG)),) if name == 'supervisor' else ()

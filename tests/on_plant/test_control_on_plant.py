@@ -101,7 +101,7 @@ def test_figure6_ka_settles_joint_1_with_less_residual_tip_vibration(figure6):
     Without Ka, joint 1 sticks short of the target at the end of the move (26.6 mrad measured)
     and arrives a second later, so the tip is still swinging in the window; with the file's
     Ka the joint arrives with the move and the residual is the small held-arm ring (measured
-    from the tip's final rest: 17.5 mm without, 0.80 mm with Ka = 0.25). See the docs.
+    from the tip's final rest: 17.5 mm without, 0.80 mm with Ka = 0.25). See docs/controllers.md.
     """
     without = figure6[0.0]
     assert without.joint1_motion > 1e-3  # still moving after the move: it stuck short

@@ -6,7 +6,7 @@ filters (56-58 ms behind); joint 4, the moving wrist, has no command filter (pap
 and leads them as shipped, swinging the gripper sideways in mid-descent by more than the
 insertion tolerance (it comes back on the axis at the mouth). Passing its setpoints through the
 same filter outside its loop (``control.filter.setpoint_order`` and ``setpoint_corner``, off by
-default: the README's known limits give the trade) keeps the descent within half the
+default: docs/performance.md gives the trade) keeps the descent within half the
 tolerance. The plant core, the five controller cores and the planner core run in one process
 (no ROS), at the control rate.
 """

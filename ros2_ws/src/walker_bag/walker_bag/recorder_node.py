@@ -58,7 +58,7 @@ from walker_runtime.spinning import TopicSampler, freeze_start_up_objects
 from walker_bag.core.bag_metadata import TopicMetadata
 from walker_bag.core.bag_recovery import recover_abandoned_bags
 from walker_bag.core.bag_writer import BagWriter
-from walker_bag.core.errors import BagError, MessageDefinitionError
+from walker_bag.core.errors import MessageDefinitionError
 from walker_bag.core.losses import LossLedger
 from walker_bag.core.message_definitions import message_definition, type_description_hash
 from walker_bag.core.qos import QosProfile, subscription_policies

@@ -140,6 +140,8 @@ class ComposedGraph:
     """
 
     def __init__(self, specs: Sequence[NodeSpec], context) -> None:
+        from walker_runtime.node_parameters import fix_use_sim_time
+
         self.context = context
         self.nodes: list[tuple[NodeSpec, Component, object]] = []
         self.loop_by_call = False  # the plant and the controllers exchange by call
@@ -152,6 +154,7 @@ class ComposedGraph:
                 except Exception as error:  # any refusal: report which node and why
                     raise CompositionError(f'{spec.full_name} refused to start: {error}') \
                         from error
+                fix_use_sim_time(node)
                 self.nodes.append((spec, component, node))
                 if component.start:
                     getattr(node, component.start)()

@@ -137,6 +137,7 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                  parameters: tuple[tuple[str, str], ...] = (),
                  grouped_controllers: bool = False,
                  foxglove_port: int | None = None,
+                 plant_state_file: str | Path | None = None,
                  plant_params_file: str | Path | None = None) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, controllers, planner, supervisor, viz.
 
@@ -170,6 +171,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     foxglove_port : int, optional
         Also serve the graph's topics to Foxglove (``walker_viz foxglove_bridge``) on this
         port of 127.0.0.1.
+    plant_state_file : str or Path, optional
+        The plant's state snapshot (its ``state_file``): a plant started again after a crash
+        restores the physical state it had from it (``walker_sim.core.snapshot``).
     plant_params_file : str or Path, optional
         A parameter file of the plant's own (default: ``params_file``): the robot as it
         really is, where the other nodes work on the model (a campaign's dispersed runs).
@@ -194,6 +198,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     plant = common + (('sim.clock_mode', 'sim_time' if sim_time else 'real_time'),)
     if start is not None:
         plant += start.parameters()
+    if plant_state_file is not None:
+        plant += (('state_file', str(plant_state_file)),)
     nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace,
                           str(plant_params_file or params_file), plant + parameters, remaps))
     # The controllers run on the plant's state stream and its stamps (watchdogs on the steady
@@ -275,7 +281,7 @@ def start_stances(configuration, count: int) -> list[StartStance]:
 def several_walkers(configuration, count: int, sim_time: bool = False,
                     record: bool = False, bag_dir: str | Path | None = None,
                     parameters: tuple[tuple[str, str], ...] = (),
-                    grouped_controllers: bool = False
+                    grouped_controllers: bool = False, state_dir: str | Path | None = None
                     ) -> list[tuple[str, StartStance, list[NodeSpec]]]:
     """List the graphs of ``count`` walkers on one truss: ``(namespace, start, nodes)`` each.
 
@@ -285,7 +291,8 @@ def several_walkers(configuration, count: int, sim_time: bool = False,
     namespace (``/walker_2/clock``), except for the first walker, whose graph is exactly the
     single walker's. With ``record``, each walker's recorder writes ``<bag_dir>/bag`` (the
     first) or ``<bag_dir>/bag_walker_<i>``; ``parameters`` go to every node and
-    ``grouped_controllers`` is each graph's (see :func:`walker_graph`).
+    ``grouped_controllers`` is each graph's (see :func:`walker_graph`); with ``state_dir``,
+    each plant keeps its state snapshot in ``<state_dir>/plant_state_walker_<i>.json``.
     """
     graphs = []
     for index, start in enumerate(start_stances(configuration, count), start=1):
@@ -297,7 +304,9 @@ def several_walkers(configuration, count: int, sim_time: bool = False,
         graphs.append((namespace, start, walker_graph(
             configuration.path, namespace, sim_time, record=record, bag_path=bag,
             start=start if index > 1 else None, clock_topic=clock, parameters=parameters,
-            grouped_controllers=grouped_controllers)))
+            grouped_controllers=grouped_controllers,
+            plant_state_file=None if state_dir is None else
+            Path(state_dir) / f'plant_state_{namespace.strip("/")}.json')))
     return graphs
 
 

@@ -18,7 +18,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from walker_msgs.action import Step, WalkTo
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from walker_msgs.msg import GripperStates, StepPhase, StepReport
 from walker_msgs.srv import GripperCommand, PlanTrajectory
 
@@ -27,6 +27,7 @@ from walker_bringup.loop_health import (
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
 from walker_runtime.spinning import (
     TopicSampler, destroy_actions, helper_node, hidden_name)
+from walker_teleop.goal_monitor import GoalLostError, GoalMonitor
 from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'GoalRejectedError',
@@ -102,6 +103,7 @@ class GraphClient:
         self._supervisor_status = f'{namespace.rstrip("/")}/supervisor{SUPERVISOR_STATUS_SUFFIX}'
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
                                       COMMAND_QOS)
+        self._process_status = None  # the /diagnostics publisher of report_process
 
     def _on_phase(self, msg: StepPhase) -> None:
         self.phase = msg
@@ -126,6 +128,21 @@ class GraphClient:
         stamps = self.joint_stamps
         return len(stamps) >= 2 and stamps[-1] > stamps[0]
 
+    def report_process(self, node: str, level: int, message: str) -> None:
+        """Publish a node process's status on ``/diagnostics`` (its death, its restart).
+
+        ``level`` as ``diagnostic_msgs/DiagnosticStatus`` (0 OK, 1 WARN, 2 ERROR); the status
+        is named ``<node> (process)``, so that the bag records which node died and when.
+        """
+        if self._process_status is None:
+            self._process_status = self.node.create_publisher(DiagnosticArray, '/diagnostics',
+                                                              COMMAND_QOS)
+        array = DiagnosticArray(status=[DiagnosticStatus(
+            level=bytes([level]), name=f'{node} (process)', message=message,
+            hardware_id='walker_bringup')])
+        array.header.stamp = self.node.get_clock().now().to_msg()
+        self._process_status.publish(array)
+
     def close(self) -> None:
         """Destroy the client node."""
         self.executor.remove_node(self.node)
@@ -140,11 +157,15 @@ class GraphClient:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=min(_POLL, max(0.0, deadline - time.monotonic())))
 
-    def _wait(self, future, timeout: float, should_stop: Callable[[], bool] | None, what: str):
+    def _wait(self, future, timeout: float, should_stop: Callable[[], bool] | None, what: str,
+              answered_otherwise: Callable[[], bool] | None = None):
+        """Spin until ``future`` is done (its result) or ``answered_otherwise()`` (None)."""
         deadline = time.monotonic() + timeout
         while not future.done():
             if should_stop is not None and should_stop():
                 raise WalkInterruptedError(f'interrupted while waiting for {what}')
+            if answered_otherwise is not None and answered_otherwise():
+                return None
             if time.monotonic() > deadline:
                 raise TimeoutError(f'no answer to {what} within {timeout:.0f} s')
             self.executor.spin_until_future_complete(future, timeout_sec=_POLL)
@@ -257,12 +278,27 @@ class GraphClient:
             action = 'walk_to' if client is self.walk_client else 'step'
             raise GoalRejectedError(action, goal.target_node, self.rejections.reason(
                 action, goal.target_node, sent_at, self.spin_for))
+        result = handle.get_result_async()
+        monitor = GoalMonitor(self.node, self.namespace, what)
+        probed: list = []
+
+        def stop() -> bool:  # a supervisor dead or started again cannot answer: stop waiting
+            end = None if result.done() else monitor.check(handle, result)
+            if end is not None:
+                probed.append(end)
+            return should_stop is not None and should_stop()
+
         try:
-            wrapped = self._wait(handle.get_result_async(), timeout, should_stop, what)
+            wrapped = self._wait(result, timeout, stop, what, lambda: bool(probed))
+        except GoalLostError as error:
+            raise GraphNotReadyError(str(error)) from None
         except (WalkInterruptedError, TimeoutError):
             handle.cancel_goal_async()
             self.spin_for(0.2)
             raise
+        finally:
+            monitor.close()
+        wrapped = wrapped if wrapped is not None else probed[0]
         return wrapped.status, wrapped.result
 
     def call_trigger(self, which: str, timeout: float = 5.0) -> Trigger.Response:

@@ -103,7 +103,7 @@ class LoopHealth:
                      f'{joint})')
         if self.late_periods or late:
             text += ('. A loop that cannot keep its period tracks worse than in sim time '
-                     '(README, Known limits)')
+                     '(docs/performance.md, Known limits)')
         return text
 
     def as_dict(self) -> dict:

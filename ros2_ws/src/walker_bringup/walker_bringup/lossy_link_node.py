@@ -163,7 +163,7 @@ def main(args: list[str] | None = None) -> int:
     The default executor: a test tool needs no speed. (Chosen when the link was seen to end in
     SIGABRT as it stopped under the events executor, then taken for a race with that
     executor's callbacks; it was a hang in the middleware's teardown that the stop escalation
-    ended: README, Known limits.)
+    ended: docs/faults.md, found and not fixed.)
     """
     return run_node(LossyLinkNode, 'lossy_link', args, executor=SingleThreadedExecutor,
                     before_destroy=LossyLinkNode.report)

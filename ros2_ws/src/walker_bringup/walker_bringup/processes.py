@@ -45,6 +45,8 @@ class ManagedProcess:
     log_path: Path
     started_at: float
     reported_dead: bool = False
+    #: the command line it was started with (None: its spec's installed executable)
+    command: list[str] | None = None
 
     @property
     def alive(self) -> bool:
@@ -138,7 +140,7 @@ class ProcessGroup:
             popen = subprocess.Popen(command or spec.command(), env=self.env, stdout=log,
                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                      start_new_session=True)
-        process = ManagedProcess(spec, popen, log_path, time.monotonic())
+        process = ManagedProcess(spec, popen, log_path, time.monotonic(), command=command)
         self.processes.append(process)
         return process
 
@@ -147,7 +149,8 @@ class ProcessGroup:
         """Start a node again (after it died or was killed), its log continuing in its file.
 
         A process still alive is stopped first. The new process joins the group; the old one
-        is not reported by :meth:`poll_deaths` any more.
+        is not reported by :meth:`poll_deaths` any more. Without ``command``, the command line
+        the process was started with.
         """
         if process.alive:
             self.stop(process)
@@ -155,7 +158,7 @@ class ProcessGroup:
         with open(process.log_path, 'a') as log:
             log.write(f'--- restarted (the previous process ended with code '
                       f'{process.popen.returncode}) ---\n')
-        return self.start(process.spec, command, append_log=True)
+        return self.start(process.spec, command or process.command, append_log=True)
 
     def poll_deaths(self) -> list[ManagedProcess]:
         """Return the processes that have exited since the last call (each reported once)."""

@@ -9,9 +9,14 @@ same truss layout and each walking the same route moved with its start (their pl
 separate physics worlds: they do not collide). A graph counts as up when every node is in the
 ROS graph, every server answers and the supervisor has heard from every source it watches
 (checked, not after a sleep).
-A child that dies is reported at once with the end of its log, the walk is stopped safely (the
-supervisor is told to hold, the walk goal cancelled), and everything is shut down. Ctrl-C does
-the same. Nothing is left running: each child is interrupted, then terminated, then killed.
+A node process that dies is reported at once with the end of its log and started again after
+``--respawn-delay`` seconds, as launch's ``respawn`` (:mod:`walker_bringup.respawning`; the
+supervisor holds a step it sees interrupted, and ``resume`` completes it); each node's deaths
+and restarts go into the walk summary (``processes``). A node that dies more than
+``--respawn-limit`` times in a row is given up: the walk is stopped safely (the supervisor is
+told to hold, the walk goal cancelled), and everything is shut down (exit code 5). Ctrl-C does
+the same (exit code 130). Nothing is left running: each child is interrupted, then terminated,
+then killed. See docs/reliability.md.
 
 Once the graph is down (and with it the recorder, which closes the bag), the walk report is
 made from the bag (:mod:`walker_report`) into ``<out>/report``, unless ``--no-report``; it is
@@ -37,7 +42,9 @@ from walker_bringup.graph import (
     FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
     GoalRejectedError, GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
+from walker_bringup.core.respawn import DEFAULT_DELAY, DEFAULT_LIMIT, RespawnPolicy
 from walker_bringup.processes import ProcessGroup
+from walker_bringup.respawning import RespawningGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
 from walker_teleop.core.progress import walk_progress
@@ -45,6 +52,7 @@ from walker_teleop.core.progress import walk_progress
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 
 SERVE_POLL = 0.2  # [s] longest wait of --serve before it sees Ctrl-C or a dead node
+_DEATH_REPORT_LEAD = 0.5  # [s] between a death's report on /diagnostics and the hold it asks
 #: SCHED_FIFO priority of the control loop with --realtime (ros2_control's thread_priority).
 REALTIME_PRIORITY = 50
 #: Port of the Foxglove WebSocket server with --foxglove (foxglove_bridge's default).
@@ -52,6 +60,8 @@ FOXGLOVE_PORT = 8765
 #: --serve's recording: files of at most 256 MiB or 15 min, the newest 8 kept (an idle sim-time
 #: graph records about 6 MiB a minute: without a limit a long session fills the disk)
 SERVE_SPLIT = (256 * 2**20, 900.0, 8)
+#: The plant's state snapshot in the output directory (a plant started again restores it).
+PLANT_STATE_FILE = 'plant_state.json'
 
 
 def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
@@ -105,6 +115,16 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--max-bag-files', type=_non_negative_int, default=None, metavar='N',
                         help='the bag keeps its newest N files, deleting older ones; 0: every '
                              f'file (default: 0, with --serve {SERVE_SPLIT[2]})')
+    parser.add_argument('--respawn-delay', type=_non_negative_float, default=DEFAULT_DELAY,
+                        metavar='SECONDS',
+                        help='a node process that dies is started again after this many '
+                             "seconds, as launch's respawn_delay (default: %(default)s)")
+    parser.add_argument('--respawn-limit', type=_non_negative_int, default=DEFAULT_LIMIT,
+                        metavar='N',
+                        help='restarts in a row of one node (each dying within a minute of its '
+                             'start) before the graph is given up as dead: the walker is held '
+                             'and everything shut down (exit code 5); 0: never start a node '
+                             'again (default: %(default)s)')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
@@ -270,6 +290,11 @@ class _Walker:
     target: str = ''
     client: GraphClient | None = None
     code: int = 1
+    respawner: RespawningGroup | None = None
+
+    def processes(self) -> dict[str, dict]:
+        """Deaths and restarts of each node that died (the walk summary's ``processes``)."""
+        return {} if self.respawner is None else self.respawner.summary()
 
     @property
     def label(self) -> str:
@@ -290,12 +315,13 @@ def _describe_walkers(args, configuration, out: Path, env: dict) -> list[_Walker
                              parameters=_graph_parameters(args),
                              grouped_controllers=args.grouped_controllers,
                              foxglove_port=args.foxglove_port if args.foxglove else None,
+                             plant_state_file=out / PLANT_STATE_FILE,
                              plant_params_file=_plant_file(args))
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
     graphs = several_walkers(configuration, args.walkers, args.sim_time, args.record, out,
                              _graph_parameters(args),
-                             grouped_controllers=args.grouped_controllers)
+                             grouped_controllers=args.grouped_controllers, state_dir=out)
     targets = walker_targets(configuration, args.target, [start for _, start, _ in graphs])
     walkers = []
     for index, ((namespace, start, nodes), target) in enumerate(zip(graphs, targets,
@@ -323,8 +349,9 @@ def _bag_paths(walkers: list[_Walker]) -> list[Path]:
 
 
 def _graph_parameters(args) -> tuple[tuple[str, str], ...]:
-    """Return the overrides for every node: the recorder's splits, the real-time priority
-    asked for, and the gate.
+    """Return the overrides for every node.
+
+    The recorder's splits, the real-time priority asked for, and the gate.
 
     With the loop composed in sim time: at two to three times real time the supervisor,
     outside the lock-step, decides late in simulated time; the plant then waits for its
@@ -429,6 +456,8 @@ def main(argv: list[str] | None = None) -> int:
                        'recording never overwrites a bag: choose another --out, or --no-record')
         return 2
     out.mkdir(parents=True, exist_ok=True)
+    for stale in out.glob('plant_state*.json'):  # an earlier run's robot is not this one's
+        stale.unlink()
     context = init_context()
     busy = _namespaces_in_use(walkers, context)
     if busy:
@@ -455,10 +484,18 @@ def main(argv: list[str] | None = None) -> int:
     deaths: list = []
     lock = threading.Lock()
 
+    policy = RespawnPolicy(args.respawn_delay, args.respawn_limit)
+    for walker in walkers:
+        walker.respawner = RespawningGroup(
+            walker.group, policy, progress.error, walker.label if len(walkers) > 1 else '',
+            report=lambda node, level, message, w=walker: w.client is not None
+            and w.client.report_process(node, level, message))
+
     def should_stop() -> bool:
         with lock:
-            for walker in walkers:
-                deaths.extend(walker.group.poll_deaths())
+            if not deaths:  # a graph given up on is not started again
+                for walker in walkers:
+                    deaths.extend(walker.respawner.poll())
         return bool(deaths) or interrupted['signal'] is not None
 
     code = 1
@@ -483,11 +520,11 @@ def main(argv: list[str] | None = None) -> int:
             progress.say(f'[walker] live view: open ws://127.0.0.1:{args.foxglove_port} in '
                          f'Foxglove with the layout {_foxglove_layout()}')
         if args.serve:
-            return _serve(walkers[0].client, args, should_stop, deaths)
+            return _serve(walkers[0], args, should_stop, deaths, out)
         if not args.walk:
             return 0
         if len(walkers) == 1:
-            code = _walk(walkers[0].client, args.target, args, progress, should_stop, out)
+            code = _walk(walkers[0], args.target, args, progress, should_stop, out)
         else:
             code = _walk_several(walkers, args, progress, should_stop, out)
     except GraphNotReadyError as error:
@@ -579,17 +616,23 @@ def _namespaces_in_use(walkers: list[_Walker], context) -> str:
     return ''
 
 
-def _serve(client: GraphClient, args, should_stop, deaths: list) -> int:
-    """Keep the graph running until Ctrl-C (exit code 0) or a node dies.
+def _serve(walker: _Walker, args, should_stop, deaths: list, out: Path) -> int:
+    """Keep the graph running until Ctrl-C (exit code 0) or a node is given up on.
 
     The client keeps spinning: a participant that stops taking its messages would hold up the
-    graph's reliable writers.
+    graph's reliable writers. On the way out, the steps taken and each node's deaths and
+    restarts go into ``<out>/summary.json``.
     """
+    client = walker.client
     domain = os.environ.get('ROS_DOMAIN_ID', '0')
     print(f'[walker] serving in namespace {args.namespace}, ROS_DOMAIN_ID={domain}: try '
           f'scripts/walkerctl status; Ctrl-C shuts the graph down', flush=True)
-    while not should_stop():
-        client.spin_for(SERVE_POLL)
+    try:
+        while not should_stop():
+            client.spin_for(SERVE_POLL)
+    finally:
+        write_json(rows_from_reports(client.reports), out / 'summary.json',
+                   {'serve': True, 'processes': walker.processes()})
     if deaths:
         raise WalkInterruptedError('a node died')
     return 0
@@ -614,8 +657,9 @@ def walk_feedback_text(feedback, elapsed: float) -> str:
                          elapsed)
 
 
-def _walk(client: GraphClient, target: str, args, progress: _Progress, should_stop, out: Path,
+def _walk(walker: _Walker, target: str, args, progress: _Progress, should_stop, out: Path,
           label: str = '', summary_name: str = 'summary.json') -> int:
+    client = walker.client
     started = time.monotonic()
     prefix = f'{label}: ' if label else ''
 
@@ -640,6 +684,7 @@ def _walk(client: GraphClient, target: str, args, progress: _Progress, should_st
                     'message': result.message, 'path': list(result.path),
                     'wall_time': time.monotonic() - started,
                     'loop': None if client.loop is None else client.loop.as_dict(),
+                    'processes': walker.processes(),
                     **({'namespace': client.namespace} if label else {})})
         if result.success:
             print(f'[walker] {prefix}reached {target} in {result.steps_taken} steps, '
@@ -661,7 +706,7 @@ def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop
         name = 'summary.json' if walker.namespace == '/walker' else \
             f'summary_{walker.label}.json'
         try:
-            walker.code = _walk(walker.client, walker.target, args, progress,
+            walker.code = _walk(walker, walker.target, args, progress,
                                 lambda: bool(errors) or should_stop(), out, walker.label, name)
         except BaseException as error:  # re-raised in the main thread
             errors.append(error)
@@ -683,6 +728,8 @@ def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
                        f'{process.log_tail()}')
     if signum is not None:
         progress.say(f'[walker] interrupted ({signal.Signals(signum).name}): stopping safely')
+    elif deaths:  # the death was reported on /diagnostics: let it reach the supervisor first,
+        time.sleep(_DEATH_REPORT_LEAD)  # which names the dead node in the hold's reason
     for client in clients:
         try:
             response = client.call_trigger('hold', timeout=2.0)

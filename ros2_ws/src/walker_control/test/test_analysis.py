@@ -148,9 +148,10 @@ def test_bode_command_writes_the_figure_and_the_table(tmp_path, capsys):
 def test_design_command_refuses_an_unstable_file(tmp_path, capsys):
     path = tmp_path / 'unstable.yaml'
     from walker_core.robot_parameters import default_parameter_file
-    path.write_text(default_parameter_file().read_text().replace(
-        'bandwidth: [0.7, 5.0, 5.0, 8.0, 8.0]  # [rad/s] chosen: the highest',
-        'bandwidth: [5.0, 5.0, 5.0, 8.0, 8.0]  # [rad/s] chosen: the highest'))
+    shipped = default_parameter_file().read_text()
+    fine = 'bandwidth: [0.7, 5.0, 5.0, 8.0, 8.0]'  # the first is control.fine's, then hold's
+    assert shipped.index('fine:') < shipped.index(fine) < shipped.index('hold:')
+    path.write_text(shipped.replace(fine, 'bandwidth: [5.0, 5.0, 5.0, 8.0, 8.0]', 1))
     assert analysis.main(['design', '--params-file', str(path)]) == 2
     assert 'role J1, mode fine: the discrete closed loop is unstable' in capsys.readouterr().out
 

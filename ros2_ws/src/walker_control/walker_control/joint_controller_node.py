@@ -43,6 +43,7 @@ from walker_runtime.node_main import run_node
 from walker_runtime.watched_subscription import WatchedSubscription
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
+from walker_control.core.joint_order import JointOrder, default_node_name
 from walker_control.joint_channel import (
     COMMAND_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, RESUBSCRIBE_AFTER_TIMEOUTS, STATE_QOS,
     JointChannel, seconds)
@@ -51,16 +52,6 @@ __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'ControllerNode', 'JointContr
            'default_node_name', 'run_controller_node', 'main']
 
 _WATCHDOG_CHECKS_PER_TIMEOUT = 4
-
-
-def default_node_name(argv: list[str]) -> str:
-    """Name the node ``controller_<joint>`` from a ``-p joint_name:=...`` argument, if any."""
-    for flag, value in zip(argv, argv[1:], strict=False):
-        if flag in ('-p', '--param') and value.startswith('joint_name:='):
-            joint = value.split(':=', 1)[1]
-            if joint in PHYSICAL_JOINT_NAMES:
-                return 'controller_' + joint.removesuffix('_joint')
-    return 'joint_controller'
 
 
 class ControllerNode(Node):
@@ -110,11 +101,7 @@ class ControllerNode(Node):
                                        self._sim_clock_now, f'{joint}: ' if several else '',
                                        after_setpoint=self._answer_waiting_state)
                           for joint in self._joints]
-        self._names: tuple[str, ...] = ()
-        self._indices: list[int] = []  # joint_states index of each physical joint
-        self._own_indices: list[int] = []  # physical index of each joint of the node
-        self._acceleration_names: tuple[str, ...] = ()
-        self._acceleration_indices: list[int] = []
+        self._order = JointOrder(self._joints)
         self._accelerations: tuple[float, list[float | None]] | None = None
         self._last_stamp: float | None = None
         self._last_effort: JointState | None = None
@@ -274,15 +261,10 @@ class ControllerNode(Node):
         self._answer_waiting_state()
 
     def _on_accelerations(self, msg: JointAccelerations) -> None:
-        names = tuple(msg.name)
-        if names != self._acceleration_names:
-            self._acceleration_names = names
-            self._acceleration_indices = [names.index(j) if j in names else -1
-                                          for j in self._joints]
         values = msg.acceleration
         self._accelerations = (seconds(msg.header.stamp),
                                [values[i] if 0 <= i < len(values) else None
-                                for i in self._acceleration_indices])
+                                for i in self._order.acceleration_indices(msg.name)])
 
     def _on_joint_state(self, msg: JointState) -> None:
         now = self._steady_now()
@@ -334,16 +316,18 @@ class ControllerNode(Node):
 
     def _answer(self, msg: JointState, stamp: float) -> None:
         """Compute every joint's effort for the state ``msg`` and publish them together."""
-        positions = self._positions(msg)
-        if positions is None:
+        refusal = self._order.check_state(msg.name, len(msg.position), len(msg.velocity))
+        if refusal:
+            self.get_logger().error(refusal, throttle_duration_sec=1.0)
             return
+        positions = [msg.position[i] for i in self._order.physical]
         accelerations = None
         if self._accelerations is not None \
                 and stamp - self._accelerations[0] <= self._settings.control.state_timeout:
             accelerations = self._accelerations[1]
         names, efforts = [], []
         for k, channel in enumerate(self._channels):
-            i = self._indices[self._own_indices[k]]
+            i = self._order.own[k]
             measurement = Measurement(msg.position[i], msg.velocity[i],
                                       accelerations[k] if accelerations else None, positions)
             effort = channel.answer(msg.header, stamp, measurement)
@@ -374,26 +358,6 @@ class ControllerNode(Node):
         if any(channel.stale.any for channel in self._channels):
             self._resubscribe_silent_streams(now)
         self._answer_waiting_state()
-
-    # ---------------------------------------------------------------------------- helpers
-    def _positions(self, msg: JointState) -> list[float] | None:
-        """Return the state's positions of the physical joints in order (None: refused)."""
-        names = tuple(msg.name)
-        if names != self._names:
-            missing = [j for j in PHYSICAL_JOINT_NAMES if j not in names]
-            if missing:
-                self.get_logger().error(
-                    f'joint_states lacks {", ".join(missing)}; state ignored',
-                    throttle_duration_sec=1.0)
-                return None
-            self._names = names
-            self._indices = [names.index(j) for j in PHYSICAL_JOINT_NAMES]
-            self._own_indices = [PHYSICAL_JOINT_NAMES.index(j) for j in self._joints]
-        if len(msg.position) != len(names) or len(msg.velocity) != len(names):
-            self.get_logger().error('joint_states needs a position and a velocity per joint; '
-                                    'state ignored', throttle_duration_sec=1.0)
-            return None
-        return [msg.position[i] for i in self._indices]
 
 
 class JointControllerNode(ControllerNode):

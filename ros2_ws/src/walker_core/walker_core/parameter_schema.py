@@ -2,9 +2,11 @@
 
 A *section* is a frozen dataclass whose leaf fields are declared with :func:`parameter`, which
 records the description, unit and allowed range that the ROS nodes also use to declare the
-parameter. Sections nest; a leaf's ROS parameter name is the dotted path of field names, e.g.
-``robot.geometry.l2``. Building a section from a flat ``{name: value}`` dictionary checks every
-value (type, finiteness, range) and then the section's own cross-field rules, and raises
+parameter, and the source of its value (the paper, or chosen and why), from which
+``docs/parameters.md`` is generated (``scripts/generate_parameter_docs.py``). Sections nest;
+a leaf's ROS parameter name is the dotted path of field names, e.g. ``robot.geometry.l2``.
+Building a section from a flat ``{name: value}`` dictionary checks every value (type,
+finiteness, range) and then the section's own cross-field rules, and raises
 :class:`ParameterError` naming the offending parameter. Nothing is ever half-built.
 
 The YAML layout is the standard ``ros__parameters`` form (``ros2 run ... --ros-args
@@ -45,7 +47,7 @@ class ParameterSpec:
         ``float``, ``int``, ``bool``, ``str``, ``tuple[float, ...]``, ``tuple[int, ...]`` or
         ``tuple[str, ...]``.
     description : str
-        What the parameter means, for ``ros2 param describe``.
+        What the parameter means, in one line, for ``ros2 param describe``.
     unit : str
         SI unit (REP 103), or ``''`` when dimensionless.
     minimum, maximum : float or None
@@ -54,6 +56,9 @@ class ParameterSpec:
         True when the value cannot change while a node runs (geometry, masses).
     choices : tuple of str or None
         Allowed values of a string parameter.
+    source : str
+        Where the shipped value comes from, in one line: ``'paper ...'`` (a section or
+        equation of the paper) or ``'chosen ...'`` (and why).
     """
 
     name: str
@@ -64,6 +69,7 @@ class ParameterSpec:
     maximum: float | None = None
     read_only: bool = True
     choices: tuple[str, ...] | None = None
+    source: str = ''
 
     @property
     def full_description(self) -> str:
@@ -78,11 +84,11 @@ class ParameterSpec:
 
 def parameter(description: str, unit: str = '', minimum: float | None = None,
               maximum: float | None = None, *, read_only: bool = True,
-              choices: tuple[str, ...] | None = None) -> Any:
+              choices: tuple[str, ...] | None = None, source: str = '') -> Any:
     """Declare a leaf field of a parameter section (use as the dataclass field default)."""
     return dataclasses.field(metadata={'walker_parameter': {
         'description': description, 'unit': unit, 'minimum': minimum, 'maximum': maximum,
-        'read_only': read_only, 'choices': choices}})
+        'read_only': read_only, 'choices': choices, 'source': source}})
 
 
 def _is_section(tp: Any) -> bool:

@@ -31,8 +31,13 @@ JOINT_KINDS_BY_ROLE = ('yaw', 'pitch', 'vertex', 'pitch', 'yaw')
 class Geometry:
     """Link lengths of paper eq (1)."""
 
-    l1: float = parameter('wrist offset: pitch axis to gripper contact point', 'm', 0.01, 2.0)
-    l2: float = parameter('length of each of the two flexible links', 'm', 0.05, 5.0)
+    l1: float = parameter(
+        'wrist offset: pitch axis to gripper contact point', 'm', 0.01, 2.0,
+        source='chosen: 1/3 of a 0.45 m full-size wrist; short next to l2, as Figure 1 draws it')
+    l2: float = parameter(
+        'length of each of the two flexible links', 'm', 0.05, 5.0,
+        source='chosen: 1/3 of a 1.8 m full-size link; an inverted V of 83 deg at J3 on the 0.9 '
+               'm truss')
 
     def __post_init__(self) -> None:
         if self.l1 >= self.l2:
@@ -44,10 +49,16 @@ class Geometry:
 class Masses:
     """Masses of the bodies; the rigid model lumps them at J3, J4 and the tip (eqs (9)-(13))."""
 
-    gripper: float = parameter('gripper with its yaw drive, at each end', 'kg', 0.01, 100.0)
-    wrist: float = parameter('wrist pitch drive housing, at each end', 'kg', 0.0, 100.0)
-    vertex: float = parameter('vertex drive housing', 'kg', 0.0, 100.0)
-    link: float = parameter('each flexible link, uniformly distributed', 'kg', 0.01, 100.0)
+    gripper: float = parameter(
+        'gripper with its screw drive and yaw motor, at each end', 'kg', 0.01, 100.0,
+        source='chosen: the tip mass dominates, as paper section 5 assumes')
+    wrist: float = parameter('wrist pitch drive housing, at each end', 'kg', 0.0, 100.0,
+                             source='chosen: pitch motor and housing')
+    vertex: float = parameter('vertex drive housing', 'kg', 0.0, 100.0,
+                              source='chosen: "much less than at the tip" (paper section 5)')
+    link: float = parameter(
+        'each flexible link, uniformly distributed', 'kg', 0.01, 100.0,
+        source='chosen: a light carbon-fibre tube, "light-weight" (paper section 2)')
 
     @property
     def lumped(self) -> tuple[float, float, float]:
@@ -66,13 +77,26 @@ class Masses:
 class Drive:
     """One kind of joint drive (harmonic-drive gear motor) and its joint's limits."""
 
-    gear_ratio: float = parameter('harmonic drive reduction n_i', '', 1.0, 1000.0)
-    torque_limit: float = parameter('maximum joint torque', 'N*m', 0.01, 1000.0)
-    friction_torque: float = parameter('Coulomb friction torque at the joint', 'N*m', 0.0, 1000.0)
-    stiction_torque: float = parameter('static friction (breakaway) torque', 'N*m', 0.0, 1000.0)
-    velocity_limit: float = parameter('maximum joint speed', 'rad/s', 0.01, 100.0)
-    position_min: float = parameter('lower joint limit', 'rad', -10.0, 10.0)
-    position_max: float = parameter('upper joint limit', 'rad', -10.0, 10.0)
+    gear_ratio: float = parameter(
+        'harmonic drive reduction n_i', '', 1.0, 1000.0,
+        source='chosen: a common harmonic-drive ratio (paper: harmonic drives)')
+    torque_limit: float = parameter(
+        'maximum joint torque', 'N*m', 0.01, 1000.0,
+        source='chosen: yaw accelerates the 5 kg tip cluster at 0.9 m at about 3 rad/s^2; pitch '
+               'carries the most')
+    friction_torque: float = parameter(
+        'Coulomb friction torque at the joint', 'N*m', 0.0, 1000.0,
+        source='paper section 3: friction above 10 % of the maximum torque (15 %)')
+    stiction_torque: float = parameter('static friction (breakaway) torque', 'N*m', 0.0, 1000.0,
+                                       source='chosen: breakaway 20 % above the Coulomb level')
+    velocity_limit: float = parameter('maximum joint speed', 'rad/s', 0.01, 100.0,
+                                      source='chosen: motor speed over the gear ratio')
+    position_min: float = parameter(
+        'lower joint limit', 'rad', -10.0, 10.0,
+        source='chosen: a 180 deg sweep fits from either side (yaw); the links cannot fold '
+               '(vertex)')
+    position_max: float = parameter('upper joint limit', 'rad', -10.0, 10.0,
+                                    source='chosen: symmetric with position_min')
 
     def __post_init__(self) -> None:
         if self.friction_torque <= 0.10 * self.torque_limit:
@@ -92,8 +116,8 @@ class Drive:
 class Drives:
     """The three kinds of drive: yaw (J1, J5), pitch (J2, J4) and vertex (J3)."""
 
-    motor_inertia: float = parameter('rotor inertia I_m of every joint motor', 'kg*m^2',
-                                     0.0, 1.0)
+    motor_inertia: float = parameter('rotor inertia I_m of every joint motor', 'kg*m^2', 0.0, 1.0,
+                                     source='chosen: a small DC servo rotor; I_m of eqs (9)-(13)')
     yaw: Drive
     pitch: Drive
     vertex: Drive
@@ -117,14 +141,20 @@ class Flexibility:
     """
 
     joint1_mode: float = parameter(
-        'lowest out-of-plane structural mode with the joints held, seen at joint 1', 'rad/s',
-        1.0, 1000.0)
+        'lowest out-of-plane structural mode with the joints held, seen at joint 1',
+        'rad/s', 1.0, 1000.0,
+        source='paper section 3: the mode seen at joint 1')
     joints23_mode: float = parameter(
         'lowest in-plane structural mode with the joints held, seen at joints 2 and 3',
-        'rad/s', 1.0, 1000.0)
-    damping_ratio: float = parameter('structural damping ratio of the modes', '', 0.0, 1.0)
-    segments_per_link: int = parameter('rigid segments each flexible link is split into', '',
-                                       2, 20)
+        'rad/s', 1.0, 1000.0,
+        source='paper section 3: the modes seen at joints 2 and 3')
+    damping_ratio: float = parameter(
+        'structural damping ratio of the modes', '', 0.0, 1.0,
+        source='chosen: 2-5 % is usual for a composite arm with harmonic drives; the paper gives '
+               'none')
+    segments_per_link: int = parameter(
+        'rigid segments each flexible link is split into', '', 2, 20,
+        source="chosen: each link's first bending mode in each plane; more need faster physics")
 
     def __post_init__(self) -> None:
         if self.joint1_mode >= self.joints23_mode:
@@ -136,7 +166,8 @@ class Flexibility:
 class RobotParameters:
     """The robot: geometry, masses, drives and flexibility."""
 
-    name: str = parameter('robot name, also the ROS namespace of its topics')
+    name: str = parameter('robot name, also the ROS namespace of its topics',
+                          source="chosen: the default ROS namespace of the robot's interfaces")
     geometry: Geometry
     mass: Masses
     drive: Drives
@@ -152,12 +183,18 @@ class RobotParameters:
 class TrussParameters:
     """A flat truss face: nodes on a rectangular grid, each with a threaded hole (axis +z)."""
 
-    spacing: float = parameter('distance between neighbouring nodes', 'm', 0.05, 10.0)
-    columns: int = parameter('number of nodes along x', '', 1, 100)
-    rows: int = parameter('number of nodes along y', '', 1, 100)
-    origin_x: float = parameter('x of node n0_0 in the truss (world) frame', 'm', -100.0, 100.0)
-    origin_y: float = parameter('y of node n0_0 in the truss (world) frame', 'm', -100.0, 100.0)
-    hole_depth: float = parameter('depth of the threaded hole', 'm', 0.001, 1.0)
+    spacing: float = parameter('distance between neighbouring nodes', 'm', 0.05, 10.0,
+                               source='chosen: 1/3-scale node spacing, reachable (below 2 l2)')
+    columns: int = parameter('number of nodes along x', '', 1, 100,
+                             source='chosen: several nodes in both directions')
+    rows: int = parameter('number of nodes along y', '', 1, 100,
+                          source='chosen: several nodes in both directions')
+    origin_x: float = parameter('x of node n0_0 in the truss (world) frame', 'm', -100.0, 100.0,
+                                source='chosen: node n0_0 at the world origin')
+    origin_y: float = parameter('y of node n0_0 in the truss (world) frame', 'm', -100.0, 100.0,
+                                source='chosen: node n0_0 at the world origin')
+    hole_depth: float = parameter('depth of the threaded hole', 'm', 0.001, 1.0,
+                                  source='chosen: thread engagement of the screw gripper')
 
     def __post_init__(self) -> None:
         if self.columns * self.rows < 2:
@@ -169,13 +206,17 @@ class GripperParameters:
     """Screw-in attachment of a gripper to a node."""
 
     insertion_position_tolerance: float = parameter(
-        'largest tip distance from the hole axis at which the screw-in succeeds', 'm', 1e-5, 0.1)
+        'largest tip distance from the hole axis at which a screw-in succeeds', 'm', 1e-5, 0.1,
+        source='chosen: a thread entry chamfer; the paper needs the tip "precisely located at '
+               'the top of hole"')
     insertion_axis_tolerance: float = parameter(
-        'largest angle between gripper and hole axes at which the screw-in succeeds', 'rad',
-        1e-4, 0.5)
+        'largest angle between gripper and hole axes at which a screw-in succeeds',
+        'rad', 1e-4, 0.5,
+        source='chosen: 2 deg of axis misalignment')
     approach_height: float = parameter(
-        'height above the hole where insertion starts and extraction ends', 'm', 0.001, 0.5)
-    screw_time: float = parameter('time to screw in or unscrew', 's', 0.0, 60.0)
+        'height above the hole where insertion starts and extraction ends', 'm', 0.001, 0.5,
+        source='chosen: insertion starts 30 mm above the hole')
+    screw_time: float = parameter('time to screw in or unscrew', 's', 0.0, 60.0, source='chosen')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,17 +224,17 @@ class TimingParameters:
     """Rates every node agrees on."""
 
     control_rate: float = parameter(
-        'rate of joint states, effort commands and setpoints (the control period is its '
-        'inverse)', 'Hz', 10.0, 5000.0)
+        'rate of joint states, effort commands and setpoints', 'Hz', 10.0, 5000.0,
+        source='chosen: a 2 ms period, about 40 samples per cycle of the fastest (80 rad/s) mode')
     realtime_priority: int = parameter(
-        "SCHED_FIFO priority the control loop's processes (the plant and the joint "
-        'controllers) ask for when they run on the wall clock (0: default scheduling; ignored '
-        'in sim time, where the lock-step has no deadlines)', '', 0, 99)
+        "SCHED_FIFO priority of the control loop's processes on the wall clock (0: default)",
+        '', 0, 99,
+        source="chosen: opt-in; run_all.py --realtime asks for 50 (ros2_control's priority)")
     decision_priority: int = parameter(
-        'SCHED_FIFO priority the processes that decide and plan the steps (the supervisor and '
-        'the planner, with its setpoint stream) ask for on the wall clock: below '
-        'realtime_priority, so that they never delay a control period, and above every '
-        'ordinary process (0: default scheduling; ignored in sim time)', '', 0, 99)
+        'SCHED_FIFO priority of the supervisor and the planner on the wall clock (0: default)',
+        '', 0, 99,
+        source="chosen: below the loop's, above every ordinary process; asked for only with "
+               'realtime_priority')
 
     @property
     def decision_scheduling_priority(self) -> int:

@@ -1,7 +1,7 @@
 """The settling window: how long the joints stay still before the tip counts as at rest.
 
 The supervisor waits it before it judges where a motion left the tip (``supervisor.settle_time``,
-:class:`walker_supervisor.core.sequencer.SupervisorParameters`); the walk report measures the
+:class:`walker_supervisor.core.parameters.SupervisorParameters`); the walk report measures the
 tip's residual vibration over the same window before each insertion. The parameter is declared
 here, once, so that both take it from the model and the report needs nothing of the
 supervisor.
@@ -23,10 +23,9 @@ SETTLING_PREFIX = 'supervisor.'
 def settle_time_parameter() -> Any:
     """Declare ``settle_time`` [s] (a dataclass field of a section under ``supervisor.``)."""
     return parameter(
-        'time the joints must stay still before the tip is judged where it came to rest '
-        'after a motion that moved joint 1: a coarse motion or fine line that ended short of '
-        'the point above the hole, before a correction line; a line at the mouth, before the '
-        'screw-in', 's', 0.0, 10.0, read_only=False)
+        'time the joints must be still after a motion of joint 1 before the tip is judged',
+        's', 0.0, 10.0, read_only=False,
+        source='chosen: joint 1 comes in behind its filter slowly enough to look still for 0.1 s')
 
 
 @dataclasses.dataclass(frozen=True)

@@ -8,10 +8,11 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.core.chaining import chain
+from walker_planner.core.planning import PlanRequest
 from walker_planner.core.streaming import SampledTrajectory
 
-__all__ = ['to_duration', 'to_seconds', 'to_time', 'trajectory_message', 'sampled_trajectory',
-           'chained_message']
+__all__ = ['plan_request', 'to_duration', 'to_seconds', 'to_time', 'trajectory_message',
+           'sampled_trajectory', 'chained_message']
 
 _NANOSECONDS = 1_000_000_000
 
@@ -85,3 +86,13 @@ def chained_message(first: JointTrajectory, second: JointTrajectory,
     joined = chain(sampled_trajectory(first), sampled_trajectory(second), lead)
     return trajectory_message(joined.times, joined.positions, joined.velocities,
                               joined.accelerations)
+
+
+def plan_request(request) -> PlanRequest:
+    """Return the planner core's request of a ``plan_trajectory`` request message."""
+    return PlanRequest(
+        trajectory_type=request.trajectory_type, base_gripper=request.base_gripper,
+        start=tuple(request.start), goal=tuple(request.goal), duration=request.duration,
+        max_velocity=request.max_velocity, max_acceleration=request.max_acceleration,
+        start_joints=tuple(request.start_joints), min_radius=request.min_radius,
+        sweep_direction=int(request.sweep_direction))

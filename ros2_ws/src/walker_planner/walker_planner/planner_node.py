@@ -34,25 +34,27 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 from walker_msgs.action import FollowTrajectory
-from walker_msgs.msg import ControlMode, JointCommand
+from walker_msgs.msg import ControlMode
 from walker_msgs.srv import PlanTrajectory
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.mode_command import mode_command_refusal
 from walker_runtime.node_parameters import declare_section, guard_section_updates
-from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
+from walker_runtime.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
 from walker_runtime.realtime import log_realtime_request, request_thread_priority
 from walker_runtime.core.resubscription import clock_ran_past
 from walker_core.robot_parameters import WalkerParameters
 from walker_runtime.node_main import run_node
 from walker_runtime.watched_subscription import WatchedSubscription
 from walker_runtime.spinning import destroy_actions, helper_node, spin_nodes
-from walker_planner.conversions import sampled_trajectory, to_time, trajectory_message
+from walker_planner.conversions import (
+    plan_request, sampled_trajectory, to_time, trajectory_message)
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
-from walker_planner.core.planning import PlanningContext, PlanRequest, plan
+from walker_planner.core.planning import PlanningContext, plan
 from walker_planner.core.streamer import ActiveStream, TrajectoryStreamer
 from walker_planner.core.streaming import SampledTrajectory
+from walker_planner.setpoints import SetpointPublishers
 
 __all__ = ['PlannerNode', 'main']
 
@@ -114,13 +116,9 @@ class PlannerNode(Node):
         self._stream_node = helper_node(f'{self.get_name()}_stream', self.get_namespace(),
                                         self.context, use_global_arguments=False)
         self._stream_thread: threading.Thread | None = None
-        self._setpoint_messages = [JointCommand(joint_name=name) for name in PHYSICAL_JOINT_NAMES]
         self._state_names: tuple[str, ...] = ()
         self._state_index: list[int] = []
-        self._setpoint_publishers = {
-            name: self._stream_node.create_publisher(
-                JointCommand, f'controllers/{name}/setpoint', COMMAND_QOS)
-            for name in PHYSICAL_JOINT_NAMES}
+        self._setpoints = SetpointPublishers(self._stream_node)
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
         # on the stream node, whose thread it paces; a silence counts from the start (a plant
@@ -273,7 +271,7 @@ class PlannerNode(Node):
     # ------------------------------------------------------------------ planning service
     def _on_plan(self, request, response):
         try:
-            result = plan(_plan_request(request), self._planning)
+            result = plan(plan_request(request), self._planning)
         except PlanningError as error:
             response.success, response.message = False, str(error)
             self.get_logger().warning(f'plan_trajectory refused: {error}')
@@ -369,19 +367,7 @@ class PlannerNode(Node):
         return active, ''
 
     def _send(self, stamp: int, positions, velocities, accelerations) -> None:
-        """Publish one setpoint per joint (physical order), stamped ``stamp`` [ns].
-
-        The five messages are reused (every caller holds the lock): building them every period
-        cost more than computing the setpoints.
-        """
-        stamp = to_time(stamp)
-        for j, name in enumerate(PHYSICAL_JOINT_NAMES):
-            command = self._setpoint_messages[j]
-            command.header.stamp = stamp
-            command.position = positions[j]
-            command.velocity = velocities[j]
-            command.acceleration = accelerations[j]
-            self._setpoint_publishers[name].publish(command)
+        self._setpoints.send(stamp, positions, velocities, accelerations)  # the lock is held
 
     def _feedback(self, active: ActiveStream) -> FollowTrajectory.Feedback:
         """Where the stream is (lock held): at the setpoint of the state after the newest."""
@@ -389,15 +375,6 @@ class PlannerNode(Node):
         return FollowTrajectory.Feedback(
             time_from_start=elapsed, fraction=fraction,
             max_position_error=self._streamer.tracking_error(active.stream))
-
-
-def _plan_request(request) -> PlanRequest:
-    return PlanRequest(
-        trajectory_type=request.trajectory_type, base_gripper=request.base_gripper,
-        start=tuple(request.start), goal=tuple(request.goal), duration=request.duration,
-        max_velocity=request.max_velocity, max_acceleration=request.max_acceleration,
-        start_joints=tuple(request.start_joints), min_radius=request.min_radius,
-        sweep_direction=int(request.sweep_direction))
 
 
 def _start(node: PlannerNode) -> None:

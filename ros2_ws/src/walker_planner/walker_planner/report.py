@@ -1,4 +1,4 @@
-"""The bang-bang planner's numbers for the robot in the parameter file, as the README quotes them.
+"""The bang-bang planner's numbers for the robot in the parameter file (docs/planner.md).
 
 ``python -m walker_planner.report`` prints, for 90 and 180 deg steps at the truss spacing:
 

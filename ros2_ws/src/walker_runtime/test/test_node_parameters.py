@@ -113,3 +113,15 @@ def test_cross_field_violation_refuses_to_start(make_node):
     node = make_node('parameter_probe_cross', [Parameter('truss.spacing', value=1.5)])
     with pytest.raises(ParameterError, match='reach'):
         declare_section(node, WalkerParameters)
+
+
+def test_use_sim_time_stands_as_set_at_start(make_node):
+    from walker_runtime.node_parameters import fix_use_sim_time
+
+    node = make_node('clock_probe', [Parameter('use_sim_time', value=True)])
+    fix_use_sim_time(node)
+    result = node.set_parameters([Parameter('use_sim_time', value=False)])[0]
+    assert not result.successful and 'cannot change while the node runs' in result.reason
+    assert node.get_parameter('use_sim_time').value is True
+    # setting it to what it is changes nothing and is no error
+    assert node.set_parameters([Parameter('use_sim_time', value=True)])[0].successful

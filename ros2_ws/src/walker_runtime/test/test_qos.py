@@ -39,12 +39,12 @@ def test_a_latched_history_of_no_message_is_refused(depth):
 def test_the_nodes_share_the_profiles():
     """A publisher and its subscribers take one definition: they cannot drift apart."""
     from walker_control import joint_channel
-    from walker_planner import planner_node
+    from walker_planner import planner_node, setpoints
     from walker_sim import messages
     from walker_supervisor import inputs, supervisor_node
     assert joint_channel.STATE_QOS is SENSOR_QOS is messages.SENSOR_QOS
     assert joint_channel.COMMAND_QOS is COMMAND_QOS is messages.COMMAND_QOS \
-        is planner_node.COMMAND_QOS
+        is setpoints.COMMAND_QOS
     assert joint_channel.MODE_QOS is MODE_QOS is supervisor_node.MODE_QOS
     assert joint_channel.MODE_SUBSCRIPTION_QOS is MODE_SUBSCRIPTION_QOS \
         is planner_node.MODE_SUBSCRIPTION_QOS is inputs.MODE_SUBSCRIPTION_QOS

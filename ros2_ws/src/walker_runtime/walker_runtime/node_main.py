@@ -34,6 +34,7 @@ from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
+from walker_runtime.node_parameters import fix_use_sim_time
 from walker_runtime.spinning import StopSignals, init_node_process, spin_nodes
 
 __all__ = ['EXIT_OK', 'EXIT_FAILED', 'EXIT_REFUSED', 'REFUSALS', 'run_node', 'refusal_line']
@@ -103,6 +104,7 @@ def run_node(make_node: Callable[[], _NodeT], name: str, args: list[str] | None 
     try:
         try:
             node = make_node()
+            fix_use_sim_time(node)
             if start is not None:
                 start(node)
         except REFUSALS as error:

@@ -22,7 +22,7 @@ from walker_core.parameter_file import default_values
 from walker_core.parameter_schema import (
     ParameterError, ParameterSpec, leaf_specs, replace_in_section, section_from_flat)
 
-__all__ = ['declare_section', 'guard_section_updates']
+__all__ = ['declare_section', 'guard_section_updates', 'fix_use_sim_time']
 
 
 def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
@@ -125,3 +125,23 @@ def guard_section_updates(node: Node, section_type: type, prefix: str,
 
     node.add_on_set_parameters_callback(validate)
     node.add_post_set_parameters_callback(commit)
+
+
+def fix_use_sim_time(node: Node) -> None:
+    """Refuse a runtime change of ``use_sim_time``, with the reason, on ``node``.
+
+    A node's clock is chosen with the graph's at start (``run_all.py --sim-time``, the plant's
+    ``sim.clock_mode``): one node switched alone would stamp and time in another clock than
+    its peers' (its timers stopped at /clock's time, or running on the wall clock). Set at
+    start (``-p use_sim_time:=true``) it stands.
+    """
+    def refuse(parameters: list[Parameter]) -> SetParametersResult:
+        for parameter in parameters:
+            if parameter.name == 'use_sim_time' and parameter.value != \
+                    node.get_parameter('use_sim_time').value:
+                return SetParametersResult(successful=False, reason=(
+                    "use_sim_time is chosen with the graph's clock at start and cannot change "
+                    'while the node runs (start the graph with or without --sim-time)'))
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(refuse)

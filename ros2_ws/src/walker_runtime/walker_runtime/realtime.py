@@ -2,7 +2,7 @@
 
 On a machine shared with other work, a controller that is ready to answer a joint state waits
 for the scheduler: on the 2-core development machine that wait, not the control law, makes
-most of the control loop's p99 round trip (README, Performance). Like ``ros2_control``'s
+most of the control loop's p99 round trip (docs/performance.md). Like ``ros2_control``'s
 controller manager (its ``thread_priority``), a loop process may ask the kernel for the
 ``SCHED_FIFO`` policy, under which it runs as soon as it is ready, ahead of every ordinary
 process. Every thread of the process is moved, the middleware's receive threads included, and

@@ -110,9 +110,10 @@ def freeze_start_up_objects() -> None:
     """Take what the process made while starting out of the cyclic garbage collector's reach.
 
     A full collection walks every tracked object: the modules, rclpy, numpy, scipy and the
-    nodes, 50 000-130 000 objects, which live as long as the process. In a soak of 2026-11-27
-    the supervisor and the planner each ran one every 40 s of wall time or so, 16-61 ms and
-    38-330 ms long, freeing nothing, while the walk waited on their decisions and setpoints.
+    nodes, 50 000-130 000 objects, which live as long as the process. In a soak (see
+    docs/performance_log.md) the supervisor and the planner each ran one every 40 s of wall
+    time or so, 16-61 ms and 38-330 ms long, freeing nothing, while the walk waited on their
+    decisions and setpoints.
     Frozen (``gc.freeze()``, after a last collection), those objects are no longer walked;
     what the spinning makes afterwards is collected as before. In the same soak frozen, the
     supervisor's full collections took 1-6 ms and the planner's 9-40 ms (it keeps finished

@@ -32,23 +32,19 @@ from __future__ import annotations
 import math
 import sys
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseStamped
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
-from std_msgs.msg import String
 
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_runtime.realtime import log_realtime_request
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.urdf import description_urdf, flex_joints
 from walker_runtime.node_main import run_node
 from walker_core.text import unknown_choice
-from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import (
     CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
@@ -56,10 +52,10 @@ from walker_sim.core.config import SimParameters
 from walker_sim.core.grippers import GripperMode
 from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
-from walker_sim.messages import (
-    CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, accelerations_msg, clock_msg,
-    flexible_joint_state_msg,
-    gripper_state_msg, gripper_states_msg, joint_state_msg, pose_msg, stamp_ns, time_msg)
+from walker_sim.core.snapshot import SnapshotKeeper
+from walker_sim.messages import COMMAND_QOS, gripper_state_msg, stamp_ns
+from walker_sim.plant_publishers import PlantPublishers
+from walker_sim.state_handover import StateHandover
 
 __all__ = ['PlantNode', 'main']
 
@@ -74,24 +70,23 @@ _MAX_CATCH_UP = 10
 #: refused, by name)
 _GRIPPER_COMMANDS = {'SCREW_IN': GripperCommand.Request.SCREW_IN,
                      'UNSCREW': GripperCommand.Request.UNSCREW}
-_GRIPPER_ACTIONS = {GripperCommand.Request.SCREW_IN: 'screw_in',
-                    GripperCommand.Request.UNSCREW: 'unscrew'}
+_GRIPPER_ACTIONS = {code: name.lower() for name, code in _GRIPPER_COMMANDS.items()}
 
 
 class PlantNode(Node):
-    """ROS node around the walker plant.
-
-    Raises
-    ------
-    ParameterError
-        If the parameters are invalid; the node refuses to start.
-    """
+    """ROS node around the walker plant (invalid parameters: ParameterError, no start)."""
 
     def __init__(self, **kwargs) -> None:
         super().__init__('plant', **kwargs)
         self.params = declare_section(self, WalkerParameters)
         self.sim = declare_section(self, SimParameters, 'sim.')
         self.plant = WalkerPlant(self.params, self.sim)
+        # the physical state a killed plant had, restored as a driver re-reads its encoders
+        self._snapshots = SnapshotKeeper(self.declare_parameter(
+            'state_file', '', ParameterDescriptor(description=(
+                "file of the plant's state snapshot: restored from when it exists, kept up "
+                "to date ('' : none)"), read_only=True)).value)
+        restored = self._snapshots.restore_into(self.plant)
         self.period = 1.0 / self.params.timing.control_rate
         self.period_ns = seconds_to_ns(self.period)
         self.commands = EffortCommands(self.sim.command_timeout)
@@ -100,31 +95,15 @@ class PlantNode(Node):
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._system = Clock(clock_type=ClockType.SYSTEM_TIME)
         self.sim_time = self.sim.clock_mode == 'sim_time'
-
-        self._accelerations = self.create_publisher(JointAccelerations, 'joint_accelerations',
-                                                    SENSOR_QOS)
-        self._joint_states = self.create_publisher(JointState, 'joint_states', SENSOR_QOS)
         self._clock_rate = StampedRate(self.sim.clock_rate)
         self._pose_rate = StampedRate(self.sim.pose_rate)
-        self._flexible = self.create_publisher(JointState, 'flexible_joint_states',
-                                               SENSOR_QOS)
-        self._bend_names = [joint.name for joint in flex_joints(
-            self.params.robot.flexibility.segments_per_link)]
-        self._poses = {name: self.create_publisher(PoseStamped, name, SENSOR_QOS)
-                       for name in ('tip_pose', 'gripper_a_pose', 'gripper_b_pose')}
-        self._grippers = self.create_publisher(GripperStates, 'gripper_states', LATCHED_QOS)
-        self._description = self.create_publisher(String, 'robot_description', LATCHED_QOS)
-        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._clock_publisher = (self.create_publisher(ClockMsg, '/clock', CLOCK_QOS)
-                       if self.sim_time else None)
+        self._out = PlantPublishers(self, self.params, self.sim_time)
         self.create_subscription(JointState, 'effort_commands', self._on_effort, COMMAND_QOS)
         if self.sim_time:
             self.create_subscription(ClockMsg, 'supervisor/decided_until', self._on_decided,
                                      COMMAND_QOS)
         self.create_service(GripperCommand, 'gripper_command', self._on_gripper_command)
         guard_section_updates(self, SimParameters, 'sim.', lambda: self.sim, self._apply_sim)
-
-        self._description.publish(String(data=description_urdf(self.params)))
         self._counts = {'refused': 0, 'saturated': 0, 'expired': 0, 'overruns': 0}
         self._gripper_key: tuple | None = None
         self._last_tick = math.nan
@@ -132,14 +111,15 @@ class PlantNode(Node):
         self._longest_tick_interval = 0.0  # [s] the longest wall time between two ticks
         self._loop_closed = False  # every controller has answered (real time)
         self._started = not self.sim_time
-        # Controllers in this process that take the states by call (sim time), and the state
-        # not yet handed to them; see hand_states_to
-        self._controllers = None
-        self._handover: tuple | None = None
-        self._handing_over = False
+        self._handover: StateHandover | None = None  # controllers in this process (sim time)
         self._last_sent = self._steady_now()
         self._last_warning = -math.inf
         self._stamp = 0 if self.sim_time else self._system.now().nanoseconds
+        if restored is not None:
+            self.get_logger().info(f'plant state restored from {self._snapshots.path} at '
+                                   f't={restored.time:.3f} s, base gripper {restored.base}')
+            if self.sim_time:
+                self._stamp = round(restored.time / self.period) * self.period_ns
         self._publish(self.plant.state())
         self.create_timer(_REPORT_PERIOD, self._report, clock=self._steady)
         self.create_timer(1.0 / self.sim.gripper_state_rate, self._heartbeat,
@@ -169,12 +149,10 @@ class PlantNode(Node):
     def hand_states_to(self, controllers) -> None:
         """Sim time: hand each state to ``controllers`` in this process by a call.
 
-        ``controllers`` is a controller node of this process answering every joint
-        (``walker_control.joint_controllers_node``), connected with its
-        ``answer_plant_directly(self.take_efforts)``: the lock-step's exchange then costs two
-        calls instead of two messages through DDS and two processes woken, as Gazebo's
-        ros2_control plugin runs its controllers inside the simulator. ``joint_states`` and
-        ``joint_accelerations`` are still published for every other subscriber.
+        ``controllers`` is a controller node of this process answering every joint, connected
+        with its ``answer_plant_directly(self.take_efforts)`` (:mod:`walker_sim.state_handover`).
+        ``joint_states`` and ``joint_accelerations`` are still published for every other
+        subscriber.
 
         Raises
         ------
@@ -185,7 +163,7 @@ class PlantNode(Node):
         if not self.sim_time:
             raise ValueError('states are handed to controllers by call only in sim time '
                              '(sim.clock_mode: sim_time)')
-        self._controllers = controllers
+        self._handover = StateHandover(controllers, self._steady_now)
         controllers.answer_plant_directly(self.take_efforts)
 
     def take_efforts(self, message: JointState) -> None:
@@ -195,32 +173,18 @@ class PlantNode(Node):
     @property
     def handover_pending(self) -> bool:
         """A state waits to be handed to the controllers (see :meth:`hand_over_states`)."""
-        return self._handover is not None
+        return self._handover is not None and self._handover.pending
 
     def hand_over_states(self, budget: float = 0.002) -> None:
         """Hand the newest state to the controllers in this process, and the next, and so on.
 
-        Their answer steps the plant, which publishes the next state: the loop runs here, not
-        by recursion, until an answer does not come at once (a controller waiting for its
-        setpoint answers later, from its own callback, and the state after it is handed over
-        at the next call) or for ``budget`` seconds of wall time. The process's spin loop
-        calls it between two turns of its executor (``walker_bringup.composition``), so that
-        setpoints, modes, timers and services are served between two slices of the loop.
+        For at most ``budget`` seconds of wall time (:meth:`StateHandover.run`). The process's
+        spin loop calls it between two turns of its executor (``walker_bringup.composition``),
+        so that setpoints, modes, timers and services are served between two slices of the
+        loop.
         """
-        if self._handing_over:
-            return
-        self._handing_over = True
-        try:
-            end = self._steady_now() + budget
-            while self._handover is not None:
-                accelerations, state = self._handover
-                self._handover = None
-                self._controllers.take_accelerations(accelerations)
-                self._controllers.take_state(state)
-                if self._steady_now() > end:
-                    break
-        finally:
-            self._handing_over = False
+        if self._handover is not None:
+            self._handover.run(budget)
 
     def destroy_node(self) -> None:
         """Release the simulator with the node."""
@@ -338,32 +302,23 @@ class PlantNode(Node):
         stamp = self._stamp
         # /clock at its rate, and at every state the supervisor's release stops at: its
         # ROS-time timer must see the time it released up to
-        if self._clock_publisher is not None and self._clock_rate.due(
+        if self.sim_time and self._clock_rate.due(
                 stamp, force=not self.gate.allows(stamp + self.period_ns)):
-            self._clock_publisher.publish(clock_msg(stamp))
-        accelerations = accelerations_msg(state, stamp)
-        joint_states = joint_state_msg(state, stamp)
-        self._accelerations.publish(accelerations)
-        self._joint_states.publish(joint_states)
+            self._out.clock(stamp)
+        accelerations, joint_states = self._out.state(state, stamp)
         if self._pose_rate.due(stamp):
-            self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
-            self._flexible.publish(flexible_joint_state_msg(state, self._bend_names,
-                                                            self.plant.bending(), stamp))
-            for gripper in GRIPPERS:
-                self._poses[f'gripper_{gripper}_pose'].publish(
-                    pose_msg(state.poses[gripper], stamp))
+            self._out.poses(state, self.plant.bending(), stamp)
         self._publish_grippers(state)
         self._last_sent = self._steady_now()
         self.lockstep.begin(stamp, self._last_sent)
-        if self._controllers is not None:
-            # handed over by hand_over_states, never from inside the controllers' own
-            # callbacks (their answer is still being sent)
-            self._handover = (accelerations, joint_states)
+        if self._handover is not None:
+            self._handover.offer(accelerations, joint_states)
 
     def _publish_grippers(self, state: PlantState, force: bool = False) -> None:
         key = gripper_states_key(state)
+        self._snapshots.keep(self.plant, self._steady_now(), key)
         if force or key != self._gripper_key:
-            self._grippers.publish(gripper_states_msg(state, self._stamp))
+            self._out.grippers(state, self._stamp)
             self._gripper_key = key
 
     def _heartbeat(self) -> None:
@@ -376,24 +331,9 @@ class PlantNode(Node):
 
     def _report(self) -> None:
         """Publish /diagnostics: missed, expired, refused and clamped commands, late ticks."""
-        status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: plant',
-                                  hardware_id='walker_sim')
-        missed = sum(self.lockstep.missed.values())
-        status.level = DiagnosticStatus.OK if missed == 0 else DiagnosticStatus.WARN
-        status.message = (f'{self.sim.clock_mode}, t={self.plant.time:.3f} s, '
-                          f'{missed} missed command periods')
-        values = {f'missed {joint}': count for joint, count in self.lockstep.missed.items()}
-        values.update({f'{name} commands': count for name, count in self._counts.items()})
-        values['lock-step timeouts'] = self.lockstep.timeouts
-        if self.sim.wait_for_decisions:
-            values['supervisor gate timeouts'] = self.gate.timeouts
-        values['not waited for'] = ', '.join(sorted(self.lockstep.lost))
-        if not self.sim_time:  # how long the loop stood still at worst, since it closed
-            values['longest tick interval [ms]'] = f'{self._longest_tick_interval * 1e3:.1f}'
-        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-        message = DiagnosticArray(status=[status])
-        message.header.stamp = time_msg(self._stamp)
-        self._diagnostics.publish(message)
+        self._out.diagnostics(self.sim, self.plant.time, self.lockstep, self.gate, self._counts,
+                              None if self.sim_time else self._longest_tick_interval,
+                              self._stamp)
 
     def _warn(self, now: float, text: str) -> None:
         if now - self._last_warning >= _REPORT_PERIOD:

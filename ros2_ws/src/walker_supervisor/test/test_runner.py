@@ -18,7 +18,7 @@ from walker_supervisor.core.commands import (
 from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.goals import GoalRefusedError
 from walker_supervisor.core.phases import Phase, SequencerError
-from walker_supervisor.core.runner import ANSWER_GIVE_UP, ANSWER_WAIT, WalkRunner
+from walker_supervisor.core.runner import ANSWER_GIVE_UP, ANSWER_WAIT, WATCH_PERIOD, WalkRunner
 
 SCREW_TIME = PARAMS.gripper.screw_time
 
@@ -394,3 +394,36 @@ def test_a_controller_that_fell_back_to_hold_in_a_step_is_told_its_mode_again():
         {'vertex_joint': ControllerReport(stamp, False, True)}, stamp, world.now)
     assert commands[-1] == SetControlMode('coarse', 'a')
     assert 'fell back to HOLD' in commands[-2].message
+
+
+# ---------------------------------------------------------------------- its own stall
+def _stall(world, seconds: float) -> None:
+    """Stand the runner's process still ``seconds``; on waking its watchdog runs first."""
+    world.now = round(world.now + seconds, 9)
+    world.next_watch = world.now + WATCH_PERIOD
+    world.execute(world.runner.watch(world.now, world.now))
+
+
+def test_a_supervisor_that_itself_stalled_in_a_step_names_its_own_stall_not_its_inputs():
+    """Frozen 3.3 s, it blamed the plant: 'plant gripper states: silent for 3.29 s'."""
+    world = World()
+    world.execute(world.runner.start_goal('step', 'n1_2', world.now, world.now))
+    world.run_until(lambda: world.phases and world.phases[-1] == Phase.COARSE)
+    _stall(world, 3.3)
+    assert world.phases[-1] == Phase.SAFE_HOLD
+    reason = world.of(PhaseRecord)[-1].reason
+    assert reason.startswith('fault: the supervisor itself stalled 3.3 s'), reason
+    assert 'silent' not in reason, reason
+    # its sources are heard again: nothing is silent, and resume is possible
+    end = world.now + 0.5
+    world.run_until(lambda: world.now >= end, 1.0)
+    assert not world.runner.health.faults(world.now, include_trouble=False)
+    assert world.of(PhaseRecord)[-1].reason == reason
+
+
+def test_a_supervisor_that_stalled_between_steps_says_so_and_faults_nothing():
+    world = World()
+    _stall(world, 3.3)
+    assert Phase.SAFE_HOLD not in world.phases
+    assert any('the supervisor itself stalled 3.3 s' in n for n in world.notices)
+    assert not world.runner.health.faults(world.now, include_trouble=False)

@@ -4,15 +4,16 @@ The plant's joint states (500 Hz), the tip pose and each controller's state are 
 decision rate, not handled message by message: a Python callback per message would cost more
 CPU than every decision the supervisor makes. The gripper states and the latched mode arrive by
 callback. A source silent for long has its subscription made anew, and again as often while
-the silence lasts (:class:`walker_runtime.core.resubscription.Resubscription`): a controller process
-restarted after a crash, or a graph frozen and resumed, can leave a subscription that no longer
-receives while its publisher lives on.
+the silence lasts (:class:`walker_runtime.core.resubscription.Resubscription`): a controller
+process restarted after a crash, or a graph frozen and resumed, can leave a subscription that
+no longer receives while its publisher lives on.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -21,10 +22,11 @@ from walker_msgs.msg import ControllerState, ControlMode, GripperState, GripperS
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.mode_command import mode_command_refusal
-from walker_runtime.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
+from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
 from walker_runtime.core.resubscription import Resubscription
 from walker_runtime.spinning import TopicSampler
 from walker_supervisor.clocks import Clocks
+from walker_supervisor.core.process_deaths import ProcessDeaths
 from walker_supervisor.core.runner import PLANT_GRIPPER_STATES, PLANT_JOINT_STATES, WalkRunner
 from walker_supervisor.messages import (
     controller_report, gripper_readings, joint_arrays, seconds)
@@ -51,6 +53,9 @@ class SupervisorInputs:
     ----------
     gripper_messages : dict of str to GripperState
         The newest state message of each gripper (an operator's gripper command answers it).
+    deaths : ProcessDeaths
+        The node deaths the bring-up reported on ``/diagnostics`` (the reason of a hold it
+        then asks for).
     """
 
     def __init__(self, node: Node, runner: WalkRunner, clocks: Clocks,
@@ -68,6 +73,9 @@ class SupervisorInputs:
         self.gripper_messages: dict[str, GripperState] = {}
         node.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
                                  MODE_SUBSCRIPTION_QOS)
+        self.deaths = ProcessDeaths(node.get_namespace())
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
+                                 COMMAND_QOS)
         after = RESUBSCRIBE_AFTER_TIMEOUTS * runner.settings.watchdog_timeout
         self._resubscriptions = {name: Resubscription(after) for name in runner.health.names}
 
@@ -98,6 +106,11 @@ class SupervisorInputs:
         if not mode_command_refusal(msg.commander, msg.base_gripper,
                                     self._node.get_namespace()):
             self._runner.latched_mode(msg.base_gripper)
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        steady = self._clocks.steady()
+        for status in msg.status:
+            self.deaths.status(status.name, status.level[0], status.message, steady)
 
     def _subscribe_grippers(self):
         return self._node.create_subscription(GripperStates, 'gripper_states',

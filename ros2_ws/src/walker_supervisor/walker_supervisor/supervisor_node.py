@@ -248,7 +248,8 @@ class SupervisorNode(Node):
 
     # ------------------------------------------------------------------ hold / resume
     def _on_hold(self, request: Trigger.Request, response: Trigger.Response):
-        self._execute(self.runner.hold('hold requested by an operator', self.clocks.now()))
+        reason = self.inputs.deaths.hold_reason(self.clocks.steady())
+        self._execute(self.runner.hold(reason, self.clocks.now()))
         response.success = True
         response.message = 'holding: trajectories stopped, controllers hold, grippers unchanged'
         return response

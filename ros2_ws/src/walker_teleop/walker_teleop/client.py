@@ -30,12 +30,13 @@ from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 from walker_core.mode_command import mode_command_refusal
 from walker_runtime.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS
 from walker_runtime.spinning import destroy_actions, helper_node
+from walker_teleop.goal_monitor import GoalLostError, GoalMonitor
 from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
 
-__all__ = ['TeleopClient', 'GraphUnavailableError', 'CommandInterruptedError',
-           'GoalRejectedError']
+__all__ = ['TeleopClient', 'GraphUnavailableError', 'ServerLostError',
+           'CommandInterruptedError', 'GoalRejectedError']
 
 _POLL = 0.1  # [s] longest wait before Ctrl-C is seen
 _LATCHED_GRACE = 0.5  # [s] wait for a latched topic that may never have been published
@@ -43,6 +44,10 @@ _LATCHED_GRACE = 0.5  # [s] wait for a latched topic that may never have been pu
 
 class GraphUnavailableError(RuntimeError):
     """The walker graph (or the server a command needs) did not answer in time."""
+
+
+class ServerLostError(GraphUnavailableError):
+    """The supervisor running a goal died or was started again (the goal's outcome unknown)."""
 
 
 class CommandInterruptedError(RuntimeError):
@@ -185,11 +190,15 @@ class TeleopClient:
 
         The first Ctrl-C cancels the goal (the step under way finishes, the walker ends with
         both grippers attached) and keeps waiting for the result; a second one stops waiting.
+        Meanwhile the supervisor is watched (:class:`~walker_teleop.goal_monitor.GoalMonitor`):
+        dead or started again, it cannot answer, and the wait ends within seconds.
 
         Raises
         ------
         GraphUnavailableError
             No action server within the timeout.
+        ServerLostError
+            The supervisor died or was started again while the goal ran.
         GoalRejectedError
             The supervisor rejected the goal (its ``reason`` says why).
         CommandInterruptedError
@@ -214,13 +223,29 @@ class TeleopClient:
                 action, target, sent_at, lambda seconds: self.spin_until(lambda: False,
                                                                          seconds)))
         result = handle.get_result_async()
+        monitor = GoalMonitor(self.node, self.namespace,
+                              f'the {"walk" if action == "walk_to" else "step"} to {target}')
+        probed: list = []
+
+        def ended() -> bool:
+            if result.done():
+                return True
+            end = monitor.check(handle, result)
+            if end is not None:
+                probed.append(end)
+            return bool(probed)
 
         def cancel() -> None:
             handle.cancel_goal_async()
             on_cancel()
 
-        self._wait_interruptible(result.done, cancel)
-        wrapped = result.result()
+        try:
+            self._wait_interruptible(ended, cancel)
+        except GoalLostError as error:
+            raise ServerLostError(str(error)) from None
+        finally:
+            monitor.close()
+        wrapped = result.result() if result.done() else probed[0]
         return wrapped.status, wrapped.result
 
     # ------------------------------------------------------------------ status

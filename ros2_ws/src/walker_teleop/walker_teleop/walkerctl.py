@@ -45,7 +45,8 @@ examples:
 Start a graph to drive with: python3 scripts/run_all.py --serve [--sim-time]
 
 exit codes: 0 done, 1 refused or failed (the reason is printed), 2 bad arguments,
-  3 the graph did not answer, 130 interrupted
+  3 the graph did not answer (or the supervisor died or was started again during a goal),
+  130 interrupted
 environment: ROS_DOMAIN_ID selects the walker's domain (--domain-id overrides it);
   ROS_AUTOMATIC_DISCOVERY_RANGE is set to LOCALHOST unless already set, so discovery stays on
   this machine."""
@@ -267,10 +268,10 @@ def _goal(client, args) -> int:
     try:
         status, result = client.run_goal(action, args.node, on_feedback, on_cancel)
     except GoalRejectedError as rejection:
-        progress.end()
         print(f'{args.command} {args.node} refused: {rejection.reason}')
         return EXIT_REFUSED
-    progress.end()
+    finally:
+        progress.end()  # no progress line is left standing, whatever ends the wait
     if result.success:
         if action == 'walk_to':
             print(f'reached {args.node} in {result.steps_taken} steps, {result.duration:.1f} s '

@@ -34,37 +34,48 @@ class RecorderParameters:
     """Settings of the walk recorder (``recorder.*``)."""
 
     directory: str = parameter(
-        'directory the bags are written under (relative paths from the working directory)')
+        'directory the bags are written under (relative to the working directory)',
+        source='chosen: beside the other outputs of run_all.py (runs/ is not versioned)')
     bag_name: str = parameter(
-        "name of the bag directory; '' names it walker_<YYYY_MM_DD-HH_MM_SS>")
+        "name of the bag directory; '' names it walker_<YYYY_MM_DD-HH_MM_SS>",
+        source='chosen: as ros2 bag record names rosbag2_<date-time>')
     topics: tuple[str, ...] = parameter(
-        'topics to record: names or glob patterns (* matches any characters); relative ones '
-        'are resolved in the recorder namespace')
+        'topics to record: names or glob patterns, relative ones in the recorder namespace',
+        source="chosen: the robot's namespace and the simulation clock")
     discovery_period: float = parameter(
-        'period of the search for new topics to subscribe to', 's', 0.01, 10.0)
+        'period of the search for new topics to subscribe to', 's', 0.01, 10.0,
+        source='chosen: a topic that appears later is recorded from a quarter of a second on')
     flush_period: float = parameter(
-        'period at which received messages are written out to the file: the most a crash '
-        'can lose', 's', 0.01, 60.0)
+        'period at which received messages are written to the file: the most a crash loses',
+        's', 0.01, 60.0,
+        source='chosen: one small write per period')
     max_chunk_size: int = parameter(
-        'size at which a chunk of messages is written out before its period ends', 'B',
-        1024, 64 * 1024 * 1024)
+        'size at which a chunk of messages is written out before its period ends',
+        'B', 1024, 64 * 1024 * 1024,
+        source="chosen: 768 KiB, the chunk size of Jazzy's MCAP writer")
     queue_depth: int = parameter(
-        'messages each subscription holds while the recorder is busy', '', 1, 100000)
+        'messages each subscription holds while the recorder is busy', '', 1, 100000,
+        source='chosen: 10 s of 500 Hz joint states while the recorder is busy or starved')
     max_bag_size: int = parameter(
-        'size at which the bag goes on in its next file (ros2 bag record --max-bag-size); 0: '
-        'no split by size', 'B', 0, 2**62)
+        'size at which the bag goes on in its next file (--max-bag-size); 0: no split by size',
+        'B', 0, 2**62,
+        source='chosen: 0, one file per bag, as ros2 bag record by default')
     max_bag_duration: float = parameter(
-        'log-time span at which the bag goes on in its next file (ros2 bag record '
-        '--max-bag-duration); 0: no split by duration', 's', 0.0, 1e9)
+        'log-time span at which the bag goes on in its next file (--max-bag-duration); 0: none',
+        's', 0.0, 1e9,
+        source='chosen: 0, no split by duration, as ros2 bag record by default')
     max_bag_files: int = parameter(
-        'files the bag keeps, the oldest deleted beyond; 0: every file', '', 0, 10**6)
+        'files the bag keeps, the oldest deleted beyond; 0: every file', '', 0, 10**6,
+        source='chosen: 0, every file kept')
     append: bool = parameter(
-        'continue an existing bag of the same name in its next file (its last file completed '
-        'first if a killed recorder left it cut); false: a bag that exists is refused')
+        'continue an existing bag of the same name in its next file; false: one that exists is '
+        'refused',
+        source='chosen: a new bag per start; true for a recorder started again after a crash')
     take_period: float = parameter(
-        'period at which received messages are taken from the middleware, all topics at '
-        'once, and handed to the bag (steady clock); in sim time their log time is the '
-        'simulation clock when taken', 's', 0.001, 1.0)
+        'period at which received messages are taken, all topics at once (steady clock)',
+        's', 0.001, 1.0,
+        source='chosen: 50 times a second, not an executor turn per message (which starved the '
+               'recorder)')
 
     def __post_init__(self) -> None:
         if not self.directory:

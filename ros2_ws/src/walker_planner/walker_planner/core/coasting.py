@@ -21,7 +21,7 @@ so the acceleration is lowered until the phase lasts the next whole number of pe
 command filters attenuate that mode already; this makes the plan itself leave none.
 
 On as shipped (``planner.bang_bang.coast``): it walks 7 % faster in sim time and 22 % in real
-time than the paper's triangle on the plant rooted at its base gripper (README, the planner).
+time than the paper's triangle on the plant rooted at its base gripper (docs/planner.md).
 On the earlier free-floating plant it did not: joint 1 ran on past the cruise rate when the
 feed-forward dropped from the acceleration torque to the friction, and stopped short in its
 friction in the deceleration.

@@ -9,7 +9,7 @@ Of the family of profiles with ``rho(phi2)`` between ``rho_min`` and ``rho(0)``,
 the one with the shortest duration ``2 phi2 / omega``: pulling the tip in lowers the inertia
 about the yaw axis but costs radial motion and raises the peak yaw rate.
 
-Mapping to the robot (our choices, documented in the README)
+Mapping to the robot (our choices, documented in docs/planner.md)
 -------------------------------------------------------------
 * ``Theta`` is the base yaw J1; ``r`` is the horizontal distance of the tip from the base yaw
   axis, ``l = l2``.

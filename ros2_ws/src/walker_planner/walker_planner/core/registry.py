@@ -1,6 +1,6 @@
 """The nine trajectory types of the planner (paper section 5), by name.
 
-One list, shared by the planner node (which accepts exactly these names) and the README's table
+One list, shared by the planner node (which accepts exactly these names) and docs/planner.md
 (a test checks they agree). Each entry says what it takes and which phase of a step it serves,
 and builds its trajectory from a validated request; Cartesian ones are mapped to joint space by
 :mod:`walker_planner.core.planning`.
@@ -68,7 +68,7 @@ class TrajectoryType:
     phase : str
         The phase of a step it serves.
     parameters : str
-        The request fields it uses, for the README and error messages.
+        The request fields it uses, for the docs and error messages.
     options : frozenset of str
         Optional request fields it accepts (others must be 0 / empty).
     build : callable
@@ -336,7 +336,7 @@ _TYPES = (
         _bang_bang_node),
 )
 
-#: The nine types by name, in the README's order.
+#: The nine types by name, in the order of docs/planner.md.
 TRAJECTORY_TYPES: dict[str, TrajectoryType] = {t.name: t for t in _TYPES}
 
 

@@ -29,14 +29,18 @@ CLOCK_MODES = ('sim_time', 'real_time')
 class StartConfiguration:
     """Where the robot is when the plant starts or is reset."""
 
-    base_gripper: str = parameter('gripper screwed in at start, acting as the base',
-                                  choices=('a', 'b'))
-    base_node: str = parameter('truss node the base gripper is screwed into at start')
-    other_node: str = parameter('truss node under the other gripper at start')
-    other_attached: bool = parameter('whether the other gripper starts screwed into other_node')
+    base_gripper: str = parameter(
+        'gripper screwed in at start, acting as the base', choices=('a', 'b'),
+        source='chosen')
+    base_node: str = parameter('truss node the base gripper is screwed into at start',
+                               source='chosen: one node in from the truss corner')
+    other_node: str = parameter('truss node under the other gripper at start',
+                                source='chosen: the neighbour one spacing along +x')
+    other_attached: bool = parameter('whether the other gripper starts screwed into other_node',
+                                     source='chosen: both grippers screwed in')
     other_height: float = parameter(
-        "height of the other gripper's contact point above other_node when it starts free",
-        'm', 0.0, 0.5)
+        'height of the other gripper above other_node when it starts free', 'm', 0.0, 0.5,
+        source='chosen')
 
     def __post_init__(self) -> None:
         if self.base_node == self.other_node:
@@ -53,42 +57,51 @@ class SimParameters:
     """Settings of the pybullet plant (``sim.*``)."""
 
     clock_mode: str = parameter(
-        'sim_time: publish /clock, lock-step with the controllers; real_time: wall clock',
-        choices=CLOCK_MODES)
-    physics_rate: float = parameter('rate of the physics steps (a multiple of the control rate)',
-                                    'Hz', 100.0, 100000.0)
+        'sim_time: /clock, lock-stepped with the controllers; real_time: the wall clock',
+        choices=CLOCK_MODES,
+        source='chosen: the walk and the tests run in sim time')
+    physics_rate: float = parameter(
+        'rate of the physics steps (a multiple of the control rate)', 'Hz', 100.0, 100000.0,
+        source='chosen: at least the stiffest mode in rad/s (704 by default)')
     lockstep_timeout: float = parameter(
-        'sim time: wall-clock wait for the five efforts of a step before the last ones are '
-        'applied', 's', 0.001, 60.0, read_only=False)
+        'sim time: wall-clock wait for the five efforts of a step',
+        's', 0.001, 60.0, read_only=False,
+        source='chosen: long enough for a loaded machine, short for a dead controller')
     wait_for_decisions: bool = parameter(
-        'sim time: never step past the time up to which the supervisor has decided (its '
-        'supervisor/decided_until topic, once it publishes it), so that its decisions fall '
-        'at the same simulated times however long they take; a wait of decision_timeout '
-        'drops it until the next release', read_only=False)
+        'sim time: never step past the time up to which the supervisor has decided',
+        read_only=False,
+        source='chosen: off; run_all.py --composed-loop turns it on')
     decision_timeout: float = parameter(
-        'sim time, wait_for_decisions: wall-clock wait for the supervisor to release the '
-        'clock before stepping on without it (until its next release)', 's', 0.001, 60.0,
-        read_only=False)
+        "sim time: wall-clock wait for the supervisor's release before stepping on",
+        's', 0.001, 60.0, read_only=False,
+        source='chosen: below control.state_timeout')
     startup_resend_period: float = parameter(
-        'sim time: wall-clock period at which the first state is re-sent until every '
-        'controller answered', 's', 0.01, 10.0, read_only=False)
+        'sim time: wall-clock period of re-sending the first state until all controllers '
+        'answered', 's', 0.01, 10.0, read_only=False,
+        source='chosen')
     command_timeout: float = parameter(
         'a joint whose last effort command is older than this (plant clock) gets zero torque',
-        's', 0.001, 10.0, read_only=False)
-    gripper_state_rate: float = parameter('heartbeat rate of gripper_states', 'Hz', 0.1, 1000.0,
-                                          read_only=False)
+        's', 0.001, 10.0, read_only=False,
+        source='chosen: as a drive watchdog; friction then holds the joint')
+    gripper_state_rate: float = parameter(
+        'heartbeat rate of gripper_states (also sent on every change)',
+        'Hz', 0.1, 1000.0, read_only=False,
+        source='chosen: a liveness signal')
     clock_rate: float = parameter(
-        'rate of /clock in sim-time mode (every period at or above the control rate)', 'Hz',
-        1.0, 5000.0)
+        'rate of /clock in sim-time mode (every period at or above the control rate)',
+        'Hz', 1.0, 5000.0,
+        source="chosen: enough for the supervisor's 50 Hz decisions; each message costs CPU")
     pose_rate: float = parameter(
         'rate of tip_pose, gripper_a_pose and gripper_b_pose (every period at or above the '
-        'control rate)', 'Hz', 1.0, 5000.0, read_only=False)
+        'control rate)', 'Hz', 1.0, 5000.0, read_only=False,
+        source='chosen: resolves the 80 rad/s (12.7 Hz) modes; each message costs CPU')
     stiction_velocity: float = parameter(
-        'joint speed below which a joint is stuck and must break away at the stiction level',
-        'rad/s', 1e-6, 1.0)
+        'joint speed below which a joint is stuck and must break away', 'rad/s', 1e-6, 1.0,
+        source='chosen')
     jam_screw_ins: int = parameter(
-        'fault injection: this many coming screw-ins jam whatever the alignment (a fouled '
-        'thread); the plant counts it down as they jam', '', 0, 100, read_only=False)
+        'fault injection: this many coming screw-ins jam whatever the alignment',
+        '', 0, 100, read_only=False,
+        source='chosen: no injected fault')
     start: StartConfiguration
     imperfections: Imperfections
 

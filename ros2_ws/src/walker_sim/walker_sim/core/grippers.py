@@ -201,6 +201,36 @@ class GripperLogic:
             self._elapsed[gripper] = 0.0
         self._base = base
 
+    def timers(self) -> dict[str, tuple[GripperStatus, float]]:
+        """Each gripper's status and the seconds [s] its screw-in or unscrew has run."""
+        return {g: (self._status[g], self._elapsed[g]) for g in GRIPPERS}
+
+    def restore(self, timers: dict[str, tuple[GripperMode, str, float]], base: str) -> None:
+        """Put every gripper back in a recorded state: gripper -> ``(mode, node, elapsed)``.
+
+        The inverse of :meth:`timers` (a plant started again, :mod:`walker_sim.core.snapshot`).
+
+        Raises
+        ------
+        GripperCommandError
+            If a gripper is missing, or the base gripper is not held by the truss (nothing
+            changes).
+        """
+        validate_gripper(base)
+        if set(timers) != set(GRIPPERS):
+            raise GripperCommandError(f'a gripper state for each of {GRIPPERS} is needed, got '
+                                      f'{sorted(timers)}')
+        if timers[base][0] not in (GripperMode.ATTACHED, GripperMode.SCREWING,
+                                   GripperMode.UNSCREWING):
+            raise GripperCommandError(f'the base gripper {base!r} must be held by the truss')
+        for gripper, (mode, node, elapsed) in timers.items():
+            busy = mode in (GripperMode.SCREWING, GripperMode.UNSCREWING)
+            progress = min(1.0, elapsed / self.screw_time) if busy else 0.0
+            self._status[gripper] = GripperStatus(gripper, GripperMode(mode), node,
+                                                  progress=progress)
+            self._elapsed[gripper] = float(elapsed)
+        self._base = base
+
     def status(self, gripper: str) -> GripperStatus:
         """State of one gripper."""
         return self._status[validate_gripper(gripper)]

@@ -43,6 +43,7 @@ from walker_sim.core.grippers import (
 from walker_sim.core.imperfections import JointSensors, NodePlacement
 from walker_sim.core.motor import DriveCommand, DriveModel
 from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
+from walker_sim.core.snapshot import PlantSnapshot
 
 __all__ = ['PlantError', 'Pose', 'GripperReport', 'PlantState', 'WalkerPlant',
            'SOLVER_ITERATIONS', 'SOLVER_RESIDUAL']
@@ -334,6 +335,96 @@ class WalkerPlant:
         self.sensors.restart()
         self.sensors.sample()
         return self.state()
+
+    # ------------------------------------------------------------------ snapshot
+    def snapshot(self) -> PlantSnapshot:
+        """Return the plant's physical state, for a plant started again to restore.
+
+        See :mod:`walker_sim.core.snapshot`.
+        """
+        rooted = self._active
+        position, orientation = pybullet.getBasePositionAndOrientation(
+            rooted.body, physicsClientId=rooted.client)
+        states = pybullet.getJointStates(rooted.body, list(rooted.index.movable),
+                                         physicsClientId=rooted.client)
+        holds = {}
+        for gripper, constraint in self._attachments.items():
+            info = pybullet.getConstraintInfo(constraint, physicsClientId=rooted.client)
+            holds[gripper] = (tuple(info[7]), tuple(info[9]))  # the child (world) frame
+        return PlantSnapshot(
+            time_steps=self._time_steps, root=rooted.root, base=self._grippers.base,
+            root_position=tuple(position), root_orientation=tuple(orientation),
+            positions=tuple(s[0] for s in states), velocities=tuple(s[1] for s in states),
+            grippers={g: {'mode': status.mode.name, 'node': status.node, 'elapsed': elapsed}
+                      for g, (status, elapsed) in self._grippers.timers().items()},
+            holds=holds,
+            pulls={g: ((tuple(start.position), tuple(start.orientation)),
+                       (tuple(seat.position), tuple(seat.orientation)))
+                   for g, (start, seat) in self._pull.items()},
+            fouled_screw_ins=self._grippers.fouled_screw_ins)
+
+    def restore(self, snapshot: PlantSnapshot) -> PlantState:
+        """Put the plant in the state of ``snapshot`` (simulated time included).
+
+        Raises
+        ------
+        PlantError
+            If the snapshot does not fit this plant (another model, an unknown gripper or
+            mode, a gripper held at no node of this truss); nothing changes.
+        """
+        self._check_snapshot(snapshot)
+        for gripper in list(self._attachments):
+            self._detach(gripper)
+        self._pull.clear()
+        self._active = rooted = self._bodies[snapshot.root]
+        pybullet.resetBasePositionAndOrientation(rooted.body, list(snapshot.root_position),
+                                                 list(snapshot.root_orientation),
+                                                 physicsClientId=rooted.client)
+        for joint, angle, rate in zip(rooted.index.movable, snapshot.positions,
+                                      snapshot.velocities, strict=True):
+            pybullet.resetJointState(rooted.body, joint, angle, rate,
+                                     physicsClientId=rooted.client)
+        self._grippers.restore({g: (GripperMode[s['mode']], s['node'], s['elapsed'])
+                                for g, s in snapshot.grippers.items()}, snapshot.base)
+        self._grippers.fouled_screw_ins = snapshot.fouled_screw_ins
+        for gripper, (position, orientation) in snapshot.holds.items():
+            self._attach(gripper, Pose(np.array(position), np.array(orientation)))
+        for gripper, (start, seat) in snapshot.pulls.items():
+            self._pull[gripper] = (Pose(np.array(start[0]), np.array(start[1])),
+                                   Pose(np.array(seat[0]), np.array(seat[1])))
+        self._time_steps = snapshot.time_steps
+        self._command = DriveCommand(np.zeros(5), np.zeros(5, bool), np.zeros(5, bool))
+        self._acceleration = np.zeros(5)
+        self._motor_levels = None
+        self._read_joints()
+        return self.state()
+
+    def _check_snapshot(self, snapshot: PlantSnapshot) -> None:
+        if snapshot.root not in GRIPPERS or snapshot.base not in GRIPPERS:
+            raise PlantError(f'snapshot: unknown root or base gripper '
+                             f'({snapshot.root!r}, {snapshot.base!r})')
+        movable = len(self._bodies[snapshot.root].index.movable)
+        if len(snapshot.positions) != movable:
+            raise PlantError(f'snapshot: {len(snapshot.positions)} joint angles for a model '
+                             f'of {movable} movable joints (another robot.flexibility?)')
+        if set(snapshot.grippers) != set(GRIPPERS):
+            raise PlantError(f'snapshot: gripper states for {sorted(snapshot.grippers)}')
+        for gripper, status in snapshot.grippers.items():
+            if status['mode'] not in GripperMode.__members__:
+                raise PlantError(f'snapshot: gripper {gripper} in an unknown mode '
+                                 f'{status["mode"]!r}')
+            if status['node']:
+                try:
+                    self.truss.index(status['node'])
+                except ValueError as error:
+                    raise PlantError(f'snapshot: gripper {gripper}: {error}') from None
+        held = {g for g, s in snapshot.grippers.items() if s['mode'] in (
+            'SCREWING', 'ATTACHED', 'UNSCREWING')}
+        if snapshot.root not in held or set(snapshot.holds) != held - {snapshot.root}:
+            raise PlantError(f'snapshot: the grippers held ({sorted(held)}) do not match the '
+                             f'root {snapshot.root!r} and the holds {sorted(snapshot.holds)}')
+        if snapshot.time_steps < 0:
+            raise PlantError(f'snapshot: negative time ({snapshot.time_steps} steps)')
 
     # ------------------------------------------------------------------ stepping
     @property

@@ -34,67 +34,56 @@ class SupervisorParameters:
     """Switching regions and fault limits of the step (section ``supervisor.``)."""
 
     coarse_to_fine_region: float = parameter(
-        'tip distance from the point above the target at which coarse motion hands over to '
-        'fine motion', 'm', 0.001, 0.5, read_only=False)
+        'tip distance from the point above the target at which COARSE hands over to FINE',
+        'm', 0.001, 0.5, read_only=False,
+        source='paper section 1: the phase switches on an error region; chosen: 3 cm')
     insertion_alignment: float = parameter(
-        'largest tip distance from the point above the hole at which insertion may start, '
-        "and from the hole's axis at its mouth at which the screw-in may start",
-        'm', 1e-5, 0.05, read_only=False)
+        'largest tip error above the hole to descend from rest, and from the axis to screw in',
+        'm', 1e-5, 0.05, read_only=False,
+        source="chosen: a quarter of the 2 mm insertion tolerance, the benchmark's 0.5 mm")
     settle_velocity: float = parameter(
-        'joints slower than this count as still: the descent starts with every joint below '
-        'it, the screw-in after mouth_settle_time below it',
-        'rad/s', 1e-4, 1.0, read_only=False)
+        'joints slower than this count as still', 'rad/s', 1e-4, 1.0, read_only=False,
+        source='chosen')
     settle_time: float = settle_time_parameter()  # declared in the model: the report uses it
     phase_timeout: float = parameter(
-        'time a phase may overrun its planned duration before the step is aborted', 's',
-        0.1, 600.0, read_only=False)
+        'time a phase may overrun its plan before the step is aborted',
+        's', 0.1, 600.0, read_only=False,
+        source="chosen: joint 1's fine loop needs seconds to settle after an overshoot")
     max_insertion_attempts: int = parameter(
-        'screw-in attempts before a jammed insertion aborts the step', '', 1, 10,
-        read_only=False)
+        'screw-in attempts before a jammed insertion aborts the step', '', 1, 10, read_only=False,
+        source='chosen: a bounded retry')
     watchdog_timeout: float = parameter(
-        'the plant, its gripper heartbeat and each joint controller must be heard from this '
-        'often (steady clock), or the walker goes to safe hold', 's', 0.05, 60.0,
-        read_only=False)
+        'silence of the plant or a controller (steady clock) that puts the walker in safe hold',
+        's', 0.05, 60.0, read_only=False,
+        source='chosen: a loaded 2-core machine starves a process for over a second at times')
     coarse_start_tolerance: float = parameter(
-        'largest joint distance from the start of the coarse motion at which it may begin: '
-        'the lifted arm waits in EXTRACTION until it is there; and from the first point of a '
-        'way back that is a line (gripper vertical), beyond which the gripper is first turned '
-        'vertical where it is (keep it below planner.stream.start_tolerance, which refuses a '
-        'stream that starts farther)', 'rad',
-        1e-4, 0.5, read_only=False)
+        'largest joint distance from the start of the coarse motion, or of a way back, to begin '
+        'it', 'rad', 1e-4, 0.5, read_only=False,
+        source='chosen: below planner.stream.start_tolerance')
     relaxation_wait: float = parameter(
-        "time after a screw-in that the controllers' relaxation dither "
-        '(control.relaxation.duration) needs to free the joints from the bend the seat locked '
-        'in: the next step measures its stance only after it (during its unscrewing, with the '
-        'chain still closed), and a walk ends only after it (0: no wait)', 's', 0.0, 5.0,
-        read_only=False)
+        "time after a screw-in until the controllers' relaxation is over (0: no wait)",
+        's', 0.0, 5.0, read_only=False,
+        source='chosen: control.relaxation.duration and a margin')
     mouth_settle_time: float = parameter(
-        "time the joints must stay still at the hole's mouth, after the descent, before the "
-        'tip is checked against the axis and the gripper screwed in (after a correction line '
-        'at the mouth: settle_time)', 's', 0.0, 10.0,
-        read_only=False)
+        "time the joints must be still at the hole's mouth before the screw-in",
+        's', 0.0, 10.0, read_only=False,
+        source='chosen: the descent hardly moves joint 1')
     descent_region: float = parameter(
-        'largest tip distance from the point above the hole at which the descent may start '
-        'while the tip is still closing on it, once the motion there has ended (at or below '
-        'insertion_alignment it may also start with the tip at rest); at most '
-        "the gripper's insertion_position_tolerance", 'm', 1e-5, 0.05, read_only=False)
+        'tip distance from the point above the hole within which a closing tip may descend',
+        'm', 1e-5, 0.05, read_only=False,
+        source='chosen: the insertion tolerance; the tip reaches the axis during the descent')
     descent_axis_tolerance: float = parameter(
-        "largest distance of the tip (forward kinematics) from the hole's axis during the "
-        'descent; farther, the descent is stopped and the gripper lifted straight back to the '
-        "approach height, to come over the hole again (an insertion attempt, as a jam is); "
-        'more than descent_region', 'm', 1e-4, 0.05, read_only=False)
+        "tip distance from the hole's axis beyond which a descent is stopped and lifted back",
+        'm', 1e-4, 0.05, read_only=False,
+        source='chosen: ordinary descents are at most 2.2-3.0 mm off')
     descent_arrival_time: float = parameter(
-        'a tip within descent_region descends while it closes on the point above the hole '
-        'only if, at the speed its joints give it now, it would not get there within this '
-        'time: faster, it is swinging through the point (a stall of a real-time loop), not '
-        "coming in behind joint 1's filter", 's', 0.001, 1.0, read_only=False)
+        'a closing tip that would reach the point above the hole sooner is swinging through it',
+        's', 0.001, 1.0, read_only=False,
+        source='chosen: one decision period')
     sweep_lead: float = parameter(
-        "how long before the lift ends the coarse motion's setpoints begin, streamed with the "
-        "lift's as one motion (they add): joint 1's reference filter holds the sweep back, "
-        'so it starts while the gripper rises; a freed gripper waits up to this long for the '
-        "sweep's plan, then lifts alone (0: the coarse motion starts once the lift has "
-        "ended and the arm is there); at most the lift's duration", 's', 0.0, 1.0,
-        read_only=False)
+        "how long before the lift ends the coarse motion's setpoints begin (0: after it)",
+        's', 0.0, 1.0, read_only=False,
+        source="chosen: joint 1's filter holds the sweep back while the gripper rises")
 
     def __post_init__(self) -> None:
         check_section(self)

@@ -159,6 +159,7 @@ class WalkRunner:
         self.teleop_operation = ''
         self._last_feedback = -math.inf
         self._steady = -math.inf  # [s] the newest steady time heard
+        self._last_watch = math.inf  # [s] steady time of the last watch (none yet: inf)
         self._out: list = []
 
     # ------------------------------------------------------------------ queries
@@ -451,8 +452,13 @@ class WalkRunner:
         ``clock_held``: the graph's simulated clock stands still for this runner's own request
         (the plant steps no further): the silence of the sources driven by it is no fault.
         """
+        stalled = self._own_stall(steady)
         self._steady = steady
         self._apply(self._motions.check(steady), now)
+        if stalled:
+            # What the sources sent while this process stood still has not been taken yet:
+            # their silence is its own. Each has a whole timeout to be heard again.
+            self.health.excuse(self.health.names, steady)
         if clock_held:
             self.health.excuse([name for name in self.health.names
                                 if name != PLANT_GRIPPER_STATES], steady)
@@ -463,7 +469,14 @@ class WalkRunner:
             self._emit(StopJog('fault: ' + '; '.join(faults)))
         # Between steps no step moves: a fault is reported on the diagnostics and refuses new
         # goals while it lasts, and needs no resume.
-        if faults and busy:
+        if stalled and not busy:
+            self._emit(Notice(stalled, 'warning'))
+        elif stalled:
+            self._emit(StopJog(stalled))
+            self._emit(Notice(stalled, 'error'))
+            self._execute(self.sequencer.hold(stalled, now), now)
+            self._announce(now)
+        elif faults and busy:
             reason = 'fault: ' + '; '.join(faults)
             self._emit(Notice(reason, 'error'))
             self._execute(self.sequencer.hold(reason, now), now)
@@ -478,6 +491,22 @@ class WalkRunner:
                 self._execute(self.sequencer.hold(reason, now), now)
                 self._announce(now)
         return self._flush()
+
+    def _own_stall(self, steady: float) -> str:
+        """Say how long this runner itself stood still, if longer than the watchdog timeout.
+
+        The watch comes every ``WATCH_PERIOD`` on the steady clock; a gap of more than the
+        watchdog timeout between two is a stall of the process (frozen, starved, swapped out),
+        not of its sources. Returns the hold reason naming it, or ``''``.
+        """
+        previous, self._last_watch = self._last_watch, steady
+        gap = steady - previous
+        if not gap > self.settings.watchdog_timeout:
+            return ''
+        return (f'fault: the supervisor itself stalled {gap:.1f} s (its watchdog, due every '
+                f'{WATCH_PERIOD:g} s, ran late by more than its timeout '
+                f'{self.settings.watchdog_timeout:g} s): its decisions were late; its inputs '
+                f'are not to blame')
 
     def diagnostics(self, steady: float, extra: list[SourceStatus]
                     ) -> tuple[Level, str, list[SourceStatus]]:

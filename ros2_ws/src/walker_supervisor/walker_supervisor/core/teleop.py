@@ -75,31 +75,40 @@ class TeleopParameters:
     """Limits of the operator's jogs (section ``teleop.``)."""
 
     max_joint_jog: float = parameter(
-        'largest angle one jog_joint command may move a joint', 'rad', 1e-3, 1.0,
-        read_only=False)
+        'largest angle one jog_joint command may move a joint', 'rad', 1e-3, 1.0, read_only=False,
+        source='chosen: a jog adjusts, a step moves; 0.2 rad of J2 swings the gripper at most '
+               '0.27 m')
     joint_speed: float = parameter(
-        'peak joint speed of a jog_joint command that does not give one', 'rad/s', 1e-3, 1.5,
-        read_only=False)
+        'peak joint speed of a jog_joint command that gives none',
+        'rad/s', 1e-3, 1.5, read_only=False,
+        source='chosen: a 0.2 rad jog takes 3.75 s, slow enough to watch and stop')
     max_joint_speed: float = parameter(
-        'largest peak joint speed a jog_joint command may ask for', 'rad/s', 1e-3, 1.5,
-        read_only=False)
+        'largest peak joint speed a jog_joint command may ask for',
+        'rad/s', 1e-3, 1.5, read_only=False,
+        source="chosen: a third of the drives' velocity limit")
     max_tip_jog: float = parameter(
-        'largest distance one jog_tip command may move the free gripper', 'm', 1e-4, 0.5,
-        read_only=False)
+        'largest distance one jog_tip command may move the free gripper',
+        'm', 1e-4, 0.5, read_only=False,
+        source='chosen: a few centimetres of fine positioning; moving to another node is a step')
     tip_speed: float = parameter(
-        'speed of a jog_tip command that does not give one', 'm/s', 1e-4, 0.1, read_only=False)
+        'speed of a jog_tip command that gives none', 'm/s', 1e-4, 0.1, read_only=False,
+        source="chosen: planner.cartesian.fine_speed, a step's fine motion")
     max_tip_speed: float = parameter(
-        'largest speed a jog_tip command may ask for', 'm/s', 1e-4, 0.1, read_only=False)
+        'largest speed a jog_tip command may ask for', 'm/s', 1e-4, 0.1, read_only=False,
+        source='chosen: half planner.cartesian.max_velocity')
     clearance: float = parameter(
-        'height above the truss surface the free gripper must have wherever a jog moves it '
-        'sideways', 'm', 0.0, 0.2, read_only=False)
+        'height above the truss the free gripper needs to move sideways',
+        'm', 0.0, 0.2, read_only=False,
+        source='chosen: a third of gripper.approach_height; a gripper leaves a hole along its '
+               'axis')
     joint_tolerance: float = parameter(
-        'a joint jog that settles with a joint farther than this from its target gets a '
-        'correction move (a tip jog: farther than supervisor.insertion_alignment)', 'rad',
-        1e-4, 0.1, read_only=False)
+        'a joint jog that settles farther than this from its target gets a correction move',
+        'rad', 1e-4, 0.1, read_only=False,
+        source="chosen: the controllers' loosest in-position tolerance (J4, J5)")
     max_tilt: float = parameter(
-        'largest tilt of the free gripper from vertical at which jog_tip accepts a command '
-        '(the line starts with the gripper made vertical)', 'rad', 1e-4, 0.05, read_only=False)
+        'largest tilt of the free gripper from vertical at which jog_tip accepts a command',
+        'rad', 1e-4, 0.05, read_only=False,
+        source='chosen: the setpoints jump by this much as the line starts vertical')
 
     def __post_init__(self) -> None:
         if self.joint_speed > self.max_joint_speed:

@@ -66,7 +66,7 @@ class GoalWatch:
         self._forgotten_at = now
 
     def heard(self, now: float) -> None:
-        """The server's status arrived at ``now``."""
+        """Note that the server's status arrived at ``now``."""
         self._last_heard = max(self._last_heard, now)
 
     def probe_due(self, now: float) -> bool:
@@ -77,7 +77,7 @@ class GoalWatch:
         return True
 
     def probe_answered(self, status: str, message: str, now: float) -> None:
-        """A probe was answered at ``now`` while the first request was not.
+        """Note a probe answered at ``now`` while the first request was not.
 
         ``status`` is the goal status the answer gives (``'unknown'``, ``'aborted'``, ...);
         ``message`` the result's message, if any. An unknown goal is conclusive at once: the

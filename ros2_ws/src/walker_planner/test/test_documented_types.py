@@ -1,4 +1,4 @@
-"""The README's table of trajectory types is the registry's list, in order."""
+"""The planner page's table of trajectory types is the registry's list, in order."""
 
 import re
 
@@ -6,9 +6,9 @@ from ros_test_support import REPO_ROOT
 from walker_planner.core.registry import TRAJECTORY_TYPES
 
 
-def test_the_readme_lists_exactly_the_nine_types():
-    text = (REPO_ROOT / 'README.md').read_text()
-    section = text.split('### The nine types', 1)[1].split('###', 1)[0]
+def test_the_planner_page_lists_exactly_the_nine_types():
+    text = (REPO_ROOT / 'docs' / 'planner.md').read_text()
+    section = text.split('\n## The nine types', 1)[1].split('\n## ', 1)[0]
     rows = re.findall(r'^\| `([a-z_]+)` \|', section, flags=re.MULTILINE)
     assert rows == list(TRAJECTORY_TYPES)
     assert len(rows) == 9
