@@ -43,16 +43,18 @@ class Imperfections:
     """The truth's errors against the model (``sim.imperfections.*``); all zero: none."""
 
     node_placement: float = parameter(
-        "standard deviation of each truss node's placement error along x, y and z (0: every "
-        'node where the model puts it)', 'm', 0.0, 0.05)
+        "standard deviation of each truss node's placement error along x, y and z", 'm', 0.0,
+        0.05,
+        source='chosen: none; a campaign disperses it')
     joint_offset: tuple[float, ...] = parameter(
         "constant error of each joint's position reading, physical joint order", 'rad',
-        -0.1, 0.1)
+        -0.1, 0.1, source='chosen: none; a campaign disperses it')
     joint_noise: tuple[float, ...] = parameter(
-        "standard deviation of the white noise on each joint's position reading, drawn every "
-        'plant step, physical joint order', 'rad', 0.0, 0.05)
+        "standard deviation of the white noise on each joint's position reading, every step",
+        'rad', 0.0, 0.05,
+        source='chosen: none; a campaign disperses it')
     seed: int = parameter('seed of the node placement errors and of the sensor noise', '',
-                          0, 2**32 - 1)
+                          0, 2**32 - 1, source='chosen; a campaign sets it for each run')
 
     def __post_init__(self) -> None:
         for name in ('joint_offset', 'joint_noise'):
