@@ -97,9 +97,13 @@ class RayCampaign:
         self._temp_dir = None
         if address is None:
             self._temp_dir = tempfile.mkdtemp(prefix='walker-ray-')
-            ray.init(num_cpus=workers or os.cpu_count(), include_dashboard=False,
-                     _node_ip_address=LOOPBACK, _temp_dir=self._temp_dir,
-                     configure_logging=False, log_to_driver=False)
+            try:
+                ray.init(num_cpus=workers or os.cpu_count(), include_dashboard=False,
+                         _node_ip_address=LOOPBACK, _temp_dir=self._temp_dir,
+                         configure_logging=False, log_to_driver=False)
+            except BaseException:
+                shutil.rmtree(self._temp_dir, ignore_errors=True)
+                raise
         else:
             if workers is not None:
                 raise ValueError('workers is for a local Ray: a cluster has the CPUs its '
