@@ -85,6 +85,10 @@ def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
                for pattern in RECORDED_TOPICS)
     assert counts['joint_states'] == result.periods + 1  # every state, the last included
     assert counts['step_reports'] == 1
+    assert counts['phase_history'] == counts['phase'] == len(result.phases)
+    # the viz node's: every flexible state drawn on /tf, the fixed joints once, the markers
+    assert counts['/tf'] == counts['tip_pose'] and counts['/tf_static'] == 1
+    assert counts['markers'] >= 3  # the truss, the target, the planned paths
     data = load_walk(bag)
     assert not data.missing
     assert len(data.step_reports) == 1 and data.step_reports[0].message.to_node == TARGET
@@ -93,7 +97,15 @@ def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
     assert abs(data.tip.position[-1][0] - data.tip.position[0][0]) > 0.1  # the tip moved
 
 
-def test_an_unknown_target_is_refused_before_anything_moves(sections):
-    result = walk(sections, 'n9_9')
+def test_an_unknown_target_is_refused_before_anything_moves(sections, tmp_path):
+    recording = WalkRecording(tmp_path / 'bag')
+    try:
+        result = walk(sections, 'n9_9', recording)
+    finally:
+        recording.close()
     assert not result.reached and 'not on the truss' in result.message
     assert result.periods == 0 and result.reports == []
+    with BagReader(tmp_path / 'bag') as reader:
+        rejections = [r.message for r in reader.messages(topics=['/walker/goal_rejections'])]
+    assert [(r.action, r.target_node) for r in rejections] == [('walk_to', 'n9_9')]
+    assert 'not on the truss' in rejections[0].reason

@@ -24,7 +24,9 @@ state, and a run is the same however busy the machine is.
 
 Stamps are integer nanoseconds; a controller sees them as the node does, ``sec + nanosec *
 1e-9`` seconds. What the loop publishes goes to a recorder, if one is given
-(:class:`~walker_headless.recording.WalkRecording`).
+(:class:`~walker_headless.recording.WalkRecording`), and is kept for the supervisor's shell
+(:mod:`~walker_headless.shell`): the gripper states when they go out, each controller's
+newest state report.
 """
 
 from __future__ import annotations
@@ -37,13 +39,15 @@ from walker_control.core.channel import ControllerChannel
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import Measurement
 from walker_control.core.modes import Mode
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 from walker_planner.core.streamer import TrajectoryStreamer
 from walker_sim.core.commands import EffortCommands, seconds_to_ns
 from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
+from walker_supervisor.core.controller_watch import ControllerReport
 
 from walker_headless.sections import Sections
+from walker_headless.viz import HeadlessViz
 
 __all__ = ['RobotLoop', 'stamp_seconds', 'MODES']
 
@@ -86,6 +90,8 @@ class RobotLoop:
                                            stream.start_tolerance, self._take_setpoints)
         self.commands = EffortCommands(sections.sim.command_timeout)
         self.recording = recording
+        #: the viz node's TF and markers, drawn into the bag (None without one)
+        self.viz = HeadlessViz(sections, recording) if recording is not None else None
         self._clock_rate = StampedRate(sections.sim.clock_rate)
         self._pose_rate = StampedRate(sections.sim.pose_rate)
         # the node's heartbeat of the gripper states runs on the steady clock; here on the
@@ -98,7 +104,9 @@ class RobotLoop:
         self.velocities: list[float] = self.state.velocity.tolist()  # [rad/s]
         self.tracking = False
         self.poses_out = False  # the gripper poses went out with the state in self.state
-        self.grippers_changed = False  # and the gripper states (they changed)
+        self.grippers_out = False  # and the gripper states (changed, or the heartbeat)
+        #: each controller's newest state report not yet taken (joint -> report)
+        self.reports: dict[str, ControllerReport] = {}
         #: commands the drives refused (non-finite) and clamped at the torque limit, so far
         self.counts = {'refused': 0, 'saturated': 0}
 
@@ -127,10 +135,19 @@ class RobotLoop:
         if recording is not None and self.poses_out:
             recording.poses(stamp, state)
         key = gripper_states_key(state)
-        self.grippers_changed = key != self._gripper_key
-        if self._heartbeat.due(stamp, force=self.grippers_changed) and recording is not None:
+        self.grippers_out = self._heartbeat.due(stamp, force=key != self._gripper_key)
+        if self.grippers_out and recording is not None:
             recording.gripper_states(stamp, state)
         self._gripper_key = key
+        viz = self.viz
+        if viz is not None:
+            if self.grippers_out:
+                viz.grippers(self.gripper_readings())
+            if not viz.flexible:
+                viz.joint_state(stamp, self.positions)
+            elif self.poses_out:  # the plant's flexible joint states go out with the poses
+                viz.joint_state(stamp, self.positions + self.plant.bending().tolist())
+            viz.tick(stamp)
         if all(map(math.isfinite, self.positions)):  # the planner takes finite states only
             self.streamer.on_state(stamp, state.position)
 
@@ -148,9 +165,13 @@ class RobotLoop:
             effort = channel.last_effort
             if effort is not None:
                 receive(channel.joint, effort, stamp)
-            if output is not None and recording is not None and channel.state_due(seconds):
-                recording.controller_state(stamp, channel.joint, measurement, output,
-                                           channel.reports_stale)
+            if output is not None and channel.state_due(seconds):
+                stale = channel.reports_stale
+                self.reports[channel.joint] = ControllerReport(seconds, stale,
+                                                               output.mode == Mode.HOLD)
+                if recording is not None:
+                    recording.controller_state(stamp, channel.joint, measurement, output,
+                                               stale)
 
     def step(self) -> None:
         """Step the plant one control period with the efforts in force."""
@@ -160,6 +181,16 @@ class RobotLoop:
         counts = self.counts
         counts['refused'] += int(np.count_nonzero(state.refused))
         counts['saturated'] += int(np.count_nonzero(state.saturated))
+
+    def gripper_readings(self) -> dict[str, tuple[str, str]]:
+        """Return gripper -> (state, node) as the plant's ``gripper_states`` says now."""
+        statuses = self.state.statuses
+        return {g: (statuses[g].mode.name.lower(), statuses[g].node) for g in GRIPPERS}
+
+    def take_reports(self) -> dict[str, ControllerReport]:
+        """Return each controller's newest state report since the last call (joint -> report)."""
+        reports, self.reports = self.reports, {}
+        return reports
 
     # ------------------------------------------------------------------ commands
     def command_mode(self, mode: str, base_gripper: str) -> None:
@@ -172,6 +203,7 @@ class RobotLoop:
         self.streamer.on_control_mode(self.tracking)
         if self.recording is not None:
             self.recording.control_mode(self.stamp, int(value), base_gripper)
+            self.viz.base(self.stamp, base_gripper)
 
     def _take_setpoints(self, stamp: int, positions, velocities, accelerations) -> None:
         seconds = stamp_seconds(stamp)

@@ -43,12 +43,17 @@ TOPICS = {
     'gripper_b_pose': ('geometry_msgs/msg/PoseStamped', _SENSOR),
     'gripper_states': ('walker_msgs/msg/GripperStates', _LATCHED),
     'phase': ('walker_msgs/msg/StepPhase', _LATCHED),
+    'phase_history': ('walker_msgs/msg/StepPhase', _LATCHED),
+    'goal_rejections': ('walker_msgs/msg/GoalRejection', _LATCHED),
     'step_reports': ('walker_msgs/msg/StepReport', _LATCHED),
     'control_mode': ('walker_msgs/msg/ControlMode', _LATCHED),
     **{f'controllers/{joint}/state': ('walker_msgs/msg/ControllerState', _RELIABLE)
        for joint in PHYSICAL_JOINT_NAMES},
     'planned_trajectory': ('trajectory_msgs/msg/JointTrajectory', _LATCHED),
     'robot_description': ('std_msgs/msg/String', _LATCHED),
+    'markers': ('visualization_msgs/msg/MarkerArray', _LATCHED),
+    '/tf': ('tf2_msgs/msg/TFMessage', _RELIABLE),
+    '/tf_static': ('tf2_msgs/msg/TFMessage', _LATCHED),
     '/diagnostics': ('diagnostic_msgs/msg/DiagnosticArray', _RELIABLE),
     '/clock': ('rosgraph_msgs/msg/Clock', _RELIABLE),
 }
@@ -81,7 +86,7 @@ class WalkRecording:
     def __init__(self, bag_dir: str | Path, namespace: str = '/walker') -> None:
         self.namespace = namespace
         self._store = walker_typestore()
-        self._types = self._store.types
+        self.types = self._store.types
         self.names = {relative: relative if relative.startswith('/')
                       else f'{namespace.rstrip("/")}/{relative}' for relative in TOPICS}
         self.writer = BagWriter(bag_dir, max_chunk_size=CHUNK_SIZE,
@@ -147,19 +152,21 @@ class WalkRecording:
                                                     bool(output.saturated), stale), stamp)
 
     # ------------------------------------------------------------------ on change
-    def _serialize(self, relative: str, message, stamp: int) -> None:
+    def serialize(self, relative: str, message, stamp: int) -> None:
+        """Write ``message`` (a rosbags message of its topic's type) on a topic at ``stamp``."""
         type_name = TOPICS[relative][0]
         self._write(self.names[relative], bytes(self._store.serialize_cdr(message, type_name)),
                     stamp)
 
-    def _header(self, stamp: int, frame: str = ''):
+    def header(self, stamp: int, frame: str = ''):
+        """Return a ``std_msgs/Header`` stamped ``stamp`` [ns] in ``frame``."""
         sec, nanosec = divmod(int(stamp), _NS_PER_S)
-        return self._types['std_msgs/msg/Header'](
-            self._types['builtin_interfaces/msg/Time'](sec=sec, nanosec=nanosec), frame)
+        return self.types['std_msgs/msg/Header'](
+            self.types['builtin_interfaces/msg/Time'](sec=sec, nanosec=nanosec), frame)
 
     def gripper_states(self, stamp: int, state) -> None:
         """``gripper_states`` of a plant state: both grippers and their alignment."""
-        t = self._types
+        t = self.types
         grippers = []
         for gripper in GRIPPERS:
             report = state.grippers[gripper]
@@ -168,27 +175,36 @@ class WalkRecording:
                 name=status.name, state=int(status.mode), node=status.node,
                 position_error=float(alignment.position_error),
                 axis_error=float(alignment.axis_error), message=status.message))
-        self._serialize('gripper_states', t['walker_msgs/msg/GripperStates'](
-            header=self._header(stamp), grippers=grippers), stamp)
+        self.serialize('gripper_states', t['walker_msgs/msg/GripperStates'](
+            header=self.header(stamp), grippers=grippers), stamp)
 
     def control_mode(self, stamp: int, mode: int, base_gripper: str) -> None:
         """``control_mode`` as the supervisor commands it (in its name)."""
-        self._serialize('control_mode', self._types['walker_msgs/msg/ControlMode'](
-            header=self._header(stamp), mode=mode, base_gripper=base_gripper,
+        self.serialize('control_mode', self.types['walker_msgs/msg/ControlMode'](
+            header=self.header(stamp), mode=mode, base_gripper=base_gripper,
             commander=f'{self.namespace.rstrip("/")}/supervisor'), stamp)
 
     def phase(self, record) -> None:
-        """``phase`` of a :class:`~walker_headless.records.PhaseRecord`."""
+        """``phase`` and ``phase_history`` of a :class:`~walker_headless.records.PhaseRecord`."""
         fields = {k: v for k, v in vars(record).items() if k != 'stamp'}
-        self._serialize('phase', self._types['walker_msgs/msg/StepPhase'](
-            header=self._header(record.stamp), **fields), record.stamp)
+        message = self.types['walker_msgs/msg/StepPhase'](header=self.header(record.stamp),
+                                                           **fields)
+        data = bytes(self._store.serialize_cdr(message, 'walker_msgs/msg/StepPhase'))
+        for relative in ('phase', 'phase_history'):
+            self._write(self.names[relative], data, record.stamp)
+
+    def goal_rejection(self, stamp: int, action: str, target_node: str, reason: str) -> None:
+        """``goal_rejections``: a goal refused, and why."""
+        self.serialize('goal_rejections', self.types['walker_msgs/msg/GoalRejection'](
+            header=self.header(stamp), action=action, target_node=target_node,
+            reason=reason), stamp)
 
     def step_report(self, record) -> None:
         """``step_reports`` of a :class:`~walker_headless.records.StepReportRecord`."""
         fields = {k: v for k, v in vars(record).items() if k != 'stamp'}
         fields['phase_durations'] = np.array(fields['phase_durations'], dtype=np.float64)
-        self._serialize('step_reports', self._types['walker_msgs/msg/StepReport'](
-            header=self._header(record.stamp), **fields), record.stamp)
+        self.serialize('step_reports', self.types['walker_msgs/msg/StepReport'](
+            header=self.header(record.stamp), **fields), record.stamp)
 
     def planned_trajectory(self, stamp: int, trajectory, start: int = 0) -> None:
         """``planned_trajectory`` at ``stamp`` [ns]: a plan, ``start`` its time 0 [ns].
@@ -196,7 +212,7 @@ class WalkRecording:
         The planner publishes each plan it is asked for (unscheduled: ``start`` 0) and each
         trajectory it begins to stream, stamped with the time its first point applies.
         """
-        t = self._types
+        t = self.types
         points = []
         for k, time in enumerate(trajectory.times):
             total = int(round(float(time) * _NS_PER_S))
@@ -207,22 +223,22 @@ class WalkRecording:
                 effort=np.zeros(0, dtype=np.float64),
                 time_from_start=t['builtin_interfaces/msg/Duration'](
                     sec=total // _NS_PER_S, nanosec=total % _NS_PER_S)))
-        self._serialize('planned_trajectory', t['trajectory_msgs/msg/JointTrajectory'](
-            header=self._header(start), joint_names=list(PHYSICAL_JOINT_NAMES),
+        self.serialize('planned_trajectory', t['trajectory_msgs/msg/JointTrajectory'](
+            header=self.header(start), joint_names=list(PHYSICAL_JOINT_NAMES),
             points=points), stamp)
 
     def robot_description(self, stamp: int, urdf: str) -> None:
         """``robot_description``: the URDF the plant publishes."""
-        self._serialize('robot_description', self._types['std_msgs/msg/String'](data=urdf),
+        self.serialize('robot_description', self.types['std_msgs/msg/String'](data=urdf),
                         stamp)
 
     def diagnostics(self, stamp: int, name: str, hardware_id: str, level: int, message: str,
                     values: dict) -> None:
         """``/diagnostics`` with one status."""
-        t = self._types
+        t = self.types
         status = t['diagnostic_msgs/msg/DiagnosticStatus'](
             level=level, name=name, message=message, hardware_id=hardware_id,
             values=[t['diagnostic_msgs/msg/KeyValue'](key=str(k), value=str(v))
                     for k, v in values.items()])
-        self._serialize('/diagnostics', t['diagnostic_msgs/msg/DiagnosticArray'](
-            header=self._header(stamp), status=[status]), stamp)
+        self.serialize('/diagnostics', t['diagnostic_msgs/msg/DiagnosticArray'](
+            header=self.header(stamp), status=[status]), stamp)

@@ -1,9 +1,11 @@
-"""What the supervisor says about a walk, as plain records with the fields of its messages.
+"""What the supervisor publishes about a walk, as plain records with the fields of its messages.
 
 :class:`StepReportRecord` has the fields of ``walker_msgs/StepReport`` and
-:class:`PhaseRecord` those of ``walker_msgs/StepPhase`` (less the header: ``stamp`` [ns]), so
-that what reads the messages (:func:`walker_report.core.steps.rows_from_reports`, the bag's
-encoder) reads these alike.
+:class:`PhaseRecord` those of ``walker_msgs/StepPhase`` (less the header: ``stamp`` [ns]), as
+the supervisor node fills them from the walk runner's records
+(:func:`walker_supervisor.core.reports.report_fields`, :func:`~walker_supervisor.core.
+reports.phase_fields`), so that what reads the messages
+(:func:`walker_report.core.steps.rows_from_reports`, the bag's encoder) reads these alike.
 """
 
 from __future__ import annotations

@@ -66,14 +66,11 @@ def run_headless(args) -> int:
         return 2
     rate = sections.walker.timing.control_rate
 
-    def on_feedback(driver) -> None:
-        sequencer, walk_ = driver.sequencer, driver.walk
-        step = sequencer.step if sequencer.busy else None
-        text = walk_progress(walk_.step_index, len(walk_.route), int(sequencer.phase),
-                             step.from_node if step else '', step.to_node if step else '',
-                             sequencer.tip_error() if step else 0.0, driver.loop.time)
-        progress.update(f'[walker] {text}',
-                        key=(walk_.step_index, int(sequencer.phase)))
+    def on_feedback(feedback, time: float) -> None:
+        text = walk_progress(feedback.step_index, feedback.step_count, int(feedback.phase),
+                             feedback.from_node, feedback.to_node, feedback.tip_position_error,
+                             time)
+        progress.update(f'[walker] {text}', key=(feedback.step_index, int(feedback.phase)))
 
     try:
         result = walk(sections, args.target, recording, on_feedback,

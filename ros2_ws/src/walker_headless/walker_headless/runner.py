@@ -1,11 +1,12 @@
 """A whole walk in the lock-step loop: the library call behind ``run_all.py --headless``.
 
 :func:`walk` builds the robot side (:class:`~walker_headless.loop.RobotLoop`) and the
-supervisor's walk (:class:`~walker_headless.walk_driver.WalkDriver`) from the parameter file's
-sections, and runs them period by period until the walk has ended::
+supervisor's walk runner in its shell (:class:`~walker_headless.shell.WalkShell`) from the
+parameter file's sections, gives the runner a ``walk_to`` goal and runs them period by period
+until the goal has ended::
 
     state t_k out (recorded, to the planner's stream) -> the controllers answer ->
-    the supervisor decides at t_k -> the plant steps to t_(k+1)
+    the supervisor hears and decides at t_k -> the plant steps to t_(k+1)
 
 Deterministic: the same sections and target give the same walk, bit for bit, on any machine
 load (nothing in it reads a wall clock but the optional time limit). One process, one core,
@@ -21,11 +22,12 @@ from collections.abc import Callable
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import description_urdf
+from walker_supervisor.core.commands import Feedback
 
 from walker_headless.loop import RobotLoop
 from walker_headless.records import PhaseRecord, StepReportRecord
 from walker_headless.sections import Sections
-from walker_headless.walk_driver import WalkDriver, WalkRefusedError
+from walker_headless.shell import WalkShell
 
 __all__ = ['WalkResult', 'walk', 'DIAGNOSTICS_PERIOD']
 
@@ -83,7 +85,7 @@ class WalkResult:
 
 
 def walk(sections: Sections, target: str, recording=None,
-         progress: Callable[[WalkDriver], None] | None = None,
+         progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
          wall_timeout: float = math.inf) -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
@@ -97,8 +99,8 @@ def walk(sections: Sections, target: str, recording=None,
     recording : WalkRecording, optional
         The bag to record into (not closed here).
     progress : callable, optional
-        ``progress(driver)``, called with the walk's feedback (every ``FEEDBACK_PERIOD`` of
-        simulated time).
+        ``progress(feedback, time)``: the goal's feedback (at most every ``FEEDBACK_PERIOD``
+        of simulated time) and the simulated time [s].
     say : callable, optional
         ``say(level, text)`` for what the supervisor would log.
     wall_timeout : float
@@ -114,63 +116,48 @@ def walk(sections: Sections, target: str, recording=None,
     try:
         if recording is not None:
             recording.robot_description(0, description_urdf(sections.walker))
-        driver = WalkDriver(loop, say)
-        if progress is not None:
-            driver.feedback = lambda walk, sequencer: progress(driver)
-        try:
-            driver.start_walk(target)
-        except WalkRefusedError as error:
-            return _result(target, driver, loop, started, str(error))
+        shell = WalkShell(loop, say, progress)
+        shell.send_goal('walk_to', target)
         cpu_started = time.process_time()
         diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
         next_diagnostics = 0
         periods = 0
         message = None
-        while not driver.done:
+        while True:
             loop.sense()
             loop.control()
-            driver.decide()
-            if recording is not None and loop.stamp >= next_diagnostics:
+            shell.decide()
+            if recording is not None and loop.stamp >= next_diagnostics \
+                    and not shell.refusal:
                 next_diagnostics += diagnostics_ns
                 _plant_diagnostics(recording, loop)
-            if driver.done:
+            if shell.done:
                 break
             loop.step()
             periods += 1
             if periods % _WALL_CHECK_PERIODS == 0 and time.monotonic() - started > wall_timeout:
                 message = f'the walk did not end within {wall_timeout:g} s of wall time'
                 break
-        result = _result(target, driver, loop, started, message)
+        result = _result(target, shell, loop, started, message)
         result.cpu_time = time.process_time() - cpu_started
         return result
     finally:
         loop.close()
 
 
-def _result(target: str, driver: WalkDriver, loop: RobotLoop, started: float,
+def _result(target: str, shell: WalkShell, loop: RobotLoop, started: float,
             message: str | None) -> WalkResult:
-    walk_ = driver.walk
-    outcomes = walk_.outcomes if walk_ is not None else []
-    reached = walk_ is not None and walk_.reached and message is None
+    ended = shell.ended
+    reached = ended is not None and ended.success and message is None
     if message is None:
-        message = '' if reached else _walk_message(walk_)
+        message = shell.refusal or ('' if reached else ended.message)
     return WalkResult(
         target=target, reached=reached, message=message,
-        path=walk_.path if walk_ is not None else [],
-        steps_taken=sum(1 for o in outcomes if o.success),
-        duration=float(sum(o.duration for o in outcomes)), reports=list(driver.reports),
-        phases=list(driver.phases), sim_time=loop.time, periods=loop.stamp // loop.period_ns,
+        path=list(ended.path) if ended is not None else [],
+        steps_taken=ended.steps_taken if ended is not None else 0,
+        duration=ended.duration if ended is not None else 0.0, reports=list(shell.reports),
+        phases=list(shell.phases), sim_time=loop.time, periods=loop.stamp // loop.period_ns,
         wall_time=time.monotonic() - started)
-
-
-def _walk_message(walk_) -> str:
-    if walk_ is None:
-        return 'the walk did not start'
-    if walk_.failed:
-        return walk_.outcomes[-1].message
-    if walk_.cancel_requested:
-        return f'cancelled after {walk_.step_index} of {len(walk_.route)} steps'
-    return 'the walk did not finish'
 
 
 def _plant_diagnostics(recording, loop: RobotLoop) -> None:

@@ -13,12 +13,14 @@ from pathlib import Path
 from typing import Any
 
 from walker_control.core.config import ControllerSettings
-from walker_core.parameter_schema import ParameterError, load_parameter_file, section_from_flat
+from walker_core.parameter_schema import load_parameter_file, section_from_flat
 from walker_core.robot_parameters import WalkerParameters, default_parameter_file
 from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
 from walker_planner.core.parameters import PlannerParameters
 from walker_sim.core.config import SimParameters, check_against_walker
-from walker_supervisor.core.parameters import SupervisorParameters
+from walker_supervisor.core.parameters import (
+    SupervisorParameters, check_with_gripper, check_with_planner)
+from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 
 __all__ = ['Sections', 'load_sections']
 
@@ -41,6 +43,8 @@ class Sections:
         ``planner.*``.
     supervisor : SupervisorParameters
         ``supervisor.*``.
+    viz : VizParameters
+        ``viz.*`` (the TF and markers of the bag).
     plant : tuple of (WalkerParameters, SimParameters)
         The plant's robot and ``sim.*``: from a parameter file of the plant's own (the robot
         as it really is, where the rest works on the model: a campaign's run), or the same
@@ -53,6 +57,7 @@ class Sections:
     control: ControllerSettings
     planner: PlannerParameters
     supervisor: SupervisorParameters
+    viz: VizParameters
     plant: tuple[WalkerParameters, SimParameters] | None = None
 
     def __post_init__(self) -> None:
@@ -81,25 +86,13 @@ def load_sections(path: str | Path | None = None,
     sim = section_from_flat(SimParameters, flat, 'sim.')
     check_against_walker(sim, walker)
     supervisor = section_from_flat(SupervisorParameters, flat, 'supervisor.')
-    _check_alignment(supervisor, walker)
+    planner = section_from_flat(PlannerParameters, flat, PLANNER_PREFIX)
+    check_with_gripper(supervisor, walker.gripper)
+    check_with_planner(supervisor, planner.stream.start_tolerance)
     plant = None
     if plant_path is not None:
         truth = load_sections(plant_path, overrides)
         plant = (truth.walker, truth.sim)
     return Sections(path, walker, sim, ControllerSettings.from_flat(flat),
-                    section_from_flat(PlannerParameters, flat, PLANNER_PREFIX), supervisor,
-                    plant)
-
-
-def _check_alignment(supervisor: SupervisorParameters, walker: WalkerParameters) -> None:
-    """Check the rules between ``supervisor.*`` and the gripper (as the supervisor node)."""
-    tolerance = walker.gripper.insertion_position_tolerance
-    if supervisor.insertion_alignment >= tolerance:
-        raise ParameterError(
-            f'supervisor.insertion_alignment ({supervisor.insertion_alignment} m) must be '
-            f'smaller than gripper.insertion_position_tolerance ({tolerance} m)')
-    if supervisor.descent_region > tolerance:
-        raise ParameterError(
-            f'supervisor.descent_region ({supervisor.descent_region} m) must not exceed '
-            f'gripper.insertion_position_tolerance ({tolerance} m): the descent starts '
-            f'only with the tip inside it')
+                    planner, supervisor,
+                    section_from_flat(VizParameters, flat, VIZ_PREFIX), plant)

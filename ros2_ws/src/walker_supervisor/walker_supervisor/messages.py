@@ -22,6 +22,7 @@ from walker_supervisor.core.commands import (
     Feedback, GoalEnded, PhaseRecord, SetControlMode, StepRecord)
 from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.prepared_motions import PlanAnswer, stream_lead
+from walker_supervisor.core.reports import phase_fields, report_fields
 
 __all__ = ['GRIPPER_STATE_NAMES', 'MODES', 'joint_arrays', 'gripper_readings',
            'controller_report', 'seconds', 'mode_message', 'phase_message', 'report_message',
@@ -80,30 +81,14 @@ def mode_message(command: SetControlMode, stamp, commander: str) -> ControlMode:
 
 def phase_message(record: PhaseRecord, stamp) -> StepPhase:
     """Return the ``phase`` message of a phase record."""
-    message = StepPhase(phase=int(record.phase), base_gripper=record.base_gripper,
-                        reason=record.reason, phase_progress=float(record.phase_progress),
-                        step_index=record.step_index, step_count=record.step_count,
-                        from_node=record.from_node, to_node=record.to_node,
-                        base_node=record.base_node, base_heading=float(record.base_heading))
+    message = StepPhase(**phase_fields(record))
     message.header.stamp = stamp
     return message
 
 
 def report_message(record: StepRecord, stamp) -> StepReport:
     """Return the ``step_reports`` message of a step that ended."""
-    step, outcome = record.step, record.outcome
-    message = StepReport(
-        step_index=record.step_index, step_count=record.step_count,
-        base_gripper=step.base_gripper, moving_gripper=step.moving_gripper,
-        base_node=step.base_node, from_node=step.from_node, to_node=step.to_node,
-        sweep=float(step.sweep), success=outcome.success, message=outcome.message,
-        phase_names=list(outcome.phase_durations),
-        phase_durations=[float(v) for v in outcome.phase_durations.values()],
-        duration=float(outcome.duration), time_optimal_bound=record.time_optimal_bound,
-        bound_ratio=float(record.bound_ratio), insertion_error=record.insertion_error,
-        insertion_error_estimated=float(outcome.insertion_error),
-        residual_vibration=record.residual_vibration,
-        insertion_attempts=outcome.insertion_attempts)
+    message = StepReport(**report_fields(record))
     message.header.stamp = stamp
     return message
 

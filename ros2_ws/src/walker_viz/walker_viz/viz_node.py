@@ -16,7 +16,8 @@ A robot_state_publisher that also knows where the robot holds the truss. Thin la
   into which node), ``phase`` and ``control_mode`` (the supervisor's base gripper, and the
   step's target node) and ``planned_trajectory`` (the path drawn).
 
-Under ``use_sim_time`` the TF timer runs on the simulated clock.
+Under ``use_sim_time`` the TF timer runs on the simulated clock. What is drawn is decided by
+:class:`walker_viz.core.scene.WalkerScene`.
 """
 
 from __future__ import annotations
@@ -32,8 +33,6 @@ from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from walker_core.robot_parameters import WalkerParameters
-from walker_core.truss import Truss, UnknownNodeError
-from walker_core.urdf import robot_urdf
 from walker_runtime.core.resubscription import clock_ran_past
 from walker_runtime.node_main import run_node
 from walker_runtime.node_parameters import declare_section
@@ -41,17 +40,15 @@ from walker_runtime.qos import LATCHED_QOS, MODE_QOS, TF_QOS, TF_STATIC_QOS, lat
 from walker_runtime.spinning import TopicSampler
 from walker_runtime.watched_subscription import SampledSubscription
 from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase
-from walker_viz.core.base_anchor import BaseTracker
-from walker_viz.core.markers import (
-    target_marker, tip_path, tip_path_marker, truss_markers)
 from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
-from walker_viz.core.robot_tree import WORLD_FRAME, JointTransform, RobotTree
+from walker_viz.core.robot_tree import WORLD_FRAME
+from walker_viz.core.scene import WalkerScene
 from walker_viz.messages import marker_array, tf_message
 
 __all__ = ['VizNode', 'main']
 
-#: Gripper states in which a gripper is in its hole, holding.
-_HOLDING = (GripperState.ATTACHED, GripperState.UNSCREWING)
+#: The gripper states the scene tells apart (the others: not in a hole).
+_STATES = {GripperState.ATTACHED: 'attached', GripperState.UNSCREWING: 'unscrewing'}
 #: The supervisor's phase topic keeps a history; the newest is all this node needs.
 _PHASE_QOS = latched_qos(1)
 #: Flexible joint states wait to be drawn: many periods of the pose rate, while the plant
@@ -78,14 +75,8 @@ class VizNode(Node):
         super().__init__('viz', **kwargs)
         self.params = declare_section(self, WalkerParameters)
         self.settings = declare_section(self, VizParameters, VIZ_PREFIX)
-        self.truss = Truss.from_parameters(self.params)
-        self.tree = RobotTree(robot_urdf(self.params, flexible=self.settings.flexible,
-                                         rotors=False))
-        self.tracker = BaseTracker(self.tree, self.truss)
-        self._angles: dict[str, float] | None = None
+        self.scene = WalkerScene(self.params, self.settings)
         self._newest_state: int | None = None  # [ns] stamp of the newest joint state drawn
-        self._target: str = ''
-        self._path: np.ndarray | None = None
 
         self._tf = self.create_publisher(TFMessage, '/tf', TF_QOS)
         self._tf_static = self.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS)
@@ -103,15 +94,15 @@ class VizNode(Node):
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode, MODE_QOS)
         self.create_subscription(JointTrajectory, 'planned_trajectory', self._on_plan,
                                  LATCHED_QOS)
-        self._truss_markers = truss_markers(self.truss, self.params.truss.hole_depth)
-        self._tf_static.publish(tf_message(self.tree.static_transforms(),
+        self._tf_static.publish(tf_message(self.scene.tree.static_transforms(),
                                            self.get_clock().now().to_msg()))
         self._publish_markers()
         self.create_timer(1.0 / self.settings.tf_rate, self._publish_tf)
         self.get_logger().info(
-            f'publishing TF of {len(self.tree.links)} links ({len(self.tree.moving_joints)} '
-            f'moving joints at {self.settings.tf_rate:g} Hz) in the {WORLD_FRAME} frame, and '
-            f'the truss of {len(self.truss.node_names)} nodes as markers')
+            f'publishing TF of {len(self.scene.tree.links)} links '
+            f'({len(self.scene.tree.moving_joints)} moving joints at '
+            f'{self.settings.tf_rate:g} Hz) in the {WORLD_FRAME} frame, and the truss of '
+            f'{len(self.scene.truss.node_names)} nodes as markers')
 
     def destroy_node(self) -> None:
         """Destroy the node and the one its joint-state subscription lives on."""
@@ -130,36 +121,27 @@ class VizNode(Node):
         # drawn; straight links, the newest joint state
         for state in states if self.settings.flexible else states[-1:]:
             try:
-                if len(state.name) != len(state.position):
-                    raise ValueError(f'{len(state.name)} names but {len(state.position)} '
-                                     'positions')
-                angles = dict(zip(state.name, state.position, strict=True))
-                edges = self.tree.moving_transforms(angles)
+                edges = self.scene.transforms(state.name, state.position)
             except ValueError as error:
                 self.get_logger().warning(f'joint state not drawn: {error}',
                                           throttle_duration_sec=1.0)
                 continue
-            self._angles = angles
             self._newest_state = state.header.stamp.sec * 1_000_000_000 + \
                 state.header.stamp.nanosec
-            root = self.tracker.root_pose(angles)
-            if root is not None:
-                edges.append(JointTransform(WORLD_FRAME, self.tree.root, root))
             self._tf.publish(tf_message(edges, state.header.stamp))
 
     # ------------------------------------------------------------------ inputs
     def _on_grippers(self, message: GripperStates) -> None:
-        self.tracker.set_attached({g.name: g.node for g in message.grippers
-                                   if g.state in _HOLDING})
+        self.scene.grippers({g.name: (_STATES.get(g.state, 'other'), g.node)
+                             for g in message.grippers})
 
     def _take_base(self, gripper: str) -> None:
         try:
-            changed = self.tracker.set_base(gripper)
+            changed = self.scene.base(gripper)
         except ValueError as error:
             self.get_logger().warning(f'base gripper ignored: {error}')
             return
-        if changed and self._path is not None:
-            self._path = None  # planned from the other base
+        if changed:
             self._publish_markers()
 
     def _on_control_mode(self, message: ControlMode) -> None:
@@ -167,37 +149,22 @@ class VizNode(Node):
 
     def _on_phase(self, message: StepPhase) -> None:
         self._take_base(message.base_gripper)
-        if message.to_node != self._target:
-            self._target = message.to_node
+        if self.scene.set_target(message.to_node):
             self._publish_markers()
 
     def _on_plan(self, message: JointTrajectory) -> None:
-        if self._angles is None or not message.points:
-            return
-        anchor = self.tracker.anchor(self._angles)
-        if anchor is None:
-            return
         try:
-            self._path = tip_path(self.tree, anchor, list(message.joint_names),
-                                  np.array([p.positions for p in message.points]))
+            drawn = self.scene.plan(message.joint_names,
+                                    np.array([p.positions for p in message.points]))
         except ValueError as error:
             self.get_logger().warning(f'planned trajectory not drawn: {error}')
             return
-        self._publish_markers()
+        if drawn:
+            self._publish_markers()
 
     # ------------------------------------------------------------------ markers
     def _publish_markers(self) -> None:
-        specs = list(self._truss_markers)
-        deleted = []
-        try:
-            specs.append(target_marker(self.truss, self._target))
-        except UnknownNodeError:
-            deleted.append('target')
-        if self._path is not None and len(self._path) > 1:
-            specs.append(tip_path_marker(self._path))
-        else:
-            deleted.append('planned_tip_path')
-        self._markers.publish(marker_array(specs, deleted))
+        self._markers.publish(marker_array(*self.scene.markers()))
 
 
 def main(args=None) -> int:

@@ -21,8 +21,8 @@ from walker_supervisor.core.phases import Phase, StepOutcome
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.walk import VibrationMeter, Walk
 
-__all__ = ['PhaseAnnouncer', 'StepFigures', 'goal_feedback', 'goal_ended', 'PROGRESS_STEP',
-           'BOUNDED_MOTIONS', 'MIN_VIBRATION_WINDOW']
+__all__ = ['PhaseAnnouncer', 'StepFigures', 'goal_feedback', 'goal_ended', 'phase_fields',
+           'report_fields', 'PROGRESS_STEP', 'BOUNDED_MOTIONS', 'MIN_VIBRATION_WINDOW']
 
 #: The phase is published again, within a phase, each time its progress has grown this much
 #: (and when it reaches 1): a few messages per phase.
@@ -163,3 +163,37 @@ def goal_ended(goal: str, walk: Walk, base: str, base_node: str,
                                     insertion_error=figures.insertion_error,
                                     time_optimal_bound=figures.time_optimal_bound)
     return ended
+
+
+def phase_fields(record: PhaseRecord) -> dict:
+    """Return the fields of ``walker_msgs/StepPhase`` (less its header) of a phase record.
+
+    Plain values (``phase`` an int), as the node's message and a headless bag carry them.
+    """
+    return {'phase': int(record.phase), 'base_gripper': record.base_gripper,
+            'reason': record.reason, 'phase_progress': float(record.phase_progress),
+            'step_index': record.step_index, 'step_count': record.step_count,
+            'from_node': record.from_node, 'to_node': record.to_node,
+            'base_node': record.base_node, 'base_heading': float(record.base_heading)}
+
+
+def report_fields(record: StepRecord) -> dict:
+    """Return the fields of ``walker_msgs/StepReport`` (less its header) of a step record.
+
+    Plain values in SI units (s, m, rad), as the node's message and a headless bag carry them.
+    """
+    step, outcome = record.step, record.outcome
+    return {
+        'step_index': record.step_index, 'step_count': record.step_count,
+        'base_gripper': step.base_gripper, 'moving_gripper': step.moving_gripper,
+        'base_node': step.base_node, 'from_node': step.from_node, 'to_node': step.to_node,
+        'sweep': float(step.sweep), 'success': outcome.success, 'message': outcome.message,
+        'phase_names': list(outcome.phase_durations),
+        'phase_durations': [float(v) for v in outcome.phase_durations.values()],
+        'duration': float(outcome.duration),
+        'time_optimal_bound': float(record.time_optimal_bound),
+        'bound_ratio': float(record.bound_ratio),
+        'insertion_error': float(record.insertion_error),
+        'insertion_error_estimated': float(outcome.insertion_error),
+        'residual_vibration': float(record.residual_vibration),
+        'insertion_attempts': outcome.insertion_attempts}

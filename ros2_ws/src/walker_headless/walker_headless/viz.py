@@ -1,0 +1,151 @@
+"""The viz node's TF and markers in the headless bag, drawn by the same core scene.
+
+In the graph the viz node (``walker_viz viz_node``) hears ``joint_states`` or, with
+``viz.flexible``, the plant's ``flexible_joint_states`` (the five joints and the links'
+bending joints, at ``sim.pose_rate``), ``gripper_states``, ``control_mode``, ``phase`` and
+``planned_trajectory``, and sends ``/tf`` every ``1 / viz.tf_rate`` of the simulated clock
+(every flexible state since, or the newest joint state), ``/tf_static`` once and ``markers``
+when they change. :class:`HeadlessViz` takes the same topics from the loop by calls, lets the
+same :class:`~walker_viz.core.scene.WalkerScene` decide, and writes what the node would send
+into the bag (:class:`~walker_headless.recording.WalkRecording`), as rosbags messages of the
+same types (``walker_viz.messages`` builds the rclpy ones).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.rotations import quaternion_from_matrix
+from walker_core.urdf import flex_joints
+from walker_viz.core.robot_tree import WORLD_FRAME
+from walker_viz.core.scene import WalkerScene
+
+__all__ = ['HeadlessViz']
+
+_MARKER = 'visualization_msgs/msg/Marker'
+_KINDS = {'line_list': 'LINE_LIST', 'line_strip': 'LINE_STRIP', 'sphere_list': 'SPHERE_LIST',
+          'cylinder': 'CYLINDER', 'text': 'TEXT_VIEW_FACING'}
+
+
+class HeadlessViz:
+    """The viz node, composed: the scene fed by calls, its TF and markers into the bag.
+
+    Parameters
+    ----------
+    sections : Sections
+        The parameter file's sections (``walker``, ``viz``).
+    recording : WalkRecording
+        The bag.
+    """
+
+    def __init__(self, sections, recording) -> None:
+        self.scene = WalkerScene(sections.walker, sections.viz)
+        self.flexible = sections.viz.flexible
+        self._recording = recording
+        self._types = recording.types
+        bends = [joint.name for joint in
+                 flex_joints(sections.walker.robot.flexibility.segments_per_link)]
+        self._names = [*PHYSICAL_JOINT_NAMES, *bends] if self.flexible \
+            else list(PHYSICAL_JOINT_NAMES)
+        self._period = round(1e9 / sections.viz.tf_rate)  # [ns]
+        self._next = 0  # [ns] the TF timer's next time
+        self._states: list[tuple[int, list[float]]] = []  # (stamp, angles) not yet drawn
+        recording.serialize('/tf_static', self._tf(self.scene.tree.static_transforms(), 0), 0)
+        self._send_markers(0)
+
+    # ------------------------------------------------------------------ inputs
+    def joint_state(self, stamp: int, angles: list[float]) -> None:
+        """Take a state the node hears (:attr:`flexible`: the bends follow the five)."""
+        if self.flexible:
+            self._states.append((stamp, angles))
+        else:
+            self._states[:] = [(stamp, angles)]
+
+    def tick(self, stamp: int) -> None:
+        """Run the TF timer at ``stamp`` [ns]: send the transforms of the states heard since."""
+        if stamp < self._next:
+            return
+        while self._next <= stamp:
+            self._next += self._period
+        for state_stamp, angles in self._states:
+            edges = self.scene.transforms(self._names, angles)
+            self._recording.serialize('/tf', self._tf(edges, state_stamp), state_stamp)
+        self._states.clear()
+
+    def grippers(self, readings: dict[str, tuple[str, str]]) -> None:
+        """Take the gripper states: gripper -> (state, node)."""
+        self.scene.grippers(readings)
+
+    def base(self, stamp: int, gripper: str) -> None:
+        """Take the supervisor's base (``control_mode``)."""
+        if self.scene.base(gripper):
+            self._send_markers(stamp)
+
+    def phase(self, stamp: int, base_gripper: str, to_node: str) -> None:
+        """Take the supervisor's phase: its base and the step's target node."""
+        changed = self.scene.base(base_gripper)
+        if self.scene.set_target(to_node) or changed:
+            self._send_markers(stamp)
+
+    def plan(self, stamp: int, positions) -> None:
+        """Take a trajectory on ``planned_trajectory`` (joint positions [rad], physical order)."""
+        if self.scene.plan(PHYSICAL_JOINT_NAMES, np.asarray(positions)):
+            self._send_markers(stamp)
+
+    # ------------------------------------------------------------------ messages
+    def _tf(self, edges, stamp: int):
+        t = self._types
+        transforms = []
+        for edge in edges:
+            x, y, z = (float(v) for v in edge.matrix[:3, 3])
+            qx, qy, qz, qw = (float(v) for v in quaternion_from_matrix(edge.matrix))
+            transforms.append(t['geometry_msgs/msg/TransformStamped'](
+                header=self._recording.header(stamp, edge.parent), child_frame_id=edge.child,
+                transform=t['geometry_msgs/msg/Transform'](
+                    translation=t['geometry_msgs/msg/Vector3'](x=x, y=y, z=z),
+                    rotation=t['geometry_msgs/msg/Quaternion'](x=qx, y=qy, z=qz, w=qw))))
+        return t['tf2_msgs/msg/TFMessage'](transforms=transforms)
+
+    def _send_markers(self, stamp: int) -> None:
+        specs, deleted = self.scene.markers()
+        markers = [self._marker(spec) for spec in specs]
+        markers += [self._marker(None, namespace) for namespace in deleted]
+        self._recording.serialize('markers', self._types['visualization_msgs/msg/MarkerArray'](
+            markers=markers), stamp)
+
+    def _marker(self, spec, deleted: str = ''):
+        """Return a ``Marker`` of a spec, or (``spec`` None) one deleting namespace ``deleted``."""
+        t = self._types
+        kind = t[_MARKER]
+        point = t['geometry_msgs/msg/Point']
+        position, points, fields = point(x=0.0, y=0.0, z=0.0), [], {}
+        if spec is not None:
+            coordinates = np.asarray(spec.points, dtype=float)
+            if spec.kind in ('cylinder', 'text'):
+                position = point(*(float(v) for v in coordinates[0]))
+            else:
+                points = [point(x=float(x), y=float(y), z=float(z)) for x, y, z in coordinates]
+            fields = {'ns': spec.namespace, 'id': spec.marker_id,
+                      'type': getattr(kind, _KINDS[spec.kind]), 'action': kind.ADD,
+                      'scale': t['geometry_msgs/msg/Vector3'](*(float(v) for v in spec.scale)),
+                      'color': t['std_msgs/msg/ColorRGBA'](*(float(v) for v in spec.color)),
+                      'text': spec.text}
+        empty = np.zeros(0, dtype=np.uint8)
+        values = {
+            'header': self._recording.header(0, WORLD_FRAME), 'ns': deleted, 'id': 0,
+            'type': 0, 'action': kind.DELETE,
+            'pose': t['geometry_msgs/msg/Pose'](
+                position=position,
+                orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0)),
+            'scale': t['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=0.0),
+            'color': t['std_msgs/msg/ColorRGBA'](r=0.0, g=0.0, b=0.0, a=0.0),
+            'lifetime': t['builtin_interfaces/msg/Duration'](sec=0, nanosec=0),
+            'frame_locked': False, 'points': points, 'colors': [], 'texture_resource': '',
+            'texture': t['sensor_msgs/msg/CompressedImage'](
+                header=self._recording.header(0), format='', data=empty),
+            'uv_coordinates': [], 'text': '', 'mesh_resource': '',
+            'mesh_file': t['visualization_msgs/msg/MeshFile'](filename='', data=empty),
+            'mesh_use_embedded_materials': False}
+        values.update(fields)
+        return kind(**values)
