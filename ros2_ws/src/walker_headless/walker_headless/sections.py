@@ -90,9 +90,11 @@ def load_sections(path: str | Path | None = None,
     check_with_gripper(supervisor, walker.gripper)
     check_with_planner(supervisor, planner.stream.start_tolerance)
     plant = None
-    if plant_path is not None:
-        truth = load_sections(plant_path, overrides)
-        plant = (truth.walker, truth.sim)
+    if plant_path is not None:  # the plant's sections alone: the others' rules are the model's
+        truth = {**load_parameter_file(Path(plant_path)), **dict(overrides or {})}
+        plant_sim = section_from_flat(SimParameters, truth, 'sim.')
+        plant = (WalkerParameters.from_flat(truth), plant_sim)
+        check_against_walker(plant_sim, plant[0])
     return Sections(path, walker, sim, ControllerSettings.from_flat(flat),
                     planner, supervisor,
                     section_from_flat(VizParameters, flat, VIZ_PREFIX), plant)
