@@ -16,8 +16,10 @@ import sys
 import tempfile
 import threading
 import time
-from pathlib import Path
 from collections.abc import Iterator
+from pathlib import Path
+
+from walker_bringup.domains import isolated_domain
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
@@ -25,28 +27,6 @@ __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'spin_executor_until', 'set_stamp', 'write_parameter_file']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-# Domain ids that map to valid DDS ports on Linux (0 is left to interactive use).
-_DOMAIN_IDS = range(1, 102)
-
-
-@contextlib.contextmanager
-def isolated_domain() -> Iterator[int]:
-    """Reserve a ROS domain id no other test run on this machine is using."""
-    lock_dir = Path(tempfile.gettempdir())
-    for domain in _DOMAIN_IDS:
-        handle = open(lock_dir / f'walker-ros-domain-{domain}.lock', 'w')
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            handle.close()
-            continue
-        try:
-            yield domain
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
-            handle.close()
-        return
-    raise RuntimeError('every ROS domain id 1..101 is in use by other test runs')
 
 
 def ros_environment(domain_id: int) -> dict[str, str]:

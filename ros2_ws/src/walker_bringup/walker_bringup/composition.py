@@ -258,6 +258,9 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
         description="Run the walker's whole node graph in one process (composition).")
     parser.add_argument('--params-file', default=None,
                         help='parameter file (default: the installed walker.yaml)')
+    parser.add_argument('--plant-params-file', default=None,
+                        help="the plant's own parameter file (default: --params-file): the "
+                             'robot as it really is, the other nodes keeping the model')
     parser.add_argument('--namespace', default='/walker', help='robot namespace')
     parser.add_argument('--sim-time', action='store_true',
                         help='lock-stepped on the plant clock (default: real time)')
@@ -303,10 +306,12 @@ def graph_from_arguments(args: argparse.Namespace) -> list[NodeSpec]:
     from walker_core.robot_parameters import default_parameter_file
 
     params_file = Path(args.params_file or default_parameter_file()).resolve()
+    plant_file = args.plant_params_file and Path(args.plant_params_file).resolve()
     specs = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                          record=args.record, bag_path=args.bag_path, start=args.start,
                          clock_topic=args.clock_topic, parameters=args.param,
-                         grouped_controllers=args.grouped_controllers)
+                         grouped_controllers=args.grouped_controllers,
+                         plant_params_file=plant_file)
     only = getattr(args, 'only', None)
     if only is None:
         return specs
@@ -325,10 +330,13 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
                      parameters: tuple[tuple[str, str], ...] = (),
                      executable: str | None = None,
                      grouped_controllers: bool = False,
-                     only: Sequence[str] | None = None) -> list[str]:
+                     only: Sequence[str] | None = None,
+                     plant_params_file: str | Path | None = None) -> list[str]:
     """Return the command line of the composed graph with :func:`walker_graph`'s arguments."""
     command = [executable or str(executable_path('walker_bringup', 'composed_graph')),
                '--params-file', str(params_file), '--namespace', namespace]
+    if plant_params_file is not None:
+        command += ['--plant-params-file', str(plant_params_file)]
     if sim_time:
         command.append('--sim-time')
     if record:

@@ -137,7 +137,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                  parameters: tuple[tuple[str, str], ...] = (),
                  grouped_controllers: bool = False,
                  foxglove_port: int | None = None,
-                 plant_state_file: str | Path | None = None) -> list[NodeSpec]:
+                 plant_state_file: str | Path | None = None,
+                 plant_params_file: str | Path | None = None) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, controllers, planner, supervisor, viz.
 
     Parameters
@@ -173,6 +174,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     plant_state_file : str or Path, optional
         The plant's state snapshot (its ``state_file``): a plant started again after a crash
         restores the physical state it had from it (``walker_sim.core.snapshot``).
+    plant_params_file : str or Path, optional
+        A parameter file of the plant's own (default: ``params_file``): the robot as it
+        really is, where the other nodes work on the model (a campaign's dispersed runs).
     """
     params_file = str(params_file)
     parameters = tuple(parameters)
@@ -196,8 +200,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
         plant += start.parameters()
     if plant_state_file is not None:
         plant += (('state_file', str(plant_state_file)),)
-    nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace, params_file,
-                          plant + parameters, remaps))
+    nodes.append(NodeSpec('walker_sim', 'plant_node', 'plant', namespace,
+                          str(plant_params_file or params_file), plant + parameters, remaps))
     # The controllers run on the plant's state stream and its stamps (watchdogs on the steady
     # clock); use_sim_time tells them they are lock-stepped: a state then waits for the
     # setpoint the planner's stream owes it, and no real-time priority is asked for.

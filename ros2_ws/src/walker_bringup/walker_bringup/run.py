@@ -74,6 +74,10 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help='truss node to walk to (default: %(default)s)')
     parser.add_argument('--params-file', default=None,
                         help='parameter file (default: the installed walker.yaml)')
+    parser.add_argument('--plant-params-file', default=None,
+                        help="the plant's own parameter file (default: --params-file): the "
+                             'robot as it really is, while the controllers, the planner and '
+                             'the supervisor keep the model (a campaign run)')
     parser.add_argument('--sim-time', action='store_true',
                         help='run on the plant clock, lock-stepped, as fast as the graph allows '
                              '(default: real time, like hardware)')
@@ -177,6 +181,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                              strict=True):
         if getattr(args, name) is None:
             setattr(args, name, default)
+    if args.plant_params_file is not None and args.walkers > 1:
+        parser.error('--plant-params-file is for one walker: leave --walkers out')
     return args
 
 
@@ -309,7 +315,8 @@ def _describe_walkers(args, configuration, out: Path, env: dict) -> list[_Walker
                              parameters=_graph_parameters(args),
                              grouped_controllers=args.grouped_controllers,
                              foxglove_port=args.foxglove_port if args.foxglove else None,
-                             plant_state_file=out / PLANT_STATE_FILE)
+                             plant_state_file=out / PLANT_STATE_FILE,
+                             plant_params_file=_plant_file(args))
         return [_Walker(args.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                         args.target)]
     graphs = several_walkers(configuration, args.walkers, args.sim_time, args.record, out,
@@ -323,6 +330,11 @@ def _describe_walkers(args, configuration, out: Path, env: dict) -> list[_Walker
         walkers.append(_Walker(namespace, start if index else None, nodes,
                                ProcessGroup(logs, env), target))
     return walkers
+
+
+def _plant_file(args) -> Path | None:
+    """Return the plant's own parameter file, resolved (``None``: the graph's one file)."""
+    return Path(args.plant_params_file).resolve() if args.plant_params_file else None
 
 
 def _bag_paths(walkers: list[_Walker]) -> list[Path]:
@@ -368,7 +380,8 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
                                bool(bags) and loop is None,
                                bags[0] if bags and loop is None else None, walker.start,
                                dict(plant.remaps).get('/clock'), _graph_parameters(args),
-                               grouped_controllers=args.grouped_controllers, only=loop)
+                               grouped_controllers=args.grouped_controllers, only=loop,
+                               plant_params_file=_plant_file(args))
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
                                 'graph' if loop is None else 'loop', walker.namespace,
                                 str(params_file)), command)
@@ -397,6 +410,13 @@ def main(argv: list[str] | None = None) -> int:
         progress.error(f'[walker] error: {args.params_file or "the installed walker.yaml"}: '
                        f'{error}')
         return 2
+    if args.plant_params_file is not None:
+        try:
+            load_configuration(args.plant_params_file)
+        except ParameterError as error:
+            progress.error(f'[walker] error: --plant-params-file {args.plant_params_file}: '
+                           f'{error}')
+            return 2
     if args.walk and not args.serve:
         try:
             Truss.from_parameters(configuration.walker).index(args.target)

@@ -80,7 +80,7 @@ class RobotLoop:
 
     def __init__(self, sections: Sections, recording=None) -> None:
         self.sections = sections
-        self.plant = WalkerPlant(sections.walker, sections.sim)
+        self.plant = WalkerPlant(*sections.plant)
         self.period = sections.control.sample_time
         self.period_ns = seconds_to_ns(self.period)
         self.channels = [ControllerChannel(sections.control, joint)

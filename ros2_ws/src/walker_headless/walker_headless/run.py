@@ -5,8 +5,9 @@ progress line, the same per-step table and ``summary.json``, a rosbag2 bag of th
 (``<out>/bag``) and the walk report made from it (``<out>/report``), from the same cores in
 one process (:func:`walker_headless.runner.walk`). The options are ``run_all.py``'s
 (:func:`walker_bringup.run.parse_arguments`): ``--target``, ``--params-file``, ``--out``,
-``--namespace`` (of the bag's topics), ``--no-record``, ``--no-report``, ``--quiet`` and
-``--walk-timeout`` (wall clock) apply; the graph's own are refused there.
+``--namespace`` (of the bag's topics), ``--no-record``, ``--no-report``, ``--quiet``,
+``--walk-timeout`` (wall clock) and ``--plant-params-file`` (the plant's own file) apply;
+the graph's own are refused there.
 
 ``summary.json`` holds what the graph's does, with ``wall_time`` the loop's wall time and
 ``runner`` ``"headless"``; everything in it but ``wall_time`` is the same, bit for bit, for
@@ -40,7 +41,8 @@ def run_headless(args) -> int:
     refused (nothing ran); 6: walked, but the report could not be made.
     """
     try:
-        sections = load_sections(args.params_file)
+        sections = load_sections(args.params_file,
+                                 plant_path=getattr(args, 'plant_params_file', None))
     except (ParameterError, ValueError) as error:
         print(f'[walker] error: {error}', flush=True)
         return 2

@@ -45,6 +45,10 @@ class Sections:
         ``supervisor.*``.
     viz : VizParameters
         ``viz.*`` (the TF and markers of the bag).
+    plant : tuple of (WalkerParameters, SimParameters)
+        The plant's robot and ``sim.*``: from a parameter file of the plant's own (the robot
+        as it really is, where the rest works on the model: a campaign's run), or the same
+        as ``walker`` and ``sim``.
     """
 
     path: Path
@@ -54,13 +58,22 @@ class Sections:
     planner: PlannerParameters
     supervisor: SupervisorParameters
     viz: VizParameters
+    plant: tuple[WalkerParameters, SimParameters] | None = None
+
+    def __post_init__(self) -> None:
+        if self.plant is None:
+            object.__setattr__(self, 'plant', (self.walker, self.sim))
 
 
 def load_sections(path: str | Path | None = None,
-                  overrides: Mapping[str, Any] | None = None) -> Sections:
+                  overrides: Mapping[str, Any] | None = None,
+                  plant_path: str | Path | None = None) -> Sections:
     """Read and validate every section of a parameter file (default: the installed one).
 
     ``overrides`` maps dotted parameter names to values, as ``-p name:=value`` would.
+    ``plant_path`` is a parameter file of the plant's own (``run_all.py
+    --plant-params-file``), read and checked the same way; its robot and ``sim.*`` go to the
+    plant alone.
 
     Raises
     ------
@@ -76,6 +89,12 @@ def load_sections(path: str | Path | None = None,
     planner = section_from_flat(PlannerParameters, flat, PLANNER_PREFIX)
     check_with_gripper(supervisor, walker.gripper)
     check_with_planner(supervisor, planner.stream.start_tolerance)
+    plant = None
+    if plant_path is not None:  # the plant's sections alone: the others' rules are the model's
+        truth = {**load_parameter_file(Path(plant_path)), **dict(overrides or {})}
+        plant_sim = section_from_flat(SimParameters, truth, 'sim.')
+        plant = (WalkerParameters.from_flat(truth), plant_sim)
+        check_against_walker(plant_sim, plant[0])
     return Sections(path, walker, sim, ControllerSettings.from_flat(flat),
                     planner, supervisor,
-                    section_from_flat(VizParameters, flat, VIZ_PREFIX))
+                    section_from_flat(VizParameters, flat, VIZ_PREFIX), plant)

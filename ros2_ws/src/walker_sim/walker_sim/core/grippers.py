@@ -69,7 +69,9 @@ class HoleAlignment:
     axis_error: float
 
 
-def hole_alignment(position, z_axis, truss, hole_depth: float) -> HoleAlignment:
+def hole_alignment(position, z_axis, truss, hole_depth: float,
+                   node_errors: dict[str, tuple[float, float, float]] | None = None
+                   ) -> HoleAlignment:
     """Measure a gripper against the nearest hole.
 
     Parameters
@@ -82,6 +84,10 @@ def hole_alignment(position, z_axis, truss, hole_depth: float) -> HoleAlignment:
         The truss; holes have their mouth at each node (z = 0) and axis +z.
     hole_depth : float
         Depth [m] of the holes.
+    node_errors : dict, optional
+        Node name -> placement error (x, y, z) [m] of the nodes that are off the grid
+        (:class:`walker_sim.core.imperfections.NodePlacement`); the nearest node is found on
+        the grid, errors being far smaller than the spacing.
 
     Notes
     -----
@@ -90,12 +96,16 @@ def hole_alignment(position, z_axis, truss, hole_depth: float) -> HoleAlignment:
     x, y, z = (float(v) for v in position)
     column = min(max(round((x - truss.origin[0]) / truss.spacing), 0), truss.columns - 1)
     row = min(max(round((y - truss.origin[1]) / truss.spacing), 0), truss.rows - 1)
+    node = f'n{column}_{row}'
     dx = x - (truss.origin[0] + column * truss.spacing)
     dy = y - (truss.origin[1] + row * truss.spacing)
+    if node_errors and node in node_errors:
+        error_x, error_y, error_z = node_errors[node]
+        dx, dy, z = dx - error_x, dy - error_y, z - error_z
     dz = z + min(max(-z, 0.0), hole_depth)  # from the nearest point of the hole segment
     ax, ay, az = (float(v) for v in z_axis)
     cosine = min(max(az / math.sqrt(ax * ax + ay * ay + az * az), -1.0), 1.0)
-    return HoleAlignment(node=f'n{column}_{row}',
+    return HoleAlignment(node=node,
                          position_error=math.sqrt(dx * dx + dy * dy + dz * dz),
                          axis_error=math.acos(cosine))
 

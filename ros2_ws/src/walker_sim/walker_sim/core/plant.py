@@ -40,6 +40,7 @@ from walker_sim.core.flexibility import FlexTuning, tune_flexibility
 from walker_sim.core.grippers import (
     GripperCommandError, GripperLogic, GripperMode, GripperStatus, HoleAlignment,
     ScrewOutcome, hole_alignment)
+from walker_sim.core.imperfections import JointSensors, NodePlacement
 from walker_sim.core.motor import DriveCommand, DriveModel
 from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
 from walker_sim.core.snapshot import PlantSnapshot
@@ -118,7 +119,8 @@ class PlantState:
     time : float
         Simulated time [s] since the last reset.
     position, velocity : ndarray, shape (5,)
-        Joint angles [rad] and speeds [rad/s].
+        Joint angles [rad] as the joint sensors read them (the true angles unless
+        ``sim.imperfections`` gives the sensors an offset or noise) and true speeds [rad/s].
     acceleration : ndarray, shape (5,)
         Mean joint acceleration [rad/s^2] over the last step (velocity change over its length).
     effort : ndarray, shape (5,)
@@ -210,6 +212,11 @@ class WalkerPlant:
         self.physics_step = 1.0 / sim.physics_rate
         self.drive = DriveModel.from_parameters(params, sim)
         self.truss = Truss.from_parameters(params)
+        imperfect = sim.imperfections
+        self.placement = NodePlacement(self.truss.node_names, imperfect.node_placement,
+                                       imperfect.seed)
+        self.sensors = JointSensors(imperfect.joint_offset, imperfect.joint_noise,
+                                    imperfect.seed)
         self.kinematics = WalkerKinematics.from_parameters(params)
         self._grippers = GripperLogic.from_parameters(params)
         try:
@@ -277,8 +284,8 @@ class WalkerPlant:
         ParameterError
             If the other node cannot be reached from the base node.
         """
-        base_position = self.truss.position(start.base_node)
-        target = self.truss.position(start.other_node) - base_position
+        base_position = self.node_position(start.base_node)
+        target = self.node_position(start.other_node) - base_position
         target[2] += start.other_height
         try:
             roles = self.kinematics.inverse([target[0], target[1], target[2], 0.0, 0.0])
@@ -325,6 +332,8 @@ class WalkerPlant:
         self._acceleration = np.zeros(5)
         self._motor_levels = None
         self._read_joints()
+        self.sensors.restart()
+        self.sensors.sample()
         return self.state()
 
     # ------------------------------------------------------------------ snapshot
@@ -458,6 +467,7 @@ class WalkerPlant:
             self._read_joints()
             if self._grippers.busy:
                 self._advance_grippers()
+        self.sensors.sample()
         self._command = command
         self._acceleration = ((np.array(self._velocity) - np.array(start_velocity))
                               / (steps * self.physics_step))
@@ -495,7 +505,8 @@ class WalkerPlant:
     def state(self) -> PlantState:
         """Return the plant's state now."""
         return PlantState(
-            time=self.time, position=np.array(self._position), velocity=np.array(self._velocity),
+            time=self.time, position=self.sensors.read(self._position),
+            velocity=np.array(self._velocity),
             acceleration=self._acceleration.copy(), effort=self._command.torque.copy(),
             friction=np.array(self._friction), saturated=self._command.saturated.copy(),
             refused=self._command.refused.copy(),
@@ -503,9 +514,20 @@ class WalkerPlant:
             poses={g: self._gripper_pose(g) for g in GRIPPERS}, base=self._grippers.base,
             measure=self._alignment)
 
+    def true_joint_positions(self) -> np.ndarray:
+        """Return the true joint angles [rad] now, whatever the joint sensors read."""
+        return np.array(self._position)
+
+    def node_position(self, node: str) -> np.ndarray:
+        """Return where a node's hole mouth really is [m], in the truss frame.
+
+        The model's place plus its placement error (``sim.imperfections.node_placement``).
+        """
+        return self.truss.position(node) + self.placement.offset(node)
+
     def _alignment(self, pose: Pose) -> HoleAlignment:
         return hole_alignment(pose.position, pose.z_axis, self.truss,
-                              self.params.truss.hole_depth)
+                              self.params.truss.hole_depth, self.placement.errors)
 
     def _gripper_pose(self, gripper: str) -> Pose:
         link = self._active.gripper_links[gripper]
@@ -623,7 +645,7 @@ class WalkerPlant:
             align = np.eye(3) + sine * skew + (1.0 - cosine) * skew @ skew
         seat = np.eye(4)
         seat[:3, :3] = align @ rotation
-        seat[:3, 3] = self.truss.position(node)
+        seat[:3, 3] = self.node_position(node)
         return Pose.from_matrix(seat)
 
     def _attach(self, gripper: str, pose: Pose) -> None:

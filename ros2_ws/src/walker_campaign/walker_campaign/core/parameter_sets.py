@@ -1,0 +1,160 @@
+"""A run's two parameter sets: the model's (every node but the plant) and the truth's (the plant).
+
+Both start from one nominal parameter file. The *model* set is that file with the run's sweep
+values (what the lab tunes); the *truth* set is the model set with the run's dispersed values
+(the robot as it really is). Each is checked by the walker's own schema, section by section, as
+the nodes that read it would check it, so a value the walker refuses is refused here, before
+anything runs, with the parameter named.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from walker_core.parameter_schema import (
+    ParameterError, flatten_mapping, load_parameter_file, section_from_flat)
+
+__all__ = ['load_nominal', 'check_model', 'check_truth', 'parameter_document',
+           'write_parameter_file', 'WILDCARD']
+
+#: The section of a parameter file that every node reads.
+WILDCARD = '/**'
+
+
+def load_nominal(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Read a nominal parameter file: its flat values and the YAML document itself.
+
+    Raises
+    ------
+    ParameterError
+        The file is missing, not YAML, or not in the ``ros__parameters`` layout; or it has
+        node sections besides ``/**`` (a run's files are written from ``/**`` alone).
+    """
+    path = Path(path)
+    flat = load_parameter_file(path)
+    document = yaml.safe_load(path.read_text())
+    others = sorted(str(k) for k in document if str(k) not in (WILDCARD, '**'))
+    if others:
+        raise ParameterError(f'parameter file {path}: a campaign takes the /** section only, '
+                             f'not node sections ({", ".join(others)})')
+    return flat, document
+
+
+def _controllers(flat: Mapping[str, Any]) -> None:
+    from walker_control.core.config import ControllerSettings
+
+    ControllerSettings.from_flat(flat)
+
+
+def _planner(flat: Mapping[str, Any]) -> None:
+    from walker_planner.core.parameters import PlannerParameters
+
+    section_from_flat(PlannerParameters, flat, 'planner.')
+
+
+def _supervisor(flat: Mapping[str, Any]) -> None:
+    from walker_supervisor.core.sequencer import SupervisorParameters
+    from walker_supervisor.core.teleop import TeleopParameters
+
+    section_from_flat(SupervisorParameters, flat, 'supervisor.')
+    section_from_flat(TeleopParameters, flat, 'teleop.')
+
+
+#: The model's checks, each with the prefixes of the values it reads: a check is run once per
+#: distinct set of those values (the controllers' stability check designs every filter of
+#: every mode over the inertia range: seconds on a loaded machine).
+_MODEL_CHECKS = ((_controllers, ('robot.', 'timing.', 'control.')),
+                 (_planner, ('planner.',)), (_supervisor, ('supervisor.', 'teleop.')))
+_CHECKED: dict[tuple[str, str], str | None] = {}
+_CACHE_SIZE = 1024
+
+
+def _check_once(check, prefixes: tuple[str, ...], flat: Mapping[str, Any]) -> None:
+    values = json.dumps({k: v for k, v in flat.items() if k.startswith(prefixes)},
+                        sort_keys=True, default=repr)
+    key = (check.__name__, values)
+    if key not in _CHECKED:
+        if len(_CHECKED) >= _CACHE_SIZE:
+            _CHECKED.clear()
+        try:
+            check(flat)
+            _CHECKED[key] = None
+        except ParameterError as error:
+            _CHECKED[key] = str(error)
+    if _CHECKED[key] is not None:
+        raise ParameterError(_CHECKED[key])
+
+
+def check_model(flat: Mapping[str, Any]) -> None:
+    """Check the model's set as the controllers, planner, supervisor and plant would.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter and the rule (the controllers' stability check included).
+    """
+    for check, prefixes in _MODEL_CHECKS:
+        _check_once(check, prefixes, flat)
+    check_truth(flat)
+
+
+def check_truth(flat: Mapping[str, Any]) -> None:
+    """Check the truth's set as the plant would (robot, truss, grippers, ``sim.*``).
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter and the rule.
+    """
+    from walker_core.robot_parameters import WalkerParameters
+    from walker_sim.core.config import SimParameters, check_against_walker
+
+    check_against_walker(SimParameters.from_flat(flat), WalkerParameters.from_flat(flat))
+
+
+def parameter_document(document: Mapping[str, Any], values: Mapping[str, Any]
+                       ) -> dict[str, Any]:
+    """Return a copy of a parameter file's document with some flat values replaced.
+
+    Parameters
+    ----------
+    document : mapping
+        The nominal file's YAML document (``{'/**': {'ros__parameters': {...}}}``).
+    values : mapping
+        ``{dotted name: value}`` to put under ``/**``; each name must already be in it.
+
+    Raises
+    ------
+    ParameterError
+        A name that is not in the document.
+    """
+    result = copy.deepcopy(dict(document))
+    key = WILDCARD if WILDCARD in result else '**'
+    known = flatten_mapping(result[key]['ros__parameters'])
+    for name, value in values.items():
+        if name not in known:
+            raise ParameterError(f'parameter {name!r} is not in the nominal file')
+        node = result[key]['ros__parameters']
+        *parents, leaf = name.split('.')
+        for part in parents:
+            node = node[part]
+        node[leaf] = list(value) if isinstance(value, tuple) else value
+    return result
+
+
+def write_parameter_file(document: Mapping[str, Any], values: Mapping[str, Any],
+                         path: str | Path) -> Path:
+    """Write a parameter file: ``document`` with ``values`` replaced (floats written exactly).
+
+    PyYAML writes a float as its ``repr``, which reads back as the same float: the file
+    carries the drawn value bit for bit.
+    """
+    path = Path(path)
+    path.write_text(yaml.safe_dump(parameter_document(document, values), sort_keys=False))
+    return path

@@ -1,0 +1,149 @@
+"""A walk's outcome as result rows: one per step, one for the run, each with its parameters.
+
+A walk (headless or the graph) ends in the summary ``run_all.py`` writes (``summary.json``:
+the per-step table of :mod:`walker_report.core.steps` and the walk's end). Every row carries the
+run's identity and parameters (``sweep.<key>``, ``draw.<column>``), so a step row alone says
+under which truth and settings it was walked. Figures are SI (s, m); a figure that does not
+exist (no step taken, an unknown bound) is ``None``.
+
+The run row's ``outcome`` is ``reached`` (the walk got to its target), ``failed`` (it ended in
+a safe hold, ``cause`` saying why), ``timeout`` (it ran out of wall-clock time), or ``error``
+(the run could not be carried out: a parameter refused, a crash; ``message`` says what). Only
+``exec.*`` fields (wall time, host, process) differ when a run is repeated; the rest of a row is
+reproduced exactly (:func:`deterministic_part`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import statistics
+from collections.abc import Mapping
+from typing import Any
+
+from walker_campaign.core.plan import RunPlan
+
+__all__ = ['OUTCOMES', 'RUN', 'STEP', 'cause_of', 'run_rows', 'error_rows', 'deterministic_part',
+           'EXEC_PREFIX']
+
+OUTCOMES = ('reached', 'failed', 'timeout', 'error')
+RUN, STEP = 'run', 'step'
+#: Fields that describe how a run was executed, not what it gave.
+EXEC_PREFIX = 'exec.'
+_NUMBER = re.compile(r'[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?')
+
+
+def cause_of(message: str) -> str:
+    """Return the cause of a failure, for counting: the message's first clause, numbers as ``#``.
+
+    ``'insertion jammed 3 times: tip 2.31 mm off'`` -> ``'insertion jammed # times'``.
+    """
+    head = re.split(r'[:;(]', message or '', maxsplit=1)[0].strip()
+    return _NUMBER.sub('#', head) or 'unknown'
+
+
+def _finite(value: Any) -> float | None:
+    if value is None or isinstance(value, bool):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _identity(campaign: str, plan: RunPlan) -> dict[str, Any]:
+    row: dict[str, Any] = {'campaign': campaign, 'index': plan.index,
+                           'replicate': plan.replicate, 'point': plan.point,
+                           'seed': plan.imperfection_seed}
+    row.update({f'sweep.{k}': (list(v) if isinstance(v, tuple) else v)
+                for k, v in plan.sweep.items()})
+    row.update({f'draw.{k}': v for k, v in plan.draws.items()})
+    return row
+
+
+def _step_row(identity: Mapping[str, Any], step: Mapping[str, Any]) -> dict[str, Any]:
+    success = bool(step.get('success'))
+    attempts = int(step.get('attempts') or 0)
+    duration, bound = _finite(step.get('duration')), _finite(step.get('bound'))
+    row = {'kind': STEP, **identity, 'step': int(step['index']),
+           'gripper': step.get('gripper', ''), 'from_node': step.get('from_node', ''),
+           'to_node': step.get('to_node', ''), 'sweep_angle': _finite(step.get('sweep')),
+           'success': success, 'duration': duration, 'bound': bound,
+           'bound_ratio': duration / bound if duration is not None and bound else None,
+           'tip_error': _finite(step.get('insertion_error')),
+           'tip_error_estimated': _finite(step.get('insertion_error_estimated')),
+           'residual_vibration': _finite(step.get('residual_vibration')),
+           'attempts': attempts,
+           # a step that ended attached screwed in once more than it jammed; one aborted
+           # counts its jammed screw-ins as its attempts
+           'jams': attempts - 1 if success else attempts,
+           'message': step.get('message', '') or '',
+           'cause': '' if success else cause_of(step.get('message', ''))}
+    for phase, seconds in (step.get('phase_durations') or {}).items():
+        row[f'phase.{phase}'] = _finite(seconds)
+    return row
+
+
+def _summary_figures(steps: list[dict[str, Any]]) -> dict[str, Any]:
+    def values(key: str) -> list[float]:
+        return [s[key] for s in steps if s[key] is not None]
+
+    ratios, errors = values('bound_ratio'), values('tip_error')
+    walked, bound = sum(values('duration')), sum(values('bound'))
+    return {
+        'steps': len(steps), 'steps_ok': sum(s['success'] for s in steps),
+        'jams': sum(s['jams'] for s in steps),
+        'walk_time': walked if steps else None,
+        'bound': bound if steps else None,
+        'bound_ratio': walked / bound if bound > 0 else None,
+        'step_ratio_median': statistics.median(ratios) if ratios else None,
+        'step_ratio_max': max(ratios) if ratios else None,
+        'tip_error_mean': statistics.fmean(errors) if errors else None,
+        'tip_error_max': max(errors) if errors else None,
+        'vibration_max': max(values('residual_vibration'), default=None)}
+
+
+def run_rows(campaign: str, plan: RunPlan, summary: Mapping[str, Any],
+             execution: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
+    """Return the rows of a walk: one per step, then the run's (which marks the run as done).
+
+    Parameters
+    ----------
+    campaign : str
+        The campaign's name.
+    plan : RunPlan
+        The run.
+    summary : mapping
+        The walk's summary (``summary.json``): ``steps``, ``reached``, ``message``, and
+        ``timed_out`` when the walk ran out of time.
+    execution : mapping, optional
+        How the run was executed (wall time, host, ...): stored as ``exec.<key>``.
+    """
+    identity = _identity(campaign, plan)
+    steps = [_step_row(identity, s) for s in summary.get('steps') or []]
+    reached = bool(summary.get('reached'))
+    message = str(summary.get('message') or '')
+    failed_step = next((s for s in steps if not s['success']), None)
+    if reached:
+        outcome, cause = 'reached', ''
+    elif summary.get('timed_out'):
+        outcome, cause = 'timeout', 'the walk ran out of wall-clock time'
+    else:
+        outcome = 'failed'
+        cause = failed_step['cause'] if failed_step else cause_of(message)
+    run = {'kind': RUN, **identity, 'outcome': outcome, 'reached': reached, 'cause': cause,
+           'message': message, **_summary_figures(steps)}
+    run.update({f'{EXEC_PREFIX}{k}': v for k, v in (execution or {}).items()})
+    return steps + [run]
+
+
+def error_rows(campaign: str, plan: RunPlan, message: str,
+               execution: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
+    """Return the row of a run that could not be carried out (``outcome`` ``error``)."""
+    run = {'kind': RUN, **_identity(campaign, plan), 'outcome': 'error', 'reached': False,
+           'cause': cause_of(message), 'message': message, **_summary_figures([])}
+    run.update({f'{EXEC_PREFIX}{k}': v for k, v in (execution or {}).items()})
+    return [run]
+
+
+def deterministic_part(row: Mapping[str, Any]) -> dict[str, Any]:
+    """Return a row without its ``exec.*`` fields: what a repeated run reproduces exactly."""
+    return {k: v for k, v in row.items() if not k.startswith(EXEC_PREFIX)}
