@@ -267,21 +267,3 @@ def test_a_local_campaign_stays_on_loopback_resumes_and_ends_its_processes(tmp_p
     rows = [json.loads(line) for line in results.read_text().splitlines()]
     assert sorted(r['index'] for r in rows if r['kind'] == 'run') == list(range(runs)), \
         'no run walked twice'
-
-
-def test_a_real_walk_on_a_local_ray(tmp_path):
-    """One walk of the sim-time graph (--graph) as a Ray task, its plant on the truth's file."""
-    env = campaign_environment()
-    out = tmp_path / 'out'
-    command = [sys.executable, str(REPO_ROOT / 'scripts' / 'campaign.py'),
-               str(small_spec(tmp_path, 1)), '--out', str(out), '--workers', '1', '--graph']
-    run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=900,
-                         cwd=REPO_ROOT)
-    assert run.returncode == 0, run.stdout + run.stderr
-    rows = [json.loads(line) for line in (out / 'results.jsonl').read_text().splitlines()]
-    walk = next(r for r in rows if r['kind'] == 'run')
-    assert walk['outcome'] != 'error', walk
-    assert walk['exec.walk'] == 'graph'
-    steps = [r for r in rows if r['kind'] == 'step']
-    assert steps and all(r['tip_error'] < 2e-3 for r in steps if r['success'])
-    assert (out / 'report' / 'report.md').is_file()
