@@ -3,15 +3,17 @@
 ``walkerctl walk-to`` waited for the result of its goal with no limit: with the supervisor
 killed it kept a stale progress line and never exited. Now it watches the supervisor's status
 and asks again for the result (:mod:`walker_teleop.goal_monitor`): a dead supervisor ends the
-wait within seconds with exit code 3 and a message naming it, and a supervisor started again
-answers for a goal it does not own (it has ended: its outcome is unknown to it) instead of
-leaving its client waiting. The graph is the fault graph (every node a process, sim time, a
-ROS domain of its own, discovery on loopback), which keeps a gripper attached throughout.
+wait within seconds with exit code 3 and a message naming it. A supervisor started again
+answers the result of a goal its dead predecessor accepted with the goal ABORTED and the
+reason, not rclpy's UNKNOWN (the goal ids it ran are kept in a file beside its step-state
+file). The graph is the fault graph (every node a process, sim time, a ROS domain of its own,
+discovery on loopback), which keeps a gripper attached throughout.
 """
 
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -62,3 +64,40 @@ def test_walkerctl_exits_3_naming_the_dead_supervisor_instead_of_waiting_forever
     assert '/walker/supervisor has been silent for' in err, err
     assert f'the walk to {step.to_node} is unknown' in err, err
     assert 'reached' not in out and 'cancelling' not in err, (out, err)
+
+
+def _orphan_answer(graph, goal_id: str):
+    """Ask the supervisor for the result of goal ``goal_id`` (32 hex digits), as a client would."""
+    from rclpy.action.client import ClientGoalHandle
+    from unique_identifier_msgs.msg import UUID
+
+    handle = ClientGoalHandle(graph.client.walk_client, UUID(uuid=list(bytes.fromhex(goal_id))),
+                              None)
+    return graph.client._wait(handle.get_result_async(), 30.0, None, "the orphan's result")
+
+
+def test_a_supervisor_started_again_aborts_the_goal_its_predecessor_left(graph):
+    """The walk goal of the killed supervisor, asked for again, ends ABORTED with the reason."""
+    import yaml
+    from action_msgs.msg import GoalStatus
+
+    ledger = Path(graph.group.env['ROS_HOME']) / 'walker' / 'walker_goals.yaml'
+    if 'supervisor' not in graph.killed:  # run alone: a walk whose supervisor dies
+        step = graph.one_step()
+        since = time.monotonic()
+        graph.start_walk(step.to_node)
+        graph.wait_until(lambda: _in_insertion(graph, since), TIMEOUT, 'the walk in insertion')
+        graph.kill('supervisor')
+    running = yaml.safe_load(ledger.read_text())['running']
+    assert [goal['action'] for goal in running] == ['walk_to'], running
+    graph.restart('supervisor')
+    graph.wait_until(lambda: 'orphaned' in (yaml.safe_load(ledger.read_text()) or {})
+                     and not yaml.safe_load(ledger.read_text())['running'], TIMEOUT,
+                     'the restarted supervisor reading its ledger')
+    answer = _orphan_answer(graph, running[0]['goal_id'])
+    assert answer.status == GoalStatus.STATUS_ABORTED, answer.status
+    assert not answer.result.success
+    assert 'died and was started again' in answer.result.message, answer.result.message
+    assert running[0]['target_node'] in answer.result.message
+    unknown = _orphan_answer(graph, '0' * 32)  # a goal nobody accepted stays unknown
+    assert unknown.status == GoalStatus.STATUS_UNKNOWN, unknown.status

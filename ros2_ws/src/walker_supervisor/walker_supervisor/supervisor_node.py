@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action import CancelResponse, GoalResponse
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
@@ -46,6 +46,8 @@ from walker_supervisor.core.phases import SequencerError
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
 from walker_supervisor.inputs import SupervisorInputs
 from walker_supervisor.links import SimTimeRelease, SupervisorLinks
+from walker_supervisor.owned_goal_server import (
+    GoalLedgerFile, OwnedGoalServer, goal_ledger_path)
 from walker_supervisor.messages import (
     diagnostics_message, feedback_message, join_answers, mode_message, phase_message,
     report_message, result_message)
@@ -96,9 +98,12 @@ class SupervisorNode(Node):
         self._accepted: list[rclpy.task.Future] = []  # of goals accepted, not yet executed
         self._measurement_waiters: list[tuple[float, rclpy.task.Future]] = []
         self._ticking = self._tick_due = False
+        # goals a dead predecessor accepted are answered ABORTED, not UNKNOWN
+        self._ledger = GoalLedgerFile(goal_ledger_path(self.get_namespace()))
         for name, (action, _) in _GOALS.items():
-            ActionServer(self, action, name, execute_callback=self._run_goal,
-                         goal_callback=self._accept, cancel_callback=self._on_cancel)
+            OwnedGoalServer(self, action, name, execute_callback=self._run_goal,
+                            goal_callback=self._accept, cancel_callback=self._on_cancel,
+                            ledger=self._ledger)
         self.create_service(Trigger, 'hold', self._on_hold)
         self.create_service(Trigger, 'resume', self._on_resume)
         self.teleop = TeleopServer(self, self.runner, self.links, self.clocks, self._execute,
@@ -239,7 +244,10 @@ class SupervisorNode(Node):
         """Follow an accepted goal to its end (the runner walks it); return its result."""
         ended_future = self._accepted.pop(0)  # goals are executed in the order accepted
         self._goal_handle = goal_handle
+        kind = 'walk_to' if isinstance(goal_handle.request, WalkTo.Goal) else 'step'
+        self._ledger.started(goal_handle, kind)
         ended = await ended_future
+        self._ledger.ended(goal_handle)
         if self._goal_handle is goal_handle:
             self._goal_handle = None
         {'succeeded': goal_handle.succeed, 'canceled': goal_handle.canceled,

@@ -76,9 +76,14 @@ class GoalMonitor:
             answer = probe.result()
             if result.done() or answer is None:
                 continue
-            if answer.status in _ENDED:
+            if answer.status == GoalStatus.STATUS_ABORTED:
+                # a supervisor started again ends the goals it inherited; the same server's
+                # abort reaches the first request too (the watch waits ANSWER_GRACE for it)
+                self.watch.probe_answered('aborted', answer.result.message, now)
+            elif answer.status in _ENDED:
                 return answer  # the same server's end: the first answer may have been lost
-            self.watch.probe_answered('unknown', '', now)
+            else:
+                self.watch.probe_answered('unknown', '', now)
         if not result.done() and self.watch.probe_due(now):
             self._probes.append(handle.get_result_async())
         verdict = '' if result.done() else self.watch.verdict(now)
