@@ -109,3 +109,10 @@ def test_an_unknown_target_is_refused_before_anything_moves(sections, tmp_path):
         rejections = [r.message for r in reader.messages(topics=['/walker/goal_rejections'])]
     assert [(r.action, r.target_node) for r in rejections] == [('walk_to', 'n9_9')]
     assert 'not on the truss' in rejections[0].reason
+
+
+def test_a_walk_stopped_at_its_wall_time_limit_says_it_timed_out(sections):
+    result = walk(sections, 'n1_2', wall_timeout=0.0)
+    assert not result.reached and result.timed_out
+    assert 'did not end within 0 s of wall time' in result.message
+    assert 0 < result.periods < 1000  # stopped at the first check, long before the step ends

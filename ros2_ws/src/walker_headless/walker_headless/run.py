@@ -111,6 +111,7 @@ def _summarise(result: WalkResult, out: Path, rate: float) -> int:
     write_json(rows, out / 'summary.json',
                {'target': result.target, 'reached': result.reached,
                 'message': result.message, 'path': list(result.path),
+                'timed_out': result.timed_out,
                 'wall_time': result.wall_time, 'loop': loop_record(result),
                 'runner': 'headless'})
     if result.reached:

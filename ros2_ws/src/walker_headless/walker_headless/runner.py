@@ -68,6 +68,8 @@ class WalkResult:
     cpu_time : float
         CPU time of this process in the loop, from the walk's start to its end [s] (not part
         of the walk's outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
+    timed_out : bool
+        The walk was stopped at its wall-time limit (``wall_timeout``), unreached.
     """
 
     target: str
@@ -82,6 +84,7 @@ class WalkResult:
     periods: int
     wall_time: float
     cpu_time: float = 0.0
+    timed_out: bool = False
 
 
 def walk(sections: Sections, target: str, recording=None,
@@ -140,6 +143,7 @@ def walk(sections: Sections, target: str, recording=None,
                 break
         result = _result(target, shell, loop, started, message)
         result.cpu_time = time.process_time() - cpu_started
+        result.timed_out = message is not None
         return result
     finally:
         loop.close()
