@@ -146,13 +146,13 @@ class PlantNode(Node):
             return False
         return log_realtime_request(self.get_logger(), self.params.timing.realtime_priority)
 
-    def hand_states_to(self, controllers) -> None:
-        """Sim time: hand each state to ``controllers`` in this process by a call.
+    def hand_states_to(self, controllers, planner=None) -> None:
+        """Sim time: hand each state to ``controllers`` (and ``planner``) here by a call.
 
         ``controllers`` is a controller node of this process answering every joint, connected
-        with its ``answer_plant_directly(self.take_efforts)`` (:mod:`walker_sim.state_handover`).
-        ``joint_states`` and ``joint_accelerations`` are still published for every other
-        subscriber.
+        with its ``answer_plant_directly(self.take_efforts)``; a ``planner`` streaming by call
+        takes each state first (:mod:`walker_sim.state_handover`). ``joint_states`` and
+        ``joint_accelerations`` are still published for every other subscriber.
 
         Raises
         ------
@@ -163,7 +163,7 @@ class PlantNode(Node):
         if not self.sim_time:
             raise ValueError('states are handed to controllers by call only in sim time '
                              '(sim.clock_mode: sim_time)')
-        self._handover = StateHandover(controllers, self._steady_now)
+        self._handover = StateHandover(controllers, self._steady_now, planner)
         controllers.answer_plant_directly(self.take_efforts)
 
     def take_efforts(self, message: JointState) -> None:
