@@ -57,7 +57,7 @@ LOOP_NODES = ('plant', 'controllers')
 
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
 # [s] the loop by call: longest slice of it between two turns of the executor
-_LOOP_SLICE = 0.002
+_LOOP_SLICE = 0.010
 
 
 @dataclasses.dataclass(frozen=True)

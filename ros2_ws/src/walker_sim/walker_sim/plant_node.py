@@ -12,6 +12,7 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
   liveness heartbeat); ``robot_description`` (once, latched);
   ``/clock`` (sim time, at ``sim.clock_rate``);
   ``/diagnostics`` (1 Hz, wall clock: missed commands, refused and clamped torques);
+  ``joint_accelerations`` and the poses only while subscribed (:mod:`walker_runtime.listened`);
 * subscribes to ``effort_commands`` (``sensor_msgs/JointState``: joint names and efforts,
   stamped with the state they answer) and, in sim time, ``supervisor/decided_until``
   (``rosgraph_msgs/Clock``: with ``sim.wait_for_decisions`` no state is stepped to past it);
