@@ -56,7 +56,8 @@ __all__ = ['Component', 'COMPONENTS', 'LOOP_NODES', 'CompositionError', 'Compose
 LOOP_NODES = ('plant', 'controllers')
 
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
-# [s] the loop by call: longest slice of it between two turns of the executor
+# [s] the loop by call: longest slice of it between two turns of the executor (a turn builds
+# the wait set of every node of the thread, a few hundred microseconds)
 _LOOP_SLICE = 0.010
 
 
@@ -64,14 +65,9 @@ _LOOP_SLICE = 0.010
 class Component:
     """How one executable of the graph is built as a node in the composed process.
 
-    Attributes
-    ----------
-    module, class_name : str
-        Where the node class is (it takes ``Node``'s keyword arguments).
-    default_executor : bool
-        The node needs rclpy's default ``SingleThreadedExecutor`` (see the module notes).
-    start : str
-        Name of a method to call once the node is built ('' for none), as its ``main()`` does.
+    ``module``, ``class_name``: where the node class is (it takes ``Node``'s keyword
+    arguments); ``default_executor``: the node needs rclpy's default ``SingleThreadedExecutor``
+    (module notes); ``start``: a method to call once the node is built, as its ``main()`` does.
     """
 
     module: str
