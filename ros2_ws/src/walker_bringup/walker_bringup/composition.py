@@ -56,9 +56,9 @@ __all__ = ['Component', 'COMPONENTS', 'LOOP_NODES', 'CompositionError', 'Compose
 LOOP_NODES = ('plant', 'controllers')
 
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
-# [s] the loop by call: longest slice of it between two turns of the executor (a turn builds
-# the wait set of every node of the thread, a few hundred microseconds)
-_LOOP_SLICE = 0.010
+# [s] the loop by call: longest slice of it between two turns of the executor (a turn serves
+# one ready callback: longer slices starved the plant's heartbeat on a loaded machine)
+_LOOP_SLICE = 0.002
 
 
 @dataclasses.dataclass(frozen=True)
