@@ -7,6 +7,7 @@ Usage::
     python3 benchmarks/headless_benchmark.py --quick    # one step, shorter graph windows
     python3 benchmarks/headless_benchmark.py --no-graph # the headless runner and the plant
     python3 benchmarks/headless_benchmark.py --profile  # and cProfile's top functions
+    python3 benchmarks/headless_benchmark.py --graph-only  # the graph rows alone, merged
 
 It sets up the environment like the other scripts, prints a table and writes
 ``benchmarks/results/headless.json``. Measured side by side, in one process (one core):
@@ -21,8 +22,11 @@ It sets up the environment like the other scripts, prints a table and writes
    the very state the walk ended in, which is checked). Its rate is the physical limit of the
    loop; the headless rate is quoted as a fraction of it.
 3. The sim-time graph walking back and forth (``benchmarks/graph_runner.py``, as
-   ``run_benchmarks.py`` measures it), composed in one process and as separate processes:
-   CPU-seconds of the graph per simulated second.
+   ``run_benchmarks.py`` measures it), composed in one process (the plant and the grouped
+   controllers exchanging by call, ``run_all.py --composed``'s form in sim time), the same
+   with five controller nodes exchanging messages, and as separate processes: CPU-seconds of
+   the graph per simulated second, and each process's share. ``--graph-only`` measures these
+   alone and replaces only the graph rows of the results file.
 
 Targets (issue 37): headless at least 10 x real time on one core and at least half the
 plant-alone rate; the graph at least 3 x real time composed (at most 0.33 CPU-s per simulated
@@ -33,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import json
 import os
 import pstats
 import statistics
@@ -61,6 +66,8 @@ def _arguments() -> argparse.Namespace:
                         help='one step and shorter graph windows')
     parser.add_argument('--no-graph', dest='graph', action='store_false',
                         help='skip the sim-time graph windows')
+    parser.add_argument('--graph-only', action='store_true',
+                        help='only the graph windows; the other rows of --output are kept')
     parser.add_argument('--graph-seconds', type=float, default=None,
                         help='measured window of each graph arrangement [s] (default 40, '
                              '--quick 15)')
@@ -164,21 +171,32 @@ def profile_walk(sections, target: str, count: int = 20) -> list[dict]:
             for (file, line, name), row in rows]
 
 
+#: The graph's arrangements measured: (key, GraphRun options).
+GRAPH_ARRANGEMENTS = (('composed', {'composed': True, 'grouped': True}),
+                      ('composed_five_controllers', {'composed': True}),
+                      ('processes', {}))
+
+
 def graph_windows(seconds: float, scratch: Path) -> dict:
-    """Measure the sim-time graph walking, composed and as processes: CPU per sim second."""
+    """Measure the sim-time graph walking in each arrangement: CPU per sim second."""
     from run_benchmarks import Suite
 
     suite = Suite(argparse.Namespace(quick=False, soak=None), scratch)
     windows = {}
-    for kind, options in (('composed', {'composed': True}), ('processes', {})):
+    for kind, options in GRAPH_ARRANGEMENTS:
         window = suite.window(sim_time=True, walking=True, seconds=seconds, warmup=5.0,
                               **options)
         walker = window['per_walker'][0]
         cost = walker['cpu_seconds_per_sim_second']
+        loop = walker['loop']
         windows[kind] = {'cpu_seconds_per_sim_second': cost,
                          'real_time_factor_cpu': 1.0 / cost if cost else None,
-                         'real_time_factor_wall': walker['loop'].get('real_time_factor'),
+                         'real_time_factor_wall': loop.get('real_time_factor'),
+                         'round_trip_ms': loop.get('all_five_latency'),
                          'cpu_fraction': walker['cpu_fraction'],
+                         'cpu_fraction_by_process': window['usage']['cpu_fraction'],
+                         'walks_completed': walker['walks_completed'],
+                         'safe_holds': walker['safe_holds'],
                          'load_average': window['load_average'], 'errors': window['errors']}
     return windows
 
@@ -187,17 +205,11 @@ def _median(runs: list[dict], key: str) -> float:
     return statistics.median(run[key] for run in runs)
 
 
-def main() -> int:
-    """Measure, print the table, write the JSON; exit 0 (targets are reported, not enforced)."""
-    walker_env.reexec_in_environment(os.path.abspath(__file__), sys.argv[1:])
-    args = _arguments()
-    from bench_support import machine_info, write_json
+def headless_rows(args: argparse.Namespace, target: str, machine: dict, scratch: Path) -> dict:
+    """Measure the headless walks and the plant alone, interleaved; their document."""
     from walker_headless.sections import load_sections
 
-    target = args.target or ('n1_2' if args.quick else 'n4_3')
     sections = load_sections()
-    machine = machine_info()
-    scratch = Path(tempfile.mkdtemp(prefix='walker_headless_bench_'))
     print(f'[benchmark] headless walks to {target}, {args.repeats} of each kind, load average '
           f'{machine["load_average_1_5_15"][0]:.2f}', flush=True)
     bare, recorded, alone = [], [], []
@@ -220,11 +232,33 @@ def main() -> int:
             'fraction_of_plant_alone': _median(runs, 'real_time_factor_cpu') / plant_rate})
     if args.profile:
         document['profile'] = profile_walk(sections, target)
+    return document
+
+
+def main() -> int:
+    """Measure, print the table, write the JSON; exit 0 (targets are reported, not enforced)."""
+    walker_env.reexec_in_environment(os.path.abspath(__file__), sys.argv[1:])
+    args = _arguments()
+    from bench_support import machine_info, write_json
+
+    target = args.target or ('n1_2' if args.quick else 'n4_3')
+    machine = machine_info()
+    scratch = Path(tempfile.mkdtemp(prefix='walker_headless_bench_'))
+    if args.graph_only:
+        if not args.output.exists():
+            print(f'[benchmark] --graph-only: {args.output} does not exist; run without '
+                  '--graph-only first', file=sys.stderr)
+            return 2
+        document = json.loads(args.output.read_text())
+        document['graph_machine'] = machine
+    else:
+        document = headless_rows(args, target, machine, scratch)
     if args.graph:
         seconds = args.graph_seconds or (15.0 if args.quick else 40.0)
         print(f'[benchmark] the sim-time graph walking: {seconds:g} s windows', flush=True)
         document['graph'] = graph_windows(seconds, scratch)
-    document['machine']['load_average_after'] = [round(x, 2) for x in os.getloadavg()]
+    document['graph_machine' if args.graph_only else 'machine']['load_average_after'] = [
+        round(x, 2) for x in os.getloadavg()]
     write_json(args.output, document)
     _print_table(document)
     print(f'[benchmark] results in {args.output}')
@@ -242,12 +276,13 @@ def _print_table(document: dict) -> None:
         rows.append((name, f'{row["real_time_factor_cpu"]:.1f}',
                      f'{row["real_time_factor_wall"]:.1f}', f'{row["us_per_period_cpu"]:.0f}',
                      f'{row["fraction_of_plant_alone"]:.2f}', target))
-    for kind, target in (('composed', '>= 3 x'), ('processes', '>= 1 x')):
+    for kind, target in (('composed', '>= 3 x'), ('composed_five_controllers', ''),
+                         ('processes', '>= 1 x')):
         window = document.get('graph', {}).get(kind)
         if window is None:
             continue
         cost = window['cpu_seconds_per_sim_second']
-        rows.append((f'graph {kind}, sim time walking',
+        rows.append((f'graph {kind.replace("_", " ")}, sim time walking',
                      f'{window["real_time_factor_cpu"]:.2f}' if cost else '-',
                      f'{window["real_time_factor_wall"]:.2f}'
                      if window['real_time_factor_wall'] else '-',
@@ -257,6 +292,11 @@ def _print_table(document: dict) -> None:
         print('  '.join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)))
         if k == 0:
             print('  '.join('-' * w for w in widths))
+    for kind, window in document.get('graph', {}).items():
+        shares = sorted(window['cpu_fraction_by_process'].items(), key=lambda item: -item[1])
+        print(f'{kind}: ' + ', '.join(f'{name.rsplit("/", 1)[-1]} {100 * share:.0f} %'
+                                      for name, share in shares)
+              + (f'; errors: {window["errors"]}' if window['errors'] else ''))
     same = all(run['same_final_state'] for run in document['plant_alone']['runs'])
     print(f"the replay on the plant alone ends in the walk's final state: {same}")
     for entry in document.get('profile', [])[:12]:

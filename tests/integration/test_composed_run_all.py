@@ -70,3 +70,30 @@ def test_run_all_walks_with_the_loop_composed_and_exchanging_by_call(tmp_path):
     assert summary['loop']['decision_timeouts'] is not None, summary['loop']
     assert "in sim time with the supervisor's decisions" in text
     assert (out / 'bag' / 'metadata.yaml').exists()  # the recorder, a process of its own
+
+
+def test_run_all_walks_composed_with_the_planner_and_the_loop_by_call(tmp_path):
+    """The whole graph in one process in sim time: states and setpoints by call, recorded.
+
+    The plant hands each state to the planner's stream and to the grouped controllers, the
+    stream its setpoints to the controllers, by call (the step could not be walked without
+    them); the topics the recorder in the same process keeps are still published, and the
+    walk report reads the walk from its bag.
+    """
+    from walker_bag.core.bag_reader import BagReader
+    from walker_report.core.walk_data import load_walk
+
+    text, out, summary = walk_one_step(tmp_path, 'composed', '--composed')
+    assert 'in 1 composed process' in text
+    log = (out / 'logs' / 'graph.log').read_text()
+    assert 'the plant, the planner and the controllers exchange by call' in log, log
+    with BagReader(out / 'bag') as reader:
+        counts = reader.message_counts
+    states = next(n for topic, n in counts.items() if topic.endswith('/joint_states'))
+    simulated = summary['steps'][0]['duration']  # [s]
+    assert states > 0.9 * 500 * simulated, (states, simulated)  # every period's state
+    for name in ('a_yaw_joint', 'b_yaw_joint', 'vertex_joint'):
+        controller = next(n for topic, n in counts.items()
+                          if topic.endswith(f'/controllers/{name}/state'))
+        assert controller > 0.9 * 100 * simulated, (name, controller)  # control.state_rate
+    assert any(event.step_count for event in load_walk(out / 'bag').phases)

@@ -11,21 +11,23 @@ Executors: the plant and the five controllers share one executor, the one
 :func:`walker_runtime.spinning.make_executor` selects (the events executor by default), in the
 main thread (rclpy's ``SingleThreadedExecutor`` when they exchange by call, below). The
 supervisor and the planner keep the default ``SingleThreadedExecutor``, as in their own
-processes (their actions' executions await futures, which failed inside the
-events executor, or made its every spin return at once), and so does the recorder (it
-subscribes to topics as they appear, which the events executor does not pick up after a node
-was added); those three share a second thread. The planner streams from its own thread (on
-the events executor), as in its process. All threads share one Python
-interpreter: the whole graph gets at most one core of Python, where the separate processes
-can use every core; what it saves is the process boundary (no inter-process transport, no
-wake-up of another process per message).
+processes (their actions' executions await futures, which failed inside the events executor,
+or made its every spin return at once), and so does the recorder (it subscribes to topics as
+they appear, which the events executor does not pick up after a node was added); those three
+share a second thread. The planner streams from its own thread (on the events executor), as
+in its process. All threads share one Python interpreter: the whole graph gets at most one
+core of Python; what it saves is the process boundary (no inter-process transport, no wake-up
+of another process per message).
 
 The loop by call: in sim time, with the five joint controllers as one node
 (``--grouped-controllers``), the plant hands each state to the controllers and takes their
 answer by a function call (``PlantNode.hand_states_to``) instead of two messages through DDS,
-as Gazebo's ros2_control plugin runs its controllers inside the simulator. ``--only
-plant,controllers`` composes just that loop, for the other nodes to run as processes of their
-own (``run_all.py --composed-loop``).
+as Gazebo's ros2_control plugin runs its controllers inside the simulator; with the planner in
+the process too, its stream takes each state by call first and hands its setpoints to the
+controllers by call (``PlannerNode.stream_by_call``): the lock-step waits on no message. Every
+topic is still published for the other subscribers. ``--only plant,controllers`` composes just
+the loop, for the other nodes to run as processes of their own (``run_all.py
+--composed-loop``).
 
 Shutdown: SIGINT or SIGTERM stops the spinning, the recorder takes what it has received and
 closes its bag, then every node is destroyed (the planner last: destroying it shuts the
@@ -54,7 +56,8 @@ __all__ = ['Component', 'COMPONENTS', 'LOOP_NODES', 'CompositionError', 'Compose
 LOOP_NODES = ('plant', 'controllers')
 
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
-# [s] the loop by call: longest slice of it between two turns of the executor
+# [s] the loop by call: longest slice of it between two turns of the executor (a turn serves
+# one ready callback: longer slices starved the plant's heartbeat on a loaded machine)
 _LOOP_SLICE = 0.002
 
 
@@ -62,14 +65,9 @@ _LOOP_SLICE = 0.002
 class Component:
     """How one executable of the graph is built as a node in the composed process.
 
-    Attributes
-    ----------
-    module, class_name : str
-        Where the node class is (it takes ``Node``'s keyword arguments).
-    default_executor : bool
-        The node needs rclpy's default ``SingleThreadedExecutor`` (see the module notes).
-    start : str
-        Name of a method to call once the node is built ('' for none), as its ``main()`` does.
+    ``module``, ``class_name``: where the node class is (it takes ``Node``'s keyword
+    arguments); ``default_executor``: the node needs rclpy's default ``SingleThreadedExecutor``
+    (module notes); ``start``: a method to call once the node is built, as its ``main()`` does.
     """
 
     module: str
@@ -144,7 +142,9 @@ class ComposedGraph:
 
         self.context = context
         self.nodes: list[tuple[NodeSpec, Component, object]] = []
-        self.loop_by_call = False  # the plant and the controllers exchange by call
+        #: what exchanges by call: '' nothing, 'loop' the plant and the controllers, 'graph'
+        #: the planner's stream too (see the module notes)
+        self.loop_by_call = ''
         components = [component_of(spec) for spec in specs]
         try:
             for spec, component in zip(specs, components, strict=True):
@@ -168,10 +168,14 @@ class ComposedGraph:
         plants = [node for spec, _, node in self.nodes if spec.executable == 'plant_node']
         grouped = [node for spec, _, node in self.nodes
                    if spec.executable == 'joint_controllers_node']
+        planners = [node for spec, _, node in self.nodes if spec.executable == 'planner_node']
         if len(plants) == 1 and len(grouped) == 1 and plants[0].sim_time \
                 and len(grouped[0].joints) == 5:
-            plants[0].hand_states_to(grouped[0])
-            self.loop_by_call = True
+            planner = planners[0] if len(planners) == 1 else None
+            plants[0].hand_states_to(grouped[0], planner)
+            if planner is not None:
+                planner.stream_by_call(grouped[0].take_setpoints_by_call().push)
+            self.loop_by_call = 'graph' if planner is not None else 'loop'
 
     def node(self, name: str):
         """Return the node built from the spec named ``name`` (e.g. ``'plant'``)."""
@@ -381,8 +385,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         graph = ComposedGraph(specs, context)
         print(f'[composed_graph] {len(graph.nodes)} nodes in one process: '
               + ', '.join(spec.full_name for spec, _, _ in graph.nodes)
-              + ('; the plant and the controllers exchange by call' if graph.loop_by_call
-                 else ''), flush=True)
+              + ({'': '', 'loop': '; the plant and the controllers exchange by call',
+                  'graph': '; the plant, the planner and the controllers exchange by call'}
+                 [graph.loop_by_call]), flush=True)
         # the process is the loop's: on the wall clock it asks for the plant's real-time
         # priority, as the plant's own process does (its other nodes share the interpreter)
         with contextlib.suppress(KeyError):  # a graph without its plant asks nothing

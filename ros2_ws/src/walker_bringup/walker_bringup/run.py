@@ -128,7 +128,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
-                             'process per node')
+                             'process per node; in sim time with the five joint controllers '
+                             'as one node, the plant, the planner and the controllers '
+                             'exchanging states and setpoints by call')
     parser.add_argument('--composed-loop', action='store_true',
                         help='run the control loop (the plant and the five joint controllers '
                              'as one node) in one process, where in sim time they exchange '
@@ -175,7 +177,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
             ('--no-walk', not args.walk), ('--walkers', args.walkers > 1)) if given]
         if graph_only:
             parser.error(f'--headless runs no graph: leave {", ".join(graph_only)} out')
-    args.grouped_controllers = args.grouped_controllers or args.composed_loop
+    args.grouped_controllers = args.grouped_controllers or args.composed_loop \
+        or (args.composed and args.sim_time)  # composed in sim time: the loop by call
     serving = (SERVE_SPLIT if args.serve else (0, 0.0, 0))
     for name, default in zip(('max_bag_size', 'max_bag_duration', 'max_bag_files'), serving,
                              strict=True):

@@ -133,7 +133,7 @@ class JointChannel:
         executor then finds nothing left to take for them.
         """
         subscription = self.setpoint_subscription.subscription
-        while True:
+        while subscription is not None:
             with subscription.handle:
                 taken = subscription.handle.take_message(JointCommand, False)
             if taken is None:
@@ -162,6 +162,15 @@ class JointChannel:
         self.core.take_setpoint(
             msg.joint_name, Setpoint(msg.position, msg.velocity, msg.acceleration, msg.effort),
             seconds(msg.header.stamp), self._steady_now())
+
+    def take_setpoint_values(self, stamp: float, position: float, velocity: float,
+                             acceleration: float) -> None:
+        """Take one setpoint handed over by call, stamped ``stamp`` [s], as :meth:`on_setpoint`.
+
+        [rad, rad/s, rad/s^2]; no feed-forward effort (a stream's setpoints carry none).
+        """
+        self.core.take_setpoint(self.joint, Setpoint(position, velocity, acceleration, 0.0),
+                                stamp, self._steady_now())
 
     # --------------------------------------------------------------------------- update
     def owes_setpoint(self, stamp: float) -> bool:

@@ -96,3 +96,35 @@ def plan_request(request) -> PlanRequest:
         max_velocity=request.max_velocity, max_acceleration=request.max_acceleration,
         start_joints=tuple(request.start_joints), min_radius=request.min_radius,
         sweep_direction=int(request.sweep_direction))
+
+
+class JointStateReader:
+    """The five physical joints' positions of ``sensor_msgs/JointState`` messages.
+
+    The plant's name order is looked up once, and again only when it changes.
+    """
+
+    def __init__(self) -> None:
+        self._names: tuple[str, ...] = ()
+        self._index: list[int] = []
+
+    def positions(self, message) -> tuple[int, np.ndarray] | None:
+        """Return (stamp [ns], positions [rad] in physical order), or None.
+
+        None when a physical joint is missing or a position is not finite.
+        """
+        names = tuple(message.name)
+        if names != self._names:
+            try:
+                self._index = [names.index(name) for name in PHYSICAL_JOINT_NAMES]
+            except ValueError:
+                return None
+            self._names = names
+        try:
+            positions = np.asarray(message.position, dtype=float)[self._index]
+        except IndexError:
+            return None
+        if not np.all(np.isfinite(positions)):
+            return None
+        stamp = message.header.stamp
+        return stamp.sec * 1_000_000_000 + stamp.nanosec, positions

@@ -11,7 +11,8 @@ Interfaces (relative to the node's namespace, ``/walker`` by default; docs/archi
 * service ``stop_trajectory`` (``std_srvs/srv/Trigger``): stop whatever stream runs, at once;
 * ``controllers/<joint>/setpoint`` (``walker_msgs/msg/JointCommand``), published;
 * ``planned_trajectory`` (``trajectory_msgs/msg/JointTrajectory``), latched;
-* ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors.
+* ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors
+  (handed over by call in a composed sim-time graph: :meth:`PlannerNode.stream_by_call`).
 
 All planning is in :mod:`walker_planner.core`, and every decision about streams in its
 :class:`~walker_planner.core.streamer.TrajectoryStreamer`; this node converts messages,
@@ -23,7 +24,6 @@ from __future__ import annotations
 
 import threading
 
-import numpy as np
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.clock import Clock, ClockType
@@ -48,7 +48,7 @@ from walker_runtime.node_main import run_node
 from walker_runtime.watched_subscription import WatchedSubscription
 from walker_runtime.spinning import destroy_actions, helper_node, spin_nodes
 from walker_planner.conversions import (
-    plan_request, sampled_trajectory, to_time, trajectory_message)
+    JointStateReader, plan_request, sampled_trajectory, to_time, trajectory_message)
 from walker_planner.core.errors import PlanningError
 from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.planning import PlanningContext, plan
@@ -116,8 +116,7 @@ class PlannerNode(Node):
         self._stream_node = helper_node(f'{self.get_name()}_stream', self.get_namespace(),
                                         self.context, use_global_arguments=False)
         self._stream_thread: threading.Thread | None = None
-        self._state_names: tuple[str, ...] = ()
-        self._state_index: list[int] = []
+        self._state_reader = JointStateReader()
         self._setpoints = SetpointPublishers(self._stream_node)
         self._plan_publisher = self.create_publisher(JointTrajectory, 'planned_trajectory',
                                                      LATCHED_QOS)
@@ -194,6 +193,20 @@ class PlannerNode(Node):
         destroy_actions(self)
         super().destroy_node()
 
+    def stream_by_call(self, setpoint_sink) -> None:
+        """Take the plant's states by call (:meth:`take_state`); hand the setpoints to a sink.
+
+        For a plant and controllers in this process, in sim time: each setpoint is still
+        published, and also given to ``setpoint_sink(stamp, positions, velocities,
+        accelerations)`` [ns, rad, rad/s, rad/s^2]; the ``joint_states`` subscription goes.
+        """
+        self._setpoints.sink = setpoint_sink
+        self._states.destroy()
+
+    def take_state(self, message: JointState) -> None:
+        """Take a joint state handed over by the plant in this process (stream_by_call)."""
+        self._on_joint_state(message)
+
     def _relay(self) -> None:
         """Complete the goals of ended streams and send feedback (this node's thread)."""
         with self._lock:
@@ -240,25 +253,14 @@ class PlannerNode(Node):
                               self.get_parameter('use_sim_time').value)
 
     def _on_joint_state(self, message: JointState) -> None:
-        names = tuple(message.name)
-        if names != self._state_names:  # the plant's order, looked up once
-            try:
-                self._state_index = [names.index(name) for name in PHYSICAL_JOINT_NAMES]
-            except ValueError:
-                return
-            self._state_names = names
-        try:
-            positions = np.asarray(message.position, dtype=float)[self._state_index]
-        except IndexError:
-            return
-        if np.all(np.isfinite(positions)):
-            stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        measured = self._state_reader.positions(message)
+        if measured is not None:
             with self._lock:
                 active = self._streamer.active
                 if active is not None and active.owner.goal_handle is not None \
                         and active.owner.goal_handle.is_cancel_requested:
                     active.cancel()
-                self._streamer.on_state(stamp, positions)
+                self._streamer.on_state(*measured)
 
     def _on_control_mode(self, message: ControlMode) -> None:
         if mode_command_refusal(message.commander, message.base_gripper,

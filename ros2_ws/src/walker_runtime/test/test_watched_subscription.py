@@ -134,6 +134,19 @@ def test_renew_and_destroy_act_at_once_and_log_nothing(node):
     assert logger.warnings == [] and watched.renewals == 0
 
 
+def test_a_subscription_destroyed_for_good_is_never_made_anew(node):
+    """Its stream now comes another way (by call): a silence is not the subscription's."""
+    steady, logger = _Steady(), _Logger()
+    watched = _watched(node, [], steady, logger)
+    watched.heard()
+    watched.destroy()
+    steady.now += 10.0
+    assert not watched.check()
+    watched.renew()
+    assert watched.subscription is None and list(node.subscriptions) == []
+    assert logger.warnings == []
+
+
 def _take_until(sampled, publisher, value):
     """Publish ``value`` until a take of ``sampled`` has it (matching takes a while)."""
     deadline = time.monotonic() + SPIN

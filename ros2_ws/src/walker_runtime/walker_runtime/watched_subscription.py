@@ -72,6 +72,7 @@ class Renewal:
         self._steady_now = steady_now
         self._heard: float | None = None
         self._created = steady_now()
+        self._retired = False  # destroyed for good: never made anew
 
     @property
     def after(self) -> float:
@@ -108,7 +109,7 @@ class Renewal:
             [s] steady time now (default: the ``steady_now`` given).
         """
         now = self._steady_now() if now is None else now
-        if self._counts is not None and not self._counts():
+        if self._retired or (self._counts is not None and not self._counts()):
             return False
         last_heard = self.last_heard
         if not self._rule.due(now, last_heard):
@@ -120,12 +121,18 @@ class Renewal:
         return True
 
     def renew(self) -> None:
-        """Destroy the entity and create it again, now (no silence needed, nothing logged)."""
+        """Destroy the entity and create it again, now (no silence needed, nothing logged).
+
+        Nothing after :meth:`destroy`.
+        """
+        if self._retired:
+            return
         self._destroy()
         self._create()
 
     def destroy(self) -> None:
-        """Destroy the entity for good."""
+        """Destroy the entity for good: :meth:`check` and :meth:`renew` make it anew no more."""
+        self._retired = True
         self._destroy()
 
     def _create(self) -> None:

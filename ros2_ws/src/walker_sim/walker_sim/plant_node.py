@@ -12,6 +12,7 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
   liveness heartbeat); ``robot_description`` (once, latched);
   ``/clock`` (sim time, at ``sim.clock_rate``);
   ``/diagnostics`` (1 Hz, wall clock: missed commands, refused and clamped torques);
+  ``joint_accelerations`` and the poses only while subscribed (:mod:`walker_runtime.listened`);
 * subscribes to ``effort_commands`` (``sensor_msgs/JointState``: joint names and efforts,
   stamped with the state they answer) and, in sim time, ``supervisor/decided_until``
   (``rosgraph_msgs/Clock``: with ``sim.wait_for_decisions`` no state is stepped to past it);
@@ -146,13 +147,13 @@ class PlantNode(Node):
             return False
         return log_realtime_request(self.get_logger(), self.params.timing.realtime_priority)
 
-    def hand_states_to(self, controllers) -> None:
-        """Sim time: hand each state to ``controllers`` in this process by a call.
+    def hand_states_to(self, controllers, planner=None) -> None:
+        """Sim time: hand each state to ``controllers`` (and ``planner``) here by a call.
 
         ``controllers`` is a controller node of this process answering every joint, connected
-        with its ``answer_plant_directly(self.take_efforts)`` (:mod:`walker_sim.state_handover`).
-        ``joint_states`` and ``joint_accelerations`` are still published for every other
-        subscriber.
+        with its ``answer_plant_directly(self.take_efforts)``; a ``planner`` streaming by call
+        takes each state first (:mod:`walker_sim.state_handover`). ``joint_states`` and
+        ``joint_accelerations`` are still published for every other subscriber.
 
         Raises
         ------
@@ -163,7 +164,7 @@ class PlantNode(Node):
         if not self.sim_time:
             raise ValueError('states are handed to controllers by call only in sim time '
                              '(sim.clock_mode: sim_time)')
-        self._handover = StateHandover(controllers, self._steady_now)
+        self._handover = StateHandover(controllers, self._steady_now, planner)
         controllers.answer_plant_directly(self.take_efforts)
 
     def take_efforts(self, message: JointState) -> None:

@@ -19,6 +19,7 @@ from std_msgs.msg import String
 from walker_core.joint_roles import GRIPPERS
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.urdf import description_urdf, flex_joints
+from walker_runtime.listened import ListenedPublisher
 from walker_msgs.msg import GripperStates, JointAccelerations
 from walker_sim.core.plant import PlantState
 from walker_sim.messages import (
@@ -43,12 +44,15 @@ class PlantPublishers:
     def __init__(self, node: Node, params: WalkerParameters, sim_time: bool) -> None:
         self._node = node
         create = node.create_publisher
-        self._accelerations = create(JointAccelerations, 'joint_accelerations', SENSOR_QOS)
+        # sent only while subscribed (walker_runtime.listened): the controllers of a
+        # composed graph take them by call, and often nobody else listens
+        self._accelerations = ListenedPublisher(
+            create(JointAccelerations, 'joint_accelerations', SENSOR_QOS))
         self._joint_states = create(JointState, 'joint_states', SENSOR_QOS)
         self._flexible = create(JointState, 'flexible_joint_states', SENSOR_QOS)
         self._bend_names = [joint.name for joint in flex_joints(
             params.robot.flexibility.segments_per_link)]
-        self._poses = {name: create(PoseStamped, name, SENSOR_QOS)
+        self._poses = {name: ListenedPublisher(create(PoseStamped, name, SENSOR_QOS))
                        for name in ('tip_pose', 'gripper_a_pose', 'gripper_b_pose')}
         self._grippers = create(GripperStates, 'gripper_states', LATCHED_QOS)
         self._description = create(String, 'robot_description', LATCHED_QOS)
@@ -73,12 +77,18 @@ class PlantPublishers:
         return accelerations, joint_states
 
     def poses(self, state: PlantState, bending, stamp: int) -> None:
-        """Publish the tip's and the grippers' poses and ``flexible_joint_states`` [ns]."""
-        self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
+        """Publish the tip's and the grippers' poses and ``flexible_joint_states`` [ns].
+
+        A pose nobody subscribes to is not built (nor is ``joint_accelerations`` sent).
+        """
+        if self._poses['tip_pose'].heard:
+            self._poses['tip_pose'].publish(pose_msg(state.poses[state.tip], stamp))
         self._flexible.publish(flexible_joint_state_msg(state, self._bend_names, bending,
                                                         stamp))
         for gripper in GRIPPERS:
-            self._poses[f'gripper_{gripper}_pose'].publish(pose_msg(state.poses[gripper], stamp))
+            publisher = self._poses[f'gripper_{gripper}_pose']
+            if publisher.heard:  # built only for a subscriber (walker_runtime.listened)
+                publisher.publish(pose_msg(state.poses[gripper], stamp))
 
     def grippers(self, state: PlantState, stamp: int) -> None:
         """Publish ``gripper_states`` of ``state``, stamped [ns]."""

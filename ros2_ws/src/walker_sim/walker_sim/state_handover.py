@@ -3,7 +3,10 @@
 As Gazebo's ros2_control plugin runs its controllers inside the simulator, a plant and the
 five controllers composed in one process (``run_all.py --composed-loop``) exchange the
 lock-step's state and efforts by two calls instead of two messages through DDS and two
-processes woken (:meth:`walker_sim.plant_node.PlantNode.hand_states_to`).
+processes woken (:meth:`walker_sim.plant_node.PlantNode.hand_states_to`). With the whole graph
+in the process, the planner's stream takes each state by call first, and its setpoints for the
+coming states go to the controllers by call (:mod:`walker_control.setpoint_handover`): the
+lock-step then waits on no message at all.
 """
 
 from __future__ import annotations
@@ -23,10 +26,14 @@ class StateHandover:
         ``take_accelerations(message)`` and ``take_state(message)``.
     steady_now : callable
         The steady clock [s].
+    planner : optional
+        A planner node streaming by call (``walker_planner.planner_node``): ``take_state``
+        (message), before the controllers.
     """
 
-    def __init__(self, controllers, steady_now: Callable[[], float]) -> None:
+    def __init__(self, controllers, steady_now: Callable[[], float], planner=None) -> None:
         self._controllers = controllers
+        self._planner = planner
         self._steady_now = steady_now
         self._waiting: tuple | None = None
         self._running = False
@@ -59,6 +66,8 @@ class StateHandover:
             while self._waiting is not None:
                 accelerations, state = self._waiting
                 self._waiting = None
+                if self._planner is not None:
+                    self._planner.take_state(state)
                 self._controllers.take_accelerations(accelerations)
                 self._controllers.take_state(state)
                 if self._steady_now() > end:

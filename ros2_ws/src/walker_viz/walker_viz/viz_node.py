@@ -16,8 +16,9 @@ A robot_state_publisher that also knows where the robot holds the truss. Thin la
   into which node), ``phase`` and ``control_mode`` (the supervisor's base gripper, and the
   step's target node) and ``planned_trajectory`` (the path drawn).
 
-Under ``use_sim_time`` the TF timer runs on the simulated clock. What is drawn is decided by
-:class:`walker_viz.core.scene.WalkerScene`.
+Under ``use_sim_time`` the TF timer runs on the simulated clock. ``/tf`` is neither computed
+nor sent while nobody subscribes to it (:mod:`walker_runtime.listened`). What is drawn is
+decided by :class:`walker_viz.core.scene.WalkerScene`.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from walker_runtime.core.resubscription import clock_ran_past
 from walker_runtime.node_main import run_node
 from walker_runtime.node_parameters import declare_section
 from walker_runtime.qos import LATCHED_QOS, MODE_QOS, TF_QOS, TF_STATIC_QOS, latched_qos
+from walker_runtime.listened import ListenedPublisher
 from walker_runtime.spinning import TopicSampler
 from walker_runtime.watched_subscription import SampledSubscription
 from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase
@@ -78,7 +80,7 @@ class VizNode(Node):
         self.scene = WalkerScene(self.params, self.settings)
         self._newest_state: int | None = None  # [ns] stamp of the newest joint state drawn
 
-        self._tf = self.create_publisher(TFMessage, '/tf', TF_QOS)
+        self._tf = ListenedPublisher(self.create_publisher(TFMessage, '/tf', TF_QOS))
         self._tf_static = self.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS)
         self._markers = self.create_publisher(MarkerArray, 'markers', LATCHED_QOS)
         self._sampler = TopicSampler(f'{self.get_name()}_sampler', self.get_namespace(),
@@ -117,6 +119,10 @@ class VizNode(Node):
     def _publish_tf(self) -> None:
         states = self._joint_states.take()
         self._joint_states.check()
+        if states and not self._tf.heard:  # nobody draws it (walker_runtime.listened)
+            stamp = states[-1].header.stamp
+            self._newest_state = stamp.sec * 1_000_000_000 + stamp.nanosec
+            return
         # the links' bends change within a period of their modes: every flexible sample is
         # drawn; straight links, the newest joint state
         for state in states if self.settings.flexible else states[-1:]:
