@@ -5,8 +5,8 @@ import ipaddress
 import pytest
 
 from walker_bringup.core.host_link import (
-    HostLink, TokenBucket, host_environment, namespaces_listed, plan_host_link,
-    stale_namespaces)
+    HostLink, QueueCounts, TokenBucket, host_environment, namespaces_listed, plan_host_link,
+    queue_counts, stale_namespaces)
 
 
 def test_the_plan_names_both_hosts_and_gives_them_the_subnets_first_two_addresses():
@@ -131,3 +131,84 @@ def test_the_plan_is_a_frozen_value():
     assert isinstance(link, HostLink)
     with pytest.raises(AttributeError):
         link.robot = link.ground
+
+
+def test_the_queue_counts_are_read_from_tc_json():
+    text = ('[{"kind":"tbf","handle":"800b:","root":true,"refcnt":3,"options":{"rate":125000,'
+            '"burst":3000,"lat":300000},"bytes":5120,"packets":12,"drops":3,"overlimits":40,'
+            '"requeues":0,"backlog":0,"qlen":0}]')
+    assert queue_counts(text) == QueueCounts(5120, 12, 3, 40)
+    assert plan_host_link('wkn42').queue_commands()[1] == [
+        'tc', '-n', 'wkn42-ground', '-s', '-j', 'qdisc', 'show', 'dev', 'wkn42-g']
+
+
+@pytest.mark.parametrize('text', ['', 'qdisc tbf 800b: root', '[]', '[{"kind": "tbf"}]',
+                                  '[{"root": true, "bytes": 1}]', '{"root": true}'])
+def test_tc_output_without_a_root_queue_is_refused(text):
+    with pytest.raises(ValueError, match='no root queue'):
+        queue_counts(text)
+
+
+class _FakeIp:
+    """Stands in for ``ip``: records each command, fails the one that contains ``fail_on``."""
+
+    def __init__(self, namespaces=(), fail_on=''):
+        self.namespaces = list(namespaces)
+        self.fail_on = fail_on
+        self.commands = []
+
+    def __call__(self, command, check=True):
+        import subprocess
+
+        from walker_bringup.host_link import LinkCommandError
+
+        self.commands.append(command)
+        if command[:3] == ['ip', 'netns', 'list']:
+            return subprocess.CompletedProcess(command, 0, '\n'.join(self.namespaces), '')
+        if self.fail_on and self.fail_on in command:
+            if check:
+                raise LinkCommandError(f'{" ".join(command)} failed')
+            return subprocess.CompletedProcess(command, 1, '', 'failed')
+        if command[:3] == ['ip', 'netns', 'add']:
+            self.namespaces.append(command[3])
+        if command[:3] == ['ip', 'netns', 'delete']:
+            self.namespaces.remove(command[3])
+        return subprocess.CompletedProcess(command, 0, '', '')
+
+
+def test_hosts_made_halfway_are_removed_and_the_failure_said(monkeypatch):
+    from walker_bringup import host_link
+    from walker_bringup.host_link import LinkCommandError, LinkedHosts
+
+    ip = _FakeIp(fail_on='veth')
+    monkeypatch.setattr(host_link, '_run', ip)
+    hosts = LinkedHosts(plan_host_link('wkn42'))
+    with pytest.raises(LinkCommandError, match='veth'):
+        hosts.create()
+    assert ip.namespaces == []  # both namespaces made before the failure are gone again
+    assert ['ip', 'netns', 'delete', 'wkn42-robot'] in ip.commands
+
+
+def test_hosts_that_exist_already_are_refused_and_left_alone(monkeypatch):
+    from walker_bringup import host_link
+    from walker_bringup.host_link import LinkCommandError, LinkedHosts
+
+    ip = _FakeIp(namespaces=['wkn42-robot', 'other'])
+    monkeypatch.setattr(host_link, '_run', ip)
+    with pytest.raises(LinkCommandError, match=r'exist already \(wkn42-robot\)'):
+        LinkedHosts(plan_host_link('wkn42')).create()
+    assert ip.namespaces == ['wkn42-robot', 'other']
+    assert all(c[:3] == ['ip', 'netns', 'list'] for c in ip.commands)
+
+
+def test_the_hosts_are_removed_however_the_block_ends(monkeypatch):
+    from walker_bringup import host_link
+    from walker_bringup.host_link import LinkedHosts
+
+    ip = _FakeIp(namespaces=['other'])
+    monkeypatch.setattr(host_link, '_run', ip)
+    with pytest.raises(KeyboardInterrupt), LinkedHosts(plan_host_link('wkn42')) as hosts:
+        assert ip.namespaces == ['other', 'wkn42-robot', 'wkn42-ground']
+        hosts.cut()
+        raise KeyboardInterrupt
+    assert ip.namespaces == ['other']

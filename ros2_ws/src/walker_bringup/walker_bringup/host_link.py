@@ -18,8 +18,8 @@ import subprocess
 import sys
 
 from walker_bringup.core.host_link import (
-    DEFAULT_PREFIX, DEFAULT_SUBNET, ROLES, HostLink, TokenBucket, host_environment,
-    namespaces_listed, plan_host_link, stale_namespaces)
+    DEFAULT_PREFIX, DEFAULT_SUBNET, ROLES, HostLink, QueueCounts, TokenBucket,
+    host_environment, namespaces_listed, plan_host_link, queue_counts, stale_namespaces)
 
 __all__ = ['LinkedHosts', 'LinkCommandError', 'existing_namespaces', 'remove_stale', 'main']
 
@@ -87,9 +87,9 @@ class LinkedHosts:
         """
         taken = set(existing_namespaces()) & {h.namespace for h in self.link.hosts}
         if taken:
-            raise LinkCommandError(f'the network namespace {", ".join(sorted(taken))} exists '
-                                   'already: remove it (ground_station.py down) or choose '
-                                   'another --prefix')
+            raise LinkCommandError(f'the network namespaces of this link exist already '
+                                   f'({", ".join(sorted(taken))}): remove them '
+                                   '(ground_station.py down) or choose another --prefix')
         try:
             for command in self.link.create_commands():
                 _run(command)
@@ -119,6 +119,12 @@ class LinkedHosts:
     def clear(self) -> None:
         """Give the link its full speed back."""
         self._run_all(self.link.clear_commands())
+
+    def queue_counts(self) -> dict[str, QueueCounts]:
+        """Return what each end's queue has sent, dropped and held back, by role."""
+        return {host.role: queue_counts(_run(command).stdout)
+                for host, command in zip(self.link.hosts, self.link.queue_commands(),
+                                         strict=True)}
 
     def netem_available(self) -> bool:
         """Tell whether this kernel has ``netem`` (delay and loss); leaves nothing behind."""

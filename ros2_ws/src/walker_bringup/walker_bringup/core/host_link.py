@@ -27,13 +27,15 @@ from __future__ import annotations
 
 import dataclasses
 import ipaddress
+import json
 import math
 import re
 from collections.abc import Callable, Iterable
 
-__all__ = ['ROLES', 'Host', 'HostLink', 'TokenBucket', 'plan_host_link', 'host_environment',
-           'namespaces_listed', 'stale_namespaces', 'DEFAULT_PREFIX', 'DEFAULT_SUBNET',
-           'STATIC_PEERS_VARIABLE', 'DISCOVERY_RANGE_VARIABLE']
+__all__ = ['ROLES', 'Host', 'HostLink', 'TokenBucket', 'QueueCounts', 'plan_host_link',
+           'host_environment', 'namespaces_listed', 'stale_namespaces', 'queue_counts',
+           'DEFAULT_PREFIX', 'DEFAULT_SUBNET', 'STATIC_PEERS_VARIABLE',
+           'DISCOVERY_RANGE_VARIABLE']
 
 #: The two hosts, in the order their addresses are given.
 ROLES = ('robot', 'ground')
@@ -103,6 +105,26 @@ class TokenBucket:
         """Return the ``tbf`` arguments of ``tc qdisc replace ... root``."""
         return ['tbf', 'rate', f'{round(self.rate)}bit', 'burst', str(self.burst),
                 'latency', f'{round(self.latency * 1000.0)}ms']
+
+
+@dataclasses.dataclass(frozen=True)
+class QueueCounts:
+    """What the queue of one end of the link has done (``tc -s qdisc``), from its making on.
+
+    Attributes
+    ----------
+    sent_bytes, sent_packets : int
+        What it has sent on.
+    dropped : int
+        Packets dropped (a token bucket: those that would have waited longer than its latency).
+    overlimits : int
+        Times a packet had to wait for the rate (0: the link was never slower than its load).
+    """
+
+    sent_bytes: int
+    sent_packets: int
+    dropped: int
+    overlimits: int
 
 
 @dataclasses.dataclass(frozen=True)
@@ -177,6 +199,11 @@ class HostLink:
         """Give the link its full speed back (the kernel's default queue again)."""
         return [['tc', '-n', host.namespace, 'qdisc', 'del', 'dev', host.interface, 'root']
                 for host in self.hosts]
+
+    def queue_commands(self) -> list[list[str]]:
+        """Show the root queue of each end with its counts, as JSON (robot, then ground)."""
+        return [['tc', '-n', host.namespace, '-s', '-j', 'qdisc', 'show', 'dev',
+                 host.interface] for host in self.hosts]
 
     def netem_probe_commands(self) -> list[list[str]]:
         """Add and remove a ``netem`` queue on the robot's loopback: both succeed iff it exists."""
@@ -281,3 +308,21 @@ def stale_namespaces(names: Iterable[str], prefix: str, alive: Callable[[int], b
         if match and not alive(int(match.group(1))):
             stale.append(name)
     return stale
+
+
+def queue_counts(text: str) -> QueueCounts:
+    """Read the counts of the root queue from ``tc -s -j qdisc show dev ...``.
+
+    Raises
+    ------
+    ValueError
+        The text is not such JSON, or shows no root queue.
+    """
+    try:
+        queues = json.loads(text)
+        root = next(q for q in queues if q.get('root'))
+        return QueueCounts(int(root['bytes']), int(root['packets']), int(root['drops']),
+                           int(root['overlimits']))
+    except (json.JSONDecodeError, StopIteration, KeyError, TypeError, AttributeError) as error:
+        raise ValueError(f'no root queue with counts in the tc output {text[:200]!r} '
+                         f'({type(error).__name__})') from None
