@@ -27,8 +27,8 @@ def test_a_silent_server_is_dead_after_the_silence_limit_counted_from_the_start(
     assert watch.verdict(12.0 + SILENCE_LIMIT - 0.1) == ''
     assert watch.verdict(12.0 + SILENCE_LIMIT + 0.2) == (
         f'{SERVER} has been silent for {SILENCE_LIMIT + 0.2:.1f} s (it publishes its status '
-        f'on /diagnostics every second): it is not running, and the outcome of {WHAT} is '
-        'unknown')
+        f'on /diagnostics every second): it is not running or cannot be reached, and the '
+        f'outcome of {WHAT} is unknown: check with walkerctl status')
 
 
 def test_probes_are_due_once_a_period():

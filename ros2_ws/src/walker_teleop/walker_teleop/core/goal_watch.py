@@ -7,7 +7,8 @@ tell them apart within seconds:
 
 * *Liveness.* The supervisor publishes its status on ``/diagnostics`` every second on the
   steady clock (also while the simulated clock stands still). Silent for ``silence_limit``,
-  it is taken for dead.
+  it is taken for dead or out of reach: over a link that was cut, the client cannot tell, and
+  the supervisor goes on with the goal on its own.
 * *Knowledge of the goal.* Every ``probe_period`` the client asks for the result again, with a
   new request. A supervisor that runs the goal keeps the request until the goal ends; a
   supervisor started again in its place does not know the goal and answers at once (rclpy's
@@ -102,6 +103,7 @@ class GoalWatch:
         silent = now - self._last_heard
         if silent >= self.silence_limit:
             return (f'{self.server} has been silent for {silent:.1f} s (it publishes its '
-                    f'status on /diagnostics every second): it is not running, and the outcome '
-                    f'of {self.what} is unknown')
+                    f'status on /diagnostics every second): it is not running or cannot be '
+                    f'reached, and the outcome of {self.what} is unknown: check with walkerctl '
+                    f'status')
         return ''
