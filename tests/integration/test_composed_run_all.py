@@ -1,14 +1,16 @@
-"""``run_all.py --composed`` and ``--grouped-controllers``: up, walking, nothing left."""
+"""``run_all.py --composed`` and ``--grouped-controllers``: up, walking, killed, nothing left."""
 
 import json
-
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
-from ros_test_support import REPO_ROOT, isolated_domain, processes_with, ros_environment
+from ros_test_support import (
+    REPO_ROOT, NodeProcess, isolated_domain, processes_with, ros_environment)
 
 pytestmark = pytest.mark.integration
 
@@ -70,3 +72,69 @@ def test_run_all_walks_with_the_loop_composed_and_exchanging_by_call(tmp_path):
     assert summary['loop']['decision_timeouts'] is not None, summary['loop']
     assert "in sim time with the supervisor's decisions" in text
     assert (out / 'bag' / 'metadata.yaml').exists()  # the recorder, a process of its own
+
+
+@pytest.mark.timeout(600)
+def test_a_killed_composed_graph_comes_back_where_the_robot_was_and_continues_its_bag(
+        tmp_path):
+    """``--composed --serve``: one step, a SIGKILL of the one process, the same robot after.
+
+    The process started again restores the plant's snapshot (the grippers' nodes and the joint
+    angles of the step's end, not ``sim.start``) and its recorder continues the bag in a new
+    file: every file readable whole, no recorded instant without a gripper attached.
+    """
+    from chaos_run import check_bag
+    from sensor_msgs.msg import JointState
+    from walker_msgs.msg import GripperState
+
+    from walker_bringup.graph_client import GraphClient, init_context
+    from walker_bringup.processes import read_pids
+
+    namespace = f'/walker_composed_kill_{os.getpid()}'
+    out = tmp_path / 'run'
+    with isolated_domain() as domain:
+        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve',
+                '--sim-time', '--composed', '--namespace', namespace, '--out', str(out),
+                '--respawn-delay', '0.5']
+        with NodeProcess(args, ros_environment(domain), 'run_all') as run:
+            assert run.wait_for_output('[walker] serving in namespace', 180.0), run.output
+            context = init_context(domain)
+            client = GraphClient(namespace, context)
+            try:
+                joints = {}
+                client.node.create_subscription(
+                    JointState, 'joint_states',
+                    lambda m: joints.update(zip(m.name, m.position, strict=True)), 10)
+                _, result = client.walk_to('n1_2', 240.0)
+                assert result.success, result.message
+
+                def attached() -> dict:
+                    return {g.name: g.node for g in client.grippers.grippers
+                            if g.state == GripperState.ATTACHED}
+
+                client.spin_for(1.0)  # the snapshot is at most 0.1 s old
+                before_joints, before_grippers = dict(joints), attached()
+                assert 'n1_2' in before_grippers.values(), before_grippers
+                os.kill(read_pids(out / 'logs')['graph'], signal.SIGKILL)
+                assert run.wait_for_output('node graph started again', 120.0), run.output
+                joints.clear()
+                client.grippers = None
+                deadline = time.monotonic() + 180.0
+                while (len(joints) < 5 or client.grippers is None) \
+                        and time.monotonic() < deadline:
+                    client.spin_for(0.2)
+                assert len(joints) == 5 and client.grippers is not None, run.output
+                assert attached() == before_grippers
+                for name, angle in before_joints.items():
+                    assert joints[name] == pytest.approx(angle, abs=2e-3), name  # [rad]
+            finally:
+                client.close()
+                context.try_shutdown()
+            assert run.stop(timeout=60.0) == 0, run.output
+    assert processes_with(namespace) == [], run.output
+    bag = check_bag(out / 'bag')
+    assert len(bag['files']) >= 2, bag  # a new file after the kill
+    assert bag['messages'] == sum(bag['files'].values()) == bag['metadata_messages'], bag
+    assert bag['instants'] > 0 and bag['grip_losses'] == 0, bag
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['processes']['graph']['restarts'] == 1, summary['processes']
