@@ -136,6 +136,8 @@ class SharedMemoryGuard:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name='shm-guard', daemon=True)
         self.restored = 0
+        #: every file a process of the graph was seen to own, for a check that none is left
+        self.owned: set[str] = set()
 
     def __enter__(self) -> 'SharedMemoryGuard':
         if self._SHM.is_dir():
@@ -201,6 +203,7 @@ class SharedMemoryGuard:
             if name in self._links:
                 self._links[name] = (self._links[name][0], self._links[name][1] | owners)
                 continue
+            self.owned.add(name)
             with contextlib.suppress(OSError):
                 os.link(self._SHM / name, self._dir / name)
                 self._links[name] = ((self._dir / name).stat().st_ino, owners)

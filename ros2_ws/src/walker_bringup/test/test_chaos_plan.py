@@ -25,6 +25,12 @@ def test_every_node_and_every_phase_has_a_fault_and_no_node_fails_twice_in_a_row
     assert sum(f.kind == FREEZE for f in faults) == round(count / 2)
 
 
+def test_in_step_order_each_round_of_phases_runs_as_a_step_does():
+    faults = plan_faults(4, 10, in_step_order=True)
+    assert [f.phase for f in faults] == [*PHASES, *PHASES, *PHASES[:2]]
+    assert [f.node for f in faults] != [f.node for f in plan_faults(5, 10, in_step_order=True)]
+
+
 def test_freezes_last_within_their_range_and_kills_for_no_time():
     faults = plan_faults(3, 40, freeze=(2.0, 5.0), delay=(0.1, 0.4))
     for fault in faults:

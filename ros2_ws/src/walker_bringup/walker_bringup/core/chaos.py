@@ -102,12 +102,18 @@ def _range(name: str, bounds: tuple[float, float]) -> tuple[float, float]:
     return low, high
 
 
-def _blocks(rng: random.Random, items: Sequence[str], count: int) -> list[str]:
-    """``count`` items, from shuffled rounds of all of them, no item twice in a row."""
+def _blocks(rng: random.Random, items: Sequence[str], count: int,
+            order: Sequence[str] | None = None) -> list[str]:
+    """``count`` items, from rounds of all of them, no item twice in a row.
+
+    Each round shuffled, or sorted as in ``order``.
+    """
     chosen: list[str] = []
     while len(chosen) < count:
         block = list(items)
         rng.shuffle(block)
+        if order is not None:
+            block.sort(key=order.index)
         if chosen and len(block) > 1 and block[0] == chosen[-1]:
             block.append(block.pop(0))
         chosen += block
@@ -117,7 +123,8 @@ def _blocks(rng: random.Random, items: Sequence[str], count: int) -> list[str]:
 def plan_faults(seed: int, count: int, nodes: Sequence[str] = NODES,
                 phases: Sequence[str] = PHASES, freeze_share: float = 0.5,
                 freeze: tuple[float, float] = DEFAULT_FREEZE,
-                delay: tuple[float, float] = DEFAULT_DELAY) -> tuple[Fault, ...]:
+                delay: tuple[float, float] = DEFAULT_DELAY,
+                in_step_order: bool = False) -> tuple[Fault, ...]:
     """Plan ``count`` faults from ``seed``: the same seed gives the same plan.
 
     Nodes come in shuffled rounds of all of ``nodes``, phases in shuffled rounds of all of
@@ -141,6 +148,9 @@ def plan_faults(seed: int, count: int, nodes: Sequence[str] = NODES,
         Range [s] of a freeze's length, drawn uniformly.
     delay : (float, float)
         Range [s] of the wait after the phase began, drawn uniformly.
+    in_step_order : bool
+        Each round of phases in the order a step runs them, so that its faults can fall in
+        one step (a fault whose phase has passed waits for the next step's).
 
     Returns
     -------
@@ -169,7 +179,7 @@ def plan_faults(seed: int, count: int, nodes: Sequence[str] = NODES,
         raise ValueError(f'freeze must last more than 0 s, got {freeze!r}')
     rng = random.Random(seed)
     chosen_nodes = _blocks(rng, nodes, count)
-    chosen_phases = _blocks(rng, phases, count)
+    chosen_phases = _blocks(rng, phases, count, PHASES if in_step_order else None)
     freezes = round(freeze_share * count)
     kinds = [FREEZE] * freezes + [KILL] * (count - freezes)
     rng.shuffle(kinds)
