@@ -37,6 +37,8 @@ __all__ = ['ChaosDriver', 'ChaosError', 'GripMonitor', 'phase_name']
 RESUME_RETRY = 1.0
 #: [s] wall clock between two walk goals the supervisor refused (a step still settling)
 WALK_RETRY = 1.0
+#: [s] wall clock the walker must go on without a hold before a fault counts as recovered
+SETTLE = 5.0
 _SPIN = 0.05  # [s]
 
 
@@ -102,6 +104,7 @@ class ChaosDriver:
         self._walk_retry_at = 0.0
         self._resume_retry_at = 0.0
         self._finishing = False  # walk to the current target, then stay
+        self._moved_at = 0.0  # when the walker moved on after the last hold
 
     # ------------------------------------------------------------------ the graph's state
     def pids(self) -> dict[str, int]:
@@ -229,11 +232,12 @@ class ChaosDriver:
             self.wait(lambda: self._started_again(fault.node, node_pid),
                       f'{fault.describe()}: {fault.node} started again', resume=False)
         back = time.monotonic()
-        # The walker moves on: a phase other than SAFE_HOLD published after the node came
-        # back and after the last resume (a hold is resumed by tend)
+        # The walker moves on: a phase other than SAFE_HOLD published after the node came back
+        # and after the last resume, with no hold for SETTLE seconds since (a hold the fault
+        # brings late, a node started again that does not answer, is resumed by tend)
         self.wait(lambda: self._moving_since(back), f'{fault.describe()}: the walker moving on')
         outcome.recovered = True
-        outcome.time_to_recover = (self.phases[-1][0] if outcome.held else back) - started
+        outcome.time_to_recover = (self._moved_at if outcome.held else back) - started
         how = f'held, {outcome.resumes} resume(s)' if outcome.held else 'no hold'
         self.say(f'[chaos] {fault.describe()}: recovered in {outcome.time_to_recover:.1f} s '
                  f'({how})')
@@ -249,8 +253,14 @@ class ChaosDriver:
         return False
 
     def _moving_since(self, back: float) -> bool:
-        time_seen, message = self.phases[-1]
-        return message.phase != StepPhase.SAFE_HOLD and time_seen > back
+        """Tell whether the walker has left every hold since ``back`` for :data:`SETTLE` s."""
+        holds = [t for t, m in self.phases if t > back and m.phase == StepPhase.SAFE_HOLD]
+        since = max(holds, default=back)
+        moved = [t for t, m in self.phases if t > since and m.phase != StepPhase.SAFE_HOLD]
+        if not moved or self.phase.phase == StepPhase.SAFE_HOLD:
+            return False
+        self._moved_at = moved[0]
+        return time.monotonic() - moved[0] >= SETTLE
 
     def finish(self, target: str | None = None) -> None:
         """Walk on until the walker is idle with a gripper screwed into ``target``."""
