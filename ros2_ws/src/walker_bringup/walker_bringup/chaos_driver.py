@@ -266,7 +266,7 @@ class ChaosDriver:
         """Walk on until the walker is idle with a gripper screwed into ``target``."""
         self.target = target or self.target
         self._finishing = True
-        self.wait(lambda: self.phase.phase == StepPhase.IDLE
+        self.wait(lambda: self.phase is not None and self.phase.phase == StepPhase.IDLE
                   and self.target in self.attached_nodes()
                   and (self._result is None or self._result.done()),
                   f'the walk to {self.target}')
