@@ -13,7 +13,6 @@ no shared-memory file of its processes in /dev/shm, and every file of the bag re
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -28,7 +27,6 @@ __all__ = ['run_chaos', 'check_bag', 'DEFAULT_TARGETS', 'STARTUP_TIMEOUT']
 DEFAULT_TARGETS = ('n4_3', 'n1_1')
 STARTUP_TIMEOUT = 240.0  # [s] wall clock for the graph to come up on a loaded machine
 NAMESPACE = '/walker'
-SHM = Path('/dev/shm')
 
 
 def check_bag(bag_dir: Path) -> dict:
@@ -80,6 +78,7 @@ def run_chaos(out: Path, seed: int, count: int, say: Callable[[str], None] = pri
     from walker_bringup.chaos_driver import ChaosDriver, ChaosError, GripMonitor
     from walker_bringup.core.chaos import plan_faults, summarise_outcomes
     from walker_bringup.graph_client import GraphClient, init_context
+    from walker_bringup.processes import fastdds_shm_files, stale_shared_memory_files
     from walker_msgs.msg import StepPhase
 
     faults = plan_faults(seed, count, **plan)
@@ -94,7 +93,7 @@ def run_chaos(out: Path, seed: int, count: int, say: Callable[[str], None] = pri
             # while it shuts down: a node deletes its own files as it stops)
             guard = SharedMemoryGuard(lambda: [run.process.pid] + (
                 [] if driver is None else list(driver.pids().values())), period=0.2)
-            shm_before = set(os.listdir(SHM))  # files of others, or left by an earlier run
+            shm_before = fastdds_shm_files()  # files of others, or left by an earlier run
             guard.__enter__()
             context = client = monitor = None
             try:
@@ -124,8 +123,11 @@ def run_chaos(out: Path, seed: int, count: int, say: Callable[[str], None] = pri
                 result['exit_code'] = run.stop(timeout=120.0)
                 result['output'] = run.output
             result['left_running'] = driver.alive_pids()
-            result['stale_shared_memory'] = sorted(
-                name for name in guard.owned - shm_before if (SHM / name).exists())
+            # files its processes held, made since it started, that no live process uses (a
+            # port's files shared with another graph on the machine are in use by it)
+            result['stale_shared_memory'] = [
+                path.name for path in stale_shared_memory_files(shm_before, min_age=0.0)
+                if path.name in guard.owned]
     bag = check_bag(out / 'bag')
     result['bag'] = bag
     result['grip_instants'] = {'live': grips.instants, 'bag': bag['instants']}

@@ -184,7 +184,7 @@ def test_only_shared_memory_no_live_process_uses_is_stale(tmp_path, monkeypatch)
     from walker_bringup import processes
 
     monkeypatch.setattr(processes, '_SHM', tmp_path)
-    before = processes._fastdds_files()
+    before = processes.fastdds_shm_files()
     names = ['fastrtps_live', 'fastrtps_live_el', 'fastrtps_dead', 'fastrtps_dead_el',
              'sem.fastrtps_port7001_mutex', 'fastrtps_young']
     old = time.time() - 60.0

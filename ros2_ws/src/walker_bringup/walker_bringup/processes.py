@@ -29,7 +29,7 @@ from pathlib import Path
 from walker_bringup.graph import NodeSpec
 
 __all__ = ['ManagedProcess', 'ProcessGroup', 'STOP_TIMEOUT', 'PID_FILE', 'read_pids',
-           'stale_shared_memory_files']
+           'fastdds_shm_files', 'stale_shared_memory_files']
 
 _SHM = Path('/dev/shm')
 #: The file in a group's log directory that names each node's newest process id.
@@ -69,7 +69,8 @@ class ManagedProcess:
         return '\n'.join(text.splitlines()[-lines:])
 
 
-def _fastdds_files() -> set[Path]:
+def fastdds_shm_files() -> set[Path]:
+    """Return the Fast DDS files in /dev/shm now."""
     if not _SHM.is_dir():
         return set()
     return {p for p in _SHM.iterdir() if 'fastrtps' in p.name or 'fastdds' in p.name}
@@ -95,7 +96,7 @@ def stale_shared_memory_files(before: set[Path], min_age: float = 10.0) -> list[
     Files younger than ``min_age`` seconds are left too: a process that is starting may have
     created a file it has not mapped yet.
     """
-    candidates = _fastdds_files() - before  # listed before the mappings are read
+    candidates = fastdds_shm_files() - before  # listed before the mappings are read
     mapped = _mapped_shared_memory()
     now = time.time()
 
@@ -144,7 +145,7 @@ class ProcessGroup:
         # the node's log, so the log says where it happened.
         self.env = {**env, 'PYTHONFAULTHANDLER': '1'}
         self.processes: list[ManagedProcess] = []
-        self._shm_before = _fastdds_files()
+        self._shm_before = fastdds_shm_files()
 
     def start(self, spec: NodeSpec, command: list[str] | None = None,
               append_log: bool = False) -> ManagedProcess:
