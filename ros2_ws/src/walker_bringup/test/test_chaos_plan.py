@@ -5,7 +5,7 @@ import math
 import pytest
 
 from walker_bringup.core.chaos import (
-    FREEZE, KILL, NODES, PHASES, Fault, FaultOutcome, GripCount, plan_faults,
+    FREEZE, KILL, NODES, PHASES, Fault, FaultOutcome, GripCount, moved_on, plan_faults,
     summarise_outcomes)
 
 
@@ -100,3 +100,21 @@ def test_the_grip_count_counts_instants_with_no_gripper_attached():
     count.add([], 3.0)
     count.add([], 4.0)
     assert (count.instants, count.losses, count.first_loss_stamp) == (4, 2, 3.0)
+
+
+HOLD, MOVING = True, False
+
+
+@pytest.mark.parametrize('phases, now, expected', [
+    ([], 20.0, None),                                     # nothing seen
+    ([(1.0, MOVING)], 20.0, None),                        # only before the node came back
+    ([(1.0, MOVING), (3.0, MOVING)], 20.0, 3.0),          # went on, never held
+    ([(1.0, MOVING), (3.0, MOVING)], 7.0, None),          # not settled yet
+    ([(3.0, HOLD), (4.0, MOVING)], 20.0, 4.0),            # held, resumed
+    ([(3.0, HOLD), (4.0, MOVING), (6.0, HOLD)], 20.0, None),   # holding again now
+    ([(3.0, HOLD), (4.0, MOVING), (6.0, HOLD), (8.0, MOVING), (9.0, MOVING)], 20.0, 8.0),
+    ([(3.0, HOLD), (4.0, MOVING), (6.0, HOLD), (8.0, MOVING)], 12.0, None),  # a late hold
+])
+def test_a_fault_is_recovered_once_the_walker_goes_on_without_a_hold_for_a_while(
+        phases, now, expected):
+    assert moved_on(phases, back=2.0, now=now, settle=5.0) == expected

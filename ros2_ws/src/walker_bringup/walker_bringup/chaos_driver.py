@@ -26,7 +26,8 @@ from pathlib import Path
 from walker_msgs.action import WalkTo
 from walker_msgs.msg import GripperState, GripperStates, StepPhase
 
-from walker_bringup.core.chaos import FREEZE, PHASES, Fault, FaultOutcome, GripCount
+from walker_bringup.core.chaos import (
+    FREEZE, PHASES, Fault, FaultOutcome, GripCount, moved_on)
 from walker_bringup.graph_client import GraphClient, GraphNotReadyError
 from walker_bringup.processes import read_pids
 from walker_runtime.qos import latched_qos
@@ -37,8 +38,6 @@ __all__ = ['ChaosDriver', 'ChaosError', 'GripMonitor', 'phase_name']
 RESUME_RETRY = 1.0
 #: [s] wall clock between two walk goals the supervisor refused (a step still settling)
 WALK_RETRY = 1.0
-#: [s] wall clock the walker must go on without a hold before a fault counts as recovered
-SETTLE = 5.0
 _SPIN = 0.05  # [s]
 
 
@@ -232,9 +231,7 @@ class ChaosDriver:
             self.wait(lambda: self._started_again(fault.node, node_pid),
                       f'{fault.describe()}: {fault.node} started again', resume=False)
         back = time.monotonic()
-        # The walker moves on: a phase other than SAFE_HOLD published after the node came back
-        # and after the last resume, with no hold for SETTLE seconds since (a hold the fault
-        # brings late, a node started again that does not answer, is resumed by tend)
+        # the walker moves on for good (a hold meanwhile is resumed by tend)
         self.wait(lambda: self._moving_since(back), f'{fault.describe()}: the walker moving on')
         outcome.recovered = True
         outcome.time_to_recover = (self._moved_at if outcome.held else back) - started
@@ -253,14 +250,11 @@ class ChaosDriver:
         return False
 
     def _moving_since(self, back: float) -> bool:
-        """Tell whether the walker has left every hold since ``back`` for :data:`SETTLE` s."""
-        holds = [t for t, m in self.phases if t > back and m.phase == StepPhase.SAFE_HOLD]
-        since = max(holds, default=back)
-        moved = [t for t, m in self.phases if t > since and m.phase != StepPhase.SAFE_HOLD]
-        if not moved or self.phase.phase == StepPhase.SAFE_HOLD:
-            return False
-        self._moved_at = moved[0]
-        return time.monotonic() - moved[0] >= SETTLE
+        """Tell whether the walker has moved on for good since ``back`` (:func:`moved_on`)."""
+        moved = moved_on([(t, m.phase == StepPhase.SAFE_HOLD) for t, m in self.phases], back,
+                         time.monotonic())
+        self._moved_at = moved if moved is not None else self._moved_at
+        return moved is not None
 
     def finish(self, target: str | None = None) -> None:
         """Walk on until the walker is idle with a gripper screwed into ``target``."""

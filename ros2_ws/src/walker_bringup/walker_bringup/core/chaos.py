@@ -25,7 +25,7 @@ from collections import Counter
 from collections.abc import Iterable, Sequence
 
 __all__ = ['NODES', 'PHASES', 'KILL', 'FREEZE', 'KINDS', 'Fault', 'plan_faults',
-           'FaultOutcome', 'GripCount', 'summarise_outcomes']
+           'FaultOutcome', 'GripCount', 'summarise_outcomes', 'moved_on', 'SETTLE']
 
 #: The nine nodes of a recorded graph of separate processes (``run_all.py --serve``).
 NODES = ('recorder', 'plant', 'controller_a_yaw', 'controller_a_pitch', 'controller_vertex',
@@ -42,6 +42,8 @@ KINDS = (KILL, FREEZE)
 DEFAULT_FREEZE = (2.0, 5.0)
 #: [s] wall-clock wait after the phase began before the fault, by default
 DEFAULT_DELAY = (0.0, 0.5)
+#: [s] wall clock the walker must go on without a hold before a fault counts as recovered
+SETTLE = 5.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -227,6 +229,39 @@ class FaultOutcome:
                 'held': self.held, 'recovered': self.recovered, 'resumes': self.resumes,
                 'time_to_recover': None if math.isnan(self.time_to_recover)
                 else round(self.time_to_recover, 3), 'reason': self.reason}
+
+
+def moved_on(phases: Sequence[tuple[float, bool]], back: float, now: float,
+             settle: float = SETTLE) -> float | None:
+    """Tell when the walker moved on for good after a fault; None while it has not.
+
+    It has moved on when, since the faulty node came back, a phase other than the hold was
+    published after the last hold, the walker is not holding now, and ``settle`` seconds have
+    passed since without another hold (a hold the fault brings late, a node started again that
+    does not answer yet, is resumed meanwhile).
+
+    Parameters
+    ----------
+    phases : sequence of (float, bool)
+        Each phase message seen, in order: when it was received [s] and whether it is the
+        hold (``SAFE_HOLD``).
+    back : float
+        When the faulty node came back [s] (started again, or continued).
+    now : float
+        The time now [s], on the same clock.
+    settle : float
+        Seconds without a hold it takes.
+
+    Returns
+    -------
+    float or None
+        When the first phase after the last hold was received [s].
+    """
+    if not phases or phases[-1][1]:
+        return None
+    since = max((t for t, hold in phases if t > back and hold), default=back)
+    moved = next((t for t, hold in phases if t > since and not hold), None)
+    return moved if moved is not None and now - moved >= settle else None
 
 
 class GripCount:
