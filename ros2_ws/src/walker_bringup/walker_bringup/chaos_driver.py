@@ -104,6 +104,7 @@ class ChaosDriver:
         self._resume_retry_at = 0.0
         self._finishing = False  # walk to the current target, then stay
         self._moved_at = 0.0  # when the walker moved on after the last hold
+        self._refused = ''  # the supervisor's last reason to refuse a resume
 
     # ------------------------------------------------------------------ the graph's state
     def pids(self) -> dict[str, int]:
@@ -149,7 +150,11 @@ class ChaosDriver:
             self.say(f'[chaos] resume not answered: {error}')
         if answer is None or not answer.success:
             self._resume_retry_at = time.monotonic() + RESUME_RETRY
+            if answer is not None and answer.message != self._refused:  # each reason once
+                self.say(f'[chaos] resume refused: {answer.message}')
+            self._refused = '' if answer is None else answer.message
             return
+        self._refused = ''
         self.say(f'[chaos] resumed ({hold.reason[:80]}): {answer.message[:80]}')
         if self.outcomes:
             outcome = self.outcomes[-1]
