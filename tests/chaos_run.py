@@ -13,13 +13,12 @@ no shared-memory file of its processes in /dev/shm, and every file of the bag re
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from ros_test_support import (
-    REPO_ROOT, NodeProcess, SharedMemoryGuard, isolated_domain, ros_environment)
+    NodeProcess, SharedMemoryGuard, isolated_domain, ros_environment, serve_command)
 
 __all__ = ['run_chaos', 'check_bag', 'DEFAULT_TARGETS', 'STARTUP_TIMEOUT']
 
@@ -85,9 +84,8 @@ def run_chaos(out: Path, seed: int, count: int, say: Callable[[str], None] = pri
     started = time.monotonic()
     result: dict = {'seed': seed, 'reached': False, 'error': ''}
     with isolated_domain() as domain:
-        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve',
-                '--sim-time', '--namespace', NAMESPACE, '--out', str(out)]
-        with NodeProcess(args, ros_environment(domain), 'run_all') as run:
+        with NodeProcess(serve_command(NAMESPACE, out), ros_environment(domain),
+                         'run_all') as run:
             driver = None
             # the graph's files in /dev/shm kept from other runs' clean-ups while it runs (not
             # while it shuts down: a node deletes its own files as it stops)

@@ -23,8 +23,8 @@ from walker_bringup.domains import isolated_domain
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
-           'processes_with', 'running_graph', 'realtime_permitted', 'thread_policies',
-           'spin_executor_until', 'set_stamp', 'write_parameter_file']
+           'processes_with', 'running_graph', 'realtime_permitted', 'serve_command',
+           'thread_policies', 'spin_executor_until', 'set_stamp', 'write_parameter_file']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -253,6 +253,12 @@ def assert_always_attached(states) -> None:
     for message in states:
         stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
         assert attached_grippers(message), f'no gripper attached at t = {stamp:.3f} s'
+
+
+def serve_command(namespace: str, out: Path, *options: str) -> list[str]:
+    """Return the command line of ``run_all.py --serve --sim-time`` for a test's own graph."""
+    return [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve', '--sim-time',
+            '--namespace', namespace, '--out', str(out), *options]
 
 
 def processes_with(marker: str) -> list[int]:

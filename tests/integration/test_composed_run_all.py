@@ -10,7 +10,7 @@ import time
 import pytest
 
 from ros_test_support import (
-    REPO_ROOT, NodeProcess, isolated_domain, processes_with, ros_environment)
+    REPO_ROOT, NodeProcess, isolated_domain, processes_with, ros_environment, serve_command)
 
 pytestmark = pytest.mark.integration
 
@@ -95,9 +95,7 @@ def test_a_killed_composed_graph_comes_back_where_the_robot_was_and_continues_it
     namespace = f'/walker_composed_kill_{os.getpid()}'
     out = tmp_path / 'run'
     with isolated_domain() as domain:
-        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve',
-                '--sim-time', '--composed', '--namespace', namespace, '--out', str(out),
-                '--respawn-delay', '0.5']
+        args = serve_command(namespace, out, '--composed', '--respawn-delay', '0.5')
         with NodeProcess(args, ros_environment(domain), 'run_all') as run:
             assert run.wait_for_output('[walker] serving in namespace', 180.0), run.output
             context = init_context(domain)
