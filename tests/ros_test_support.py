@@ -23,8 +23,8 @@ from walker_bringup.domains import isolated_domain
 
 __all__ = ['REPO_ROOT', 'isolated_domain', 'ros_environment', 'NodeProcess',
            'SharedMemoryGuard', 'attached_grippers', 'assert_always_attached',
-           'processes_with', 'running_graph', 'realtime_permitted', 'thread_policies',
-           'spin_executor_until', 'set_stamp', 'write_parameter_file']
+           'processes_with', 'running_graph', 'realtime_permitted', 'serve_command',
+           'thread_policies', 'spin_executor_until', 'set_stamp', 'write_parameter_file']
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -136,6 +136,8 @@ class SharedMemoryGuard:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name='shm-guard', daemon=True)
         self.restored = 0
+        #: every file a process of the graph was seen to own, for a check that none is left
+        self.owned: set[str] = set()
 
     def __enter__(self) -> 'SharedMemoryGuard':
         if self._SHM.is_dir():
@@ -201,6 +203,7 @@ class SharedMemoryGuard:
             if name in self._links:
                 self._links[name] = (self._links[name][0], self._links[name][1] | owners)
                 continue
+            self.owned.add(name)
             with contextlib.suppress(OSError):
                 os.link(self._SHM / name, self._dir / name)
                 self._links[name] = ((self._dir / name).stat().st_ino, owners)
@@ -250,6 +253,12 @@ def assert_always_attached(states) -> None:
     for message in states:
         stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
         assert attached_grippers(message), f'no gripper attached at t = {stamp:.3f} s'
+
+
+def serve_command(namespace: str, out: Path, *options: str) -> list[str]:
+    """Return the command line of ``run_all.py --serve --sim-time`` for a test's own graph."""
+    return [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve', '--sim-time',
+            '--namespace', namespace, '--out', str(out), *options]
 
 
 def processes_with(marker: str) -> list[int]:

@@ -1,14 +1,16 @@
-"""``run_all.py --composed`` and ``--grouped-controllers``: up, walking, nothing left."""
+"""``run_all.py --composed`` and ``--grouped-controllers``: up, walking, killed, nothing left."""
 
 import json
-
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
-from ros_test_support import REPO_ROOT, isolated_domain, processes_with, ros_environment
+from ros_test_support import (
+    REPO_ROOT, NodeProcess, isolated_domain, processes_with, ros_environment, serve_command)
 
 pytestmark = pytest.mark.integration
 
@@ -97,3 +99,69 @@ def test_run_all_walks_composed_with_the_planner_and_the_loop_by_call(tmp_path):
                           if topic.endswith(f'/controllers/{name}/state'))
         assert controller > 0.9 * 100 * simulated, (name, controller)  # control.state_rate
     assert any(event.step_count for event in load_walk(out / 'bag').phases)
+@pytest.mark.timeout(600)
+def test_a_killed_composed_graph_comes_back_where_the_robot_was_and_continues_its_bag(
+        tmp_path):
+    """``--composed --serve``: one step, a SIGKILL of the one process, the same robot after.
+
+    The process started again restores the plant's snapshot (the grippers' nodes and the joint
+    angles of the step's end, not ``sim.start``) and its recorder continues the bag in a new
+    file: every file readable whole, no recorded instant without a gripper attached.
+    """
+    from chaos_run import check_bag
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from walker_msgs.msg import GripperState
+
+    from walker_bringup.chaos_driver import ChaosDriver
+    from walker_bringup.graph_client import GraphClient, init_context
+    from walker_bringup.processes import read_pids
+
+    namespace = f'/walker_composed_kill_{os.getpid()}'
+    out = tmp_path / 'run'
+    with isolated_domain() as domain:
+        args = serve_command(namespace, out, '--composed', '--respawn-delay', '0.5')
+        with NodeProcess(args, ros_environment(domain), 'run_all') as run:
+            assert run.wait_for_output('[walker] serving in namespace', 180.0), run.output
+            context = init_context(domain)
+            client = GraphClient(namespace, context)
+            try:
+                joints = {}
+                client.node.create_subscription(
+                    JointState, 'joint_states',
+                    lambda m: joints.update(zip(m.name, m.position, strict=True)),
+                    QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+                # one step, a hold on the way resumed (one process is slow on a loaded machine)
+                ChaosDriver(client, out / 'logs', ('n1_2',), 240.0).finish()
+
+                def attached() -> dict:
+                    return {g.name: g.node for g in client.grippers.grippers
+                            if g.state == GripperState.ATTACHED}
+
+                client.spin_for(1.0)  # the snapshot is at most 0.1 s old
+                before_joints, before_grippers = dict(joints), attached()
+                assert 'n1_2' in before_grippers.values(), before_grippers
+                assert len(before_joints) == 5, before_joints
+                os.kill(read_pids(out / 'logs')['graph'], signal.SIGKILL)
+                assert run.wait_for_output('node graph started again', 120.0), run.output
+                joints.clear()
+                client.grippers = None
+                deadline = time.monotonic() + 180.0
+                while (len(joints) < 5 or client.grippers is None) \
+                        and time.monotonic() < deadline:
+                    client.spin_for(0.2)
+                assert len(joints) == 5 and client.grippers is not None, run.output
+                assert attached() == before_grippers
+                for name, angle in before_joints.items():
+                    assert joints[name] == pytest.approx(angle, abs=2e-3), name  # [rad]
+            finally:
+                client.close()
+                context.try_shutdown()
+            assert run.stop(timeout=60.0) == 0, run.output
+    assert processes_with(namespace) == [], run.output
+    bag = check_bag(out / 'bag')
+    assert len(bag['files']) >= 2, bag  # a new file after the kill
+    assert bag['messages'] == sum(bag['files'].values()) == bag['metadata_messages'], bag
+    assert bag['instants'] > 0 and bag['grip_losses'] == 0, bag
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['processes']['graph']['restarts'] == 1, summary['processes']

@@ -14,14 +14,13 @@ summary records each node's deaths and restarts, and nothing is left running.
 import json
 import os
 import signal
-import sys
 import time
 
 import pytest
 
 from ros_test_support import (
-    REPO_ROOT, NodeProcess, assert_always_attached, isolated_domain, processes_with,
-    ros_environment)
+    NodeProcess, assert_always_attached, isolated_domain, processes_with, ros_environment,
+    serve_command)
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(600)]
 
@@ -56,9 +55,7 @@ def test_killed_nodes_are_started_again_and_the_walk_resumes_where_the_robot_is(
     namespace = f'/walker_respawn_{os.getpid()}'
     out = tmp_path / 'run'
     with isolated_domain() as domain:
-        args = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve',
-                '--sim-time', '--no-record', '--namespace', namespace, '--out', str(out),
-                '--respawn-delay', '0.5']
+        args = serve_command(namespace, out, '--no-record', '--respawn-delay', '0.5')
         with NodeProcess(args, ros_environment(domain), 'run_all') as run:
             assert run.wait_for_output('[walker] serving in namespace', TIMEOUT), run.output
             context = init_context(domain)

@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import pytest
 
 from walker_bringup.graph import NodeSpec, controller_node_name, walker_graph
-from walker_bringup.processes import ProcessGroup
+from walker_bringup.processes import ProcessGroup, read_pids
 from walker_bringup.summary import format_table, rows_from_reports, write_json
 
 ENV = {**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
@@ -92,6 +92,20 @@ def test_a_killed_child_restarts_with_its_log_continued(tmp_path):
         assert group.poll_deaths() == [second], 'the replaced process is not reported again'
 
 
+def test_the_group_names_each_nodes_newest_process_id_in_its_pid_file(tmp_path):
+    assert read_pids(tmp_path) == {}
+    other = NodeSpec('pkg', 'exe', 'other', '/walker', 'walker.yaml')
+    with ProcessGroup(tmp_path, ENV) as group:
+        first = group.start(SPEC, python_child('import sys; sys.exit(3)'))
+        beside = group.start(other, python_child('import time; time.sleep(30)'))
+        assert read_pids(tmp_path) == {'child': first.popen.pid, 'other': beside.popen.pid}
+        first.popen.wait(timeout=10)
+        second = group.restart(first, python_child('import time; time.sleep(30)'))
+        assert read_pids(tmp_path) == {'child': second.popen.pid, 'other': beside.popen.pid}
+        assert sorted(p.name for p in tmp_path.iterdir()) == ['child.log', 'other.log',
+                                                              'pids.json']
+
+
 def test_stop_escalates_and_leaves_nothing_behind(tmp_path):
     stubborn = ('import signal, time\n'
                 'signal.signal(signal.SIGINT, signal.SIG_IGN)\n'
@@ -170,7 +184,7 @@ def test_only_shared_memory_no_live_process_uses_is_stale(tmp_path, monkeypatch)
     from walker_bringup import processes
 
     monkeypatch.setattr(processes, '_SHM', tmp_path)
-    before = processes._fastdds_files()
+    before = processes.fastdds_shm_files()
     names = ['fastrtps_live', 'fastrtps_live_el', 'fastrtps_dead', 'fastrtps_dead_el',
              'sem.fastrtps_port7001_mutex', 'fastrtps_young']
     old = time.time() - 60.0

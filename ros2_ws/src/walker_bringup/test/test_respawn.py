@@ -150,3 +150,10 @@ def test_a_recorder_started_again_continues_its_bag_and_other_nodes_run_as_befor
     assert once == ['rec', '-p', 'recorder.append:=true']
     assert rejoin_command(ManagedProcess(recorder, None, tmp_path, 0.0, command=once)) == once
     assert rejoin_command(ManagedProcess(plant, None, tmp_path, 0.0, command=['p'])) == ['p']
+    # a composed graph that records continues its bag too; its plant has its snapshot already
+    graph = NodeSpec('walker_bringup', 'composed_graph', 'graph', '/walker', 'walker.yaml')
+    recording = ['g', '--record', '--plant-state-file', 's.json']
+    again = rejoin_command(ManagedProcess(graph, None, tmp_path, 0.0, command=recording))
+    assert again == [*recording, '--append-bag']
+    assert rejoin_command(ManagedProcess(graph, None, tmp_path, 0.0, command=again)) == again
+    assert rejoin_command(ManagedProcess(graph, None, tmp_path, 0.0, command=['g'])) == ['g']

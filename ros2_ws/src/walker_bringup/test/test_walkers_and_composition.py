@@ -102,6 +102,8 @@ def test_run_all_refuses_a_bad_number_of_walkers(capsys):
      'clock_topic': '/walker_2/clock', 'parameters': (('timing.control_rate', '1000.0'),)},
     {'sim_time': True, 'grouped_controllers': True},
     {'sim_time': True, 'grouped_controllers': True, 'only': LOOP_NODES},
+    {'sim_time': True, 'record': True, 'bag_path': '/tmp/some/bag',
+     'plant_state_file': '/tmp/some/plant_state.json'},
 ])
 def test_the_composed_command_describes_the_same_graph(options):
     keywords = {'namespace': '/walker', 'sim_time': False, 'record': False, 'bag_path': None,
@@ -124,11 +126,23 @@ def test_the_composed_command_describes_the_same_graph(options):
     (['--start', 'a,,n2_1'], 'GRIPPER,BASE_NODE,OTHER_NODE'),
     (['--param', 'timing.control_rate=1000'], 'NAME:=VALUE'),
     (['--bag-path', '/tmp/bag'], '--bag-path needs --record'),
+    (['--append-bag'], '--append-bag needs --record'),
 ])
 def test_composed_graph_refuses_malformed_options(argv, message, capsys):
     with pytest.raises(SystemExit):
         parse_arguments(argv)
     assert message in capsys.readouterr().err
+
+
+def test_a_composed_graph_that_appends_continues_its_recorders_bag_and_nothing_else():
+    command = composed_command(PARAMS, sim_time=True, record=True, bag_path='/tmp/some/bag',
+                               executable='/bin/composed_graph')
+    plain = graph_from_arguments(parse_arguments(command[1:]))
+    appended = graph_from_arguments(parse_arguments([*command[1:], '--append-bag']))
+    assert [s.name for s in appended] == [s.name for s in plain]
+    for before, after in zip(plain, appended, strict=True):
+        added = set(after.parameters) - set(before.parameters)
+        assert added == ({('recorder.append', 'true')} if before.name == 'recorder' else set())
 
 
 def test_composing_a_node_the_graph_has_not_is_refused_with_the_names_it_has():

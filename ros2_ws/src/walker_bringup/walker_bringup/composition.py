@@ -47,13 +47,17 @@ from pathlib import Path
 
 from walker_bringup.graph import NodeSpec, StartStance, executable_path, walker_graph
 
-__all__ = ['Component', 'COMPONENTS', 'LOOP_NODES', 'CompositionError', 'ComposedGraph',
-           'component_of', 'composed_command', 'parse_arguments', 'graph_from_arguments',
+__all__ = ['Component', 'COMPONENTS', 'LOOP_NODES', 'APPEND_BAG', 'CompositionError',
+           'ComposedGraph', 'component_of', 'composed_command', 'parse_arguments',
+           'graph_from_arguments',
            'main']
 
 #: The nodes of the control loop, by their names in the graph (``--only``, ``run_all.py
 #: --composed-loop``): the plant and the five joint controllers as one node.
 LOOP_NODES = ('plant', 'controllers')
+
+#: The recorder's override that continues its bag (``--append-bag``).
+APPEND_BAG = ('recorder.append', 'true')
 
 _SPIN_TIMEOUT = 0.1  # [s] longest wait before a spin loop checks for a stop again
 # [s] the loop by call: longest slice of it between two turns of the executor (a turn serves
@@ -270,6 +274,13 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
                         help='lock-stepped on the plant clock (default: real time)')
     parser.add_argument('--record', action='store_true', help='also run the recorder')
     parser.add_argument('--bag-path', default=None, help="the recorder's bag directory")
+    parser.add_argument('--append-bag', action='store_true',
+                        help='the recorder continues the bag at --bag-path in a new file (the '
+                             'one a killed process left cut completed first) instead of '
+                             'refusing a bag that exists: the composed process started again')
+    parser.add_argument('--plant-state-file', default=None, metavar='PATH',
+                        help="the plant's state snapshot: a plant started again restores the "
+                             'physical state it had from it (walker_sim.core.snapshot)')
     parser.add_argument('--start', default=None, metavar='GRIPPER,BASE_NODE,OTHER_NODE',
                         help="start stance of the plant (default: the parameter file's)")
     parser.add_argument('--clock-topic', default=None,
@@ -298,6 +309,8 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
         args.start = StartStance(*parts)
     if args.bag_path is not None and not args.record:
         parser.error('--bag-path needs --record')
+    if args.append_bag and not args.record:
+        parser.error('--append-bag needs --record')
     if args.only is not None:
         args.only = tuple(name for name in args.only.split(',') if name)
         if not args.only:
@@ -311,11 +324,16 @@ def graph_from_arguments(args: argparse.Namespace) -> list[NodeSpec]:
 
     params_file = Path(args.params_file or default_parameter_file()).resolve()
     plant_file = args.plant_params_file and Path(args.plant_params_file).resolve()
+    state_file = getattr(args, 'plant_state_file', None)
     specs = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                          record=args.record, bag_path=args.bag_path, start=args.start,
                          clock_topic=args.clock_topic, parameters=args.param,
                          grouped_controllers=args.grouped_controllers,
-                         plant_params_file=plant_file)
+                         plant_params_file=plant_file,
+                         plant_state_file=state_file and Path(state_file).resolve())
+    if getattr(args, 'append_bag', False):
+        specs = [dataclasses.replace(spec, parameters=(*spec.parameters, APPEND_BAG))
+                 if spec.executable == 'recorder_node' else spec for spec in specs]
     only = getattr(args, 'only', None)
     if only is None:
         return specs
@@ -335,7 +353,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
                      executable: str | None = None,
                      grouped_controllers: bool = False,
                      only: Sequence[str] | None = None,
-                     plant_params_file: str | Path | None = None) -> list[str]:
+                     plant_params_file: str | Path | None = None,
+                     plant_state_file: str | Path | None = None) -> list[str]:
     """Return the command line of the composed graph with :func:`walker_graph`'s arguments."""
     command = [executable or str(executable_path('walker_bringup', 'composed_graph')),
                '--params-file', str(params_file), '--namespace', namespace]
@@ -357,6 +376,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
         command.append('--grouped-controllers')
     if only:
         command += ['--only', ','.join(only)]
+    if plant_state_file is not None:
+        command += ['--plant-state-file', str(plant_state_file)]
     return command
 
 

@@ -9,12 +9,16 @@ handler on, so a native crash, or a hang ended by SIGABRT, leaves each thread's 
 node's log; before that SIGABRT the native stacks of a hung node's threads are written there too
 when ``gdb`` is on the PATH (a hang inside the middleware shows only as a Python line).
 Children write their logs in append mode, so the notes this module adds are never overwritten.
+The process id of each node's newest process is kept in ``<log_dir>/pids.json`` (rewritten
+atomically at every start), so a tool outside (a chaos driver, a debugger) finds a node's
+process from the bring-up itself rather than by matching command lines.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import json
 import os
 import shutil
 import signal
@@ -24,9 +28,12 @@ from pathlib import Path
 
 from walker_bringup.graph import NodeSpec
 
-__all__ = ['ManagedProcess', 'ProcessGroup', 'STOP_TIMEOUT', 'stale_shared_memory_files']
+__all__ = ['ManagedProcess', 'ProcessGroup', 'STOP_TIMEOUT', 'PID_FILE', 'read_pids',
+           'fastdds_shm_files', 'stale_shared_memory_files']
 
 _SHM = Path('/dev/shm')
+#: The file in a group's log directory that names each node's newest process id.
+PID_FILE = 'pids.json'
 #: [s] wall-clock time a node is given to stop cleanly after each signal. A graph of eight
 #: Python nodes shutting down together on a loaded 2-core machine was seen to take 4.7 s.
 STOP_TIMEOUT = 10.0
@@ -62,7 +69,8 @@ class ManagedProcess:
         return '\n'.join(text.splitlines()[-lines:])
 
 
-def _fastdds_files() -> set[Path]:
+def fastdds_shm_files() -> set[Path]:
+    """Return the Fast DDS files in /dev/shm now."""
     if not _SHM.is_dir():
         return set()
     return {p for p in _SHM.iterdir() if 'fastrtps' in p.name or 'fastdds' in p.name}
@@ -88,7 +96,7 @@ def stale_shared_memory_files(before: set[Path], min_age: float = 10.0) -> list[
     Files younger than ``min_age`` seconds are left too: a process that is starting may have
     created a file it has not mapped yet.
     """
-    candidates = _fastdds_files() - before  # listed before the mappings are read
+    candidates = fastdds_shm_files() - before  # listed before the mappings are read
     mapped = _mapped_shared_memory()
     now = time.time()
 
@@ -102,6 +110,18 @@ def stale_shared_memory_files(before: set[Path], min_age: float = 10.0) -> list[
         except OSError:
             return True  # gone already
     return sorted(p for p in candidates if not in_use(p) and not young(p))
+
+
+def read_pids(log_dir: Path) -> dict[str, int]:
+    """Return node name -> id of its newest process, as a group in ``log_dir`` last wrote it.
+
+    Empty when no group has started a process there.
+    """
+    try:
+        return {name: int(pid) for name, pid in
+                json.loads((Path(log_dir) / PID_FILE).read_text()).items()}
+    except FileNotFoundError:
+        return {}
 
 
 class ProcessGroup:
@@ -125,7 +145,7 @@ class ProcessGroup:
         # the node's log, so the log says where it happened.
         self.env = {**env, 'PYTHONFAULTHANDLER': '1'}
         self.processes: list[ManagedProcess] = []
-        self._shm_before = _fastdds_files()
+        self._shm_before = fastdds_shm_files()
 
     def start(self, spec: NodeSpec, command: list[str] | None = None,
               append_log: bool = False) -> ManagedProcess:
@@ -142,7 +162,16 @@ class ProcessGroup:
                                      start_new_session=True)
         process = ManagedProcess(spec, popen, log_path, time.monotonic(), command=command)
         self.processes.append(process)
+        self._write_pids()
         return process
+
+    def _write_pids(self) -> None:
+        """Name each node's newest process id in ``pids.json`` (a new file renamed over)."""
+        pids = {p.spec.name: p.popen.pid for p in self.processes}  # the newest last
+        path = self.log_dir / PID_FILE
+        partial = path.with_suffix('.json.partial')
+        partial.write_text(json.dumps(pids, indent=1) + '\n')
+        partial.replace(path)
 
     def restart(self, process: ManagedProcess, command: list[str] | None = None
                 ) -> ManagedProcess:

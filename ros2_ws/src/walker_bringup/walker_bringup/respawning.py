@@ -24,6 +24,7 @@ OK, WARN, ERROR = 0, 1, 2
 #: What a recorder started again is given: it continues its bag in a new file (the file the
 #: killed one left cut completed first) instead of refusing a bag that exists.
 _RECORDER_APPEND = ['-p', 'recorder.append:=true']
+_COMPOSED_APPEND = '--append-bag'
 
 
 def exit_text(code: int | None) -> str:
@@ -41,11 +42,16 @@ def exit_text(code: int | None) -> str:
 def rejoin_command(process: ManagedProcess) -> list[str]:
     """Return the command line a dead node is started again with.
 
-    Its own; a recorder's continues its bag (``recorder.append``).
+    Its own; a recorder's continues its bag (``recorder.append``), and so does a composed
+    graph's that records (``--append-bag``). A composed graph's plant restores its snapshot
+    as a plant process does (its ``--plant-state-file`` is in its command line already).
     """
     command = list(process.command or process.spec.command())
     if process.spec.executable == 'recorder_node' and command[-2:] != _RECORDER_APPEND:
         command += _RECORDER_APPEND
+    if process.spec.executable == 'composed_graph' and '--record' in command \
+            and _COMPOSED_APPEND not in command:
+        command.append(_COMPOSED_APPEND)
     return command
 
 

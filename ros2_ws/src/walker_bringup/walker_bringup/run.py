@@ -384,7 +384,8 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
                                bags[0] if bags and loop is None else None, walker.start,
                                dict(plant.remaps).get('/clock'), _graph_parameters(args),
                                grouped_controllers=args.grouped_controllers, only=loop,
-                               plant_params_file=_plant_file(args))
+                               plant_params_file=_plant_file(args),
+                               plant_state_file=dict(plant.parameters).get('state_file'))
     walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
                                 'graph' if loop is None else 'loop', walker.namespace,
                                 str(params_file)), command)

@@ -191,6 +191,14 @@ def test_a_restarted_supervisor_holds_takes_the_step_up_and_resume_completes_it(
     assert world.goal('walk_to', 'n0_2').steps_taken == 1
 
 
+def test_a_latched_mode_heard_after_the_step_was_taken_up_does_not_change_its_base():
+    world, step = _restarted_in_coarse_motion()
+    other = 'b' if step.base_gripper == 'a' else 'a'
+    world.runner.latched_mode(other)  # a mode on record naming the free gripper, heard late
+    answer, commands = world.runner.resume(world.now, world.now)
+    assert answer == f'resumed: completing the step to {step.to_node}'
+
+
 def test_a_record_that_does_not_describe_the_walker_is_forgotten_and_not_taken_up():
     wrong = RecordedStep('a', 'n2_2', 'n2_1', 'n1_2', 0.0)  # another base node
     world, _ = _restarted_in_coarse_motion(wrong)

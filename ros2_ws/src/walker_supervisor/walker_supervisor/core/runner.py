@@ -626,6 +626,9 @@ class WalkRunner:
         step, targets = adopted
         self.sequencer.adopt(step, targets, f'restarted in the middle of the step '
                              f'{step.from_node} -> {step.to_node}: resume to complete it')
+        # the adopted step's base is measured attached in its node: a latched mode heard after
+        # (this supervisor's own hold, commanded before the record was read) must not change it
+        self._base_known = True
         self._emit(Notice(self.sequencer.reason))
 
     # ------------------------------------------------------------------ commands
