@@ -9,10 +9,12 @@ a steady-clock timer (its watchdog's): silent for ``after`` seconds, the subscri
 destroyed and created again, with the same callback and QoS, once per ``after`` while the
 silence lasts, and the node's log says so.
 
-What counts as heard, and when a silence counts at all, the caller may say: ``last_heard``
-(the stream's newest message as the node's own watchdog judges it; by default, the last time
-the callback ran) and ``counts`` (a silence counts only while it returns True: a clock that
-runs past the newest message, peers that are heard from). The renewal itself is
+A silence counts only while the stream's peers are alive
+(:func:`~walker_runtime.core.resubscription.peers_alive`): the topic has a publisher in the ROS
+graph, and the caller's ``counts`` (a clock that runs past the newest message, peers heard
+from otherwise) holds. What counts as heard the caller may say too: ``last_heard`` (the
+stream's newest message as the node's own watchdog judges it; by default, the last time the
+callback ran). The renewal itself is
 :class:`Renewal`'s, which holds nothing of a subscription: a publisher that must be made anew
 when its commands have no effect is another small subclass; a subscription read on demand
 through a :class:`~walker_runtime.spinning.TopicSampler` is :class:`SampledSubscription`.
@@ -27,7 +29,7 @@ from typing import Any
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 
-from walker_runtime.core.resubscription import Resubscription
+from walker_runtime.core.resubscription import Resubscription, peers_alive
 
 __all__ = ['Renewal', 'WatchedSubscription', 'SampledSubscription']
 
@@ -50,7 +52,7 @@ class Renewal:
         Returns the steady time [s] of the stream's newest message, or None when it has not
         been heard from; by default the time :meth:`heard` was last called.
     counts : callable, optional
-        A silence counts only while ``counts()`` is True.
+        A silence counts only while ``counts()`` is True (and the entity has peers).
     count_from_start : bool
         Count a silence from the entity's creation when nothing has been heard yet (for a
         stream ``counts`` already knows to be running); by default a stream never heard from
@@ -102,22 +104,36 @@ class Renewal:
     def check(self, now: float | None = None) -> bool:
         """Make the entity anew if its stream has been silent for long; say whether it was.
 
+        Only while its peers are alive (:meth:`peers` in the graph, and ``counts``): the
+        silence of a peer that is gone or stopped is left to the node's watchdog.
+
         Parameters
         ----------
         now : float, optional
             [s] steady time now (default: the ``steady_now`` given).
         """
         now = self._steady_now() if now is None else now
-        if self._counts is not None and not self._counts():
-            return False
         last_heard = self.last_heard
-        if not self._rule.due(now, last_heard):
+        if not self._rule.silent(now, last_heard):
+            return False
+        peers = self.peers()
+        alive = peers_alive(peers, self._counts is None or bool(self._counts()))
+        if not self._rule.due(now, last_heard, alive):
             return False
         self.renew()
         self._logger.warning(
-            f'{self.label}: silent for {now - last_heard:.1f} s, subscription made anew (a '
-            'restarted or resumed publisher is matched again)')
+            f'{self.label}: silent for {now - last_heard:.1f} s while {peers} '
+            f'{self._peer_kind} in the graph, {self._entity_kind} made anew (a restarted or '
+            'resumed peer is matched again)')
         return True
+
+    #: what the log line calls the entity and its peers
+    _entity_kind = 'subscription'
+    _peer_kind = 'publisher(s)'
+
+    def peers(self) -> int:
+        """Count the entity's peers in the ROS graph now (a subscription's: its publishers)."""
+        raise NotImplementedError
 
     def renew(self) -> None:
         """Destroy the entity and create it again, now (no silence needed, nothing logged)."""
@@ -185,6 +201,10 @@ class WatchedSubscription(Renewal):
         self.heard()
         self._callback(message)
 
+    def peers(self) -> int:
+        """Count the publishers of the subscription's topic (as remapped) in the ROS graph."""
+        return self._node.count_publishers(self.subscription.topic_name)
+
     def _create(self) -> None:
         events = self._event_callbacks if self._event_callbacks is not None \
             else SubscriptionEventCallbacks(use_default_callbacks=False)
@@ -241,6 +261,10 @@ class SampledSubscription(Renewal):
         if taken:
             self.heard()
         return taken
+
+    def peers(self) -> int:
+        """Count the publishers of the subscription's topic in the ROS graph now."""
+        return self._sampler.node.count_publishers(self.subscription.topic_name)
 
     def _create(self) -> None:
         self.subscription = self._sampler.subscribe(self._message_type, self._topic, self._qos)
