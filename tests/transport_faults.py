@@ -23,10 +23,18 @@ from ros_test_support import NodeProcess
 
 from walker_bringup.transport_probe import parse_heard
 
-__all__ = ['SHM', 'shared_memory_files_of', 'remove_shared_memory_files', 'ProbePair']
+__all__ = ['SHM', 'fastdds_files', 'shared_memory_files_of', 'remove_shared_memory_files',
+           'ProbePair']
 
 SHM = Path('/dev/shm')
 _POLL = 0.05  # [s]
+
+
+def fastdds_files() -> set[Path]:
+    """Return every Fast DDS file in /dev/shm now (every user's)."""
+    if not SHM.is_dir():
+        return set()
+    return {p for p in SHM.iterdir() if 'fastrtps' in p.name or 'fastdds' in p.name}
 
 
 def shared_memory_files_of(pid: int) -> list[Path]:

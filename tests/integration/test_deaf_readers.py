@@ -20,7 +20,7 @@ import time
 import pytest
 
 from ros_test_support import isolated_domain, ros_environment
-from transport_faults import ProbePair, remove_shared_memory_files
+from transport_faults import ProbePair, fastdds_files, remove_shared_memory_files
 
 from walker_bringup.processes import stale_shared_memory_files
 from walker_bringup.transport import udp_loopback_environment
@@ -43,9 +43,7 @@ TRIES = 3
 @pytest.fixture
 def shared_memory_clean_up():
     """Remove the Fast DDS files the test's killed processes left (and no one else's)."""
-    from walker_bringup.processes import _fastdds_files
-
-    before = _fastdds_files()
+    before = fastdds_files()
     yield
     for path in stale_shared_memory_files(before, min_age=0.0):
         path.unlink(missing_ok=True)
