@@ -187,3 +187,23 @@ def test_a_sampled_subscription_is_made_anew_and_takes_again(node):
         assert sampled.subscription is None and list(sampler.node.subscriptions) == []
     finally:
         sampler.destroy()
+
+
+def test_a_renewable_publisher_is_made_anew_by_its_owner_only_and_delivers_again(node):
+    """The supervisor's control_mode publisher: renewed when its commands have no effect."""
+    from walker_runtime.watched_subscription import RenewablePublisher
+
+    steady, logger, received = _Steady(), _Logger(), []
+    node.create_subscription(Int32, 'numbers', lambda m: received.append(m.data), COMMAND_QOS)
+    renewable = RenewablePublisher(node, Int32, 'numbers', COMMAND_QOS, logger=logger,
+                                   steady_now=steady)
+    assert renewable.after is None and renewable.peers() == 1
+    first = renewable.publisher
+    steady.now += 1e6
+    assert not renewable.check() and renewable.publisher is first  # no silence rule
+    renewable.renew()
+    assert renewable.publisher is not first and list(node.publishers)[-1] is renewable.publisher
+    assert len([p for p in node.publishers if p.topic_name == '/numbers']) == 1
+    assert _deliver(node, renewable, received, 3), 'the new publisher delivers'
+    renewable.destroy()
+    assert renewable.publisher is None

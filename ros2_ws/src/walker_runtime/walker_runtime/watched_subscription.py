@@ -31,7 +31,7 @@ from rclpy.node import Node
 
 from walker_runtime.core.resubscription import Resubscription, peers_alive
 
-__all__ = ['Renewal', 'WatchedSubscription', 'SampledSubscription']
+__all__ = ['Renewal', 'WatchedSubscription', 'SampledSubscription', 'RenewablePublisher']
 
 
 class Renewal:
@@ -46,8 +46,9 @@ class Renewal:
         Where the renewal is reported (a warning).
     label : str
         What the log line names (the topic).
-    after : float
-        [s] steady time: silence before the first renewal, and between renewals.
+    after : float or None
+        [s] steady time: silence before the first renewal, and between renewals; None: made
+        anew only when its owner calls :meth:`renew` (:meth:`check` never does).
     last_heard : callable, optional
         Returns the steady time [s] of the stream's newest message, or None when it has not
         been heard from; by default the time :meth:`heard` was last called.
@@ -61,11 +62,11 @@ class Renewal:
         Steady time [s] (default: :func:`time.monotonic`).
     """
 
-    def __init__(self, logger, label: str, after: float, *,
+    def __init__(self, logger, label: str, after: float | None, *,
                  last_heard: Callable[[], float | None] | None = None,
                  counts: Callable[[], bool] | None = None, count_from_start: bool = False,
                  steady_now: Callable[[], float] = time.monotonic) -> None:
-        self._rule = Resubscription(after)
+        self._rule = Resubscription(after) if after is not None else None
         self._logger = logger
         self.label = label
         self._last_heard_source = last_heard
@@ -76,9 +77,9 @@ class Renewal:
         self._created = steady_now()
 
     @property
-    def after(self) -> float:
+    def after(self) -> float | None:
         """[s] steady time of silence before a renewal (settable: a parameter changed)."""
-        return self._rule.after
+        return self._rule.after if self._rule is not None else None
 
     @after.setter
     def after(self, value: float) -> None:
@@ -87,7 +88,7 @@ class Renewal:
     @property
     def renewals(self) -> int:
         """How many times the entity was made anew for a silence."""
-        return self._rule.attempts
+        return self._rule.attempts if self._rule is not None else 0
 
     def heard(self, now: float | None = None) -> None:
         """Note a message of the stream, at steady time ``now`` [s] (default: now)."""
@@ -112,6 +113,8 @@ class Renewal:
         now : float, optional
             [s] steady time now (default: the ``steady_now`` given).
         """
+        if self._rule is None:
+            return False
         now = self._steady_now() if now is None else now
         last_heard = self.last_heard
         if not self._rule.silent(now, last_heard):
@@ -273,3 +276,63 @@ class SampledSubscription(Renewal):
         if self.subscription is not None:
             self._sampler.unsubscribe(self.subscription)
             self.subscription = None
+
+
+class RenewablePublisher(Renewal):
+    """A publisher its owner makes anew when its commands have no effect.
+
+    The supervisor's ``control_mode`` publisher: a controller still in HOLD after the mode was
+    repeated several times is not hearing it (``walker_supervisor.core.health.ModeRepetition``
+    decides), and a new publisher is matched anew with every subscriber. The owner calls
+    :meth:`renew`; a silence-driven :meth:`check` is there too, with ``last_heard`` saying
+    when the commands last had their effect.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Creates the publisher (and, unless ``logger`` is given, logs).
+    message_type : type
+        The message type.
+    topic : str
+        The topic.
+    qos : rclpy.qos.QoSProfile
+        The publisher's QoS.
+    after : float, optional
+        [s] steady time before a silence-driven renewal (see :class:`Renewal`); by default
+        none: made anew by its owner only.
+    logger : rclpy logger, optional
+        Where renewals are logged (default: ``node``'s).
+    **watch
+        As for :class:`Renewal`.
+    """
+
+    _entity_kind = 'publisher'
+    _peer_kind = 'subscriber(s)'
+
+    def __init__(self, node: Node, message_type: type, topic: str, qos, *,
+                 after: float | None = None, logger=None, label: str | None = None,
+                 **watch) -> None:
+        super().__init__(logger if logger is not None else node.get_logger(),
+                         label or topic, after, **watch)
+        self._node = node
+        self._message_type = message_type
+        self._topic = topic
+        self._qos = qos
+        self.publisher = None
+        self._create()
+
+    def publish(self, message) -> None:
+        """Publish ``message`` on the current publisher."""
+        self.publisher.publish(message)
+
+    def peers(self) -> int:
+        """Count the subscribers of the publisher's topic in the ROS graph now."""
+        return self._node.count_subscribers(self.publisher.topic_name)
+
+    def _create(self) -> None:
+        self.publisher = self._node.create_publisher(self._message_type, self._topic, self._qos)
+
+    def _destroy(self) -> None:
+        if self.publisher is not None:
+            self._node.destroy_publisher(self.publisher)
+            self.publisher = None
