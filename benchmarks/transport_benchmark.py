@@ -125,7 +125,7 @@ def measure_cost(env: dict, duration: float) -> dict:
             pair.listener.stop()
         values = np.load(latencies)
     return {'cpu': cpu, 'states_latency': percentiles_ms(values),
-            'states_received_before_window': first}
+            'states_received_by_window_end': first}
 
 
 def main() -> int:
