@@ -16,7 +16,7 @@ from otherwise) holds. What counts as heard the caller may say too: ``last_heard
 stream's newest message as the node's own watchdog judges it; by default, the last time the
 callback ran). The renewal itself is
 :class:`Renewal`'s, which holds nothing of a subscription: a publisher that must be made anew
-when its commands have no effect is another small subclass; a subscription read on demand
+when its commands have no effect is :class:`RenewablePublisher`; a subscription read on demand
 through a :class:`~walker_runtime.spinning.TopicSampler` is :class:`SampledSubscription`.
 """
 
@@ -83,7 +83,10 @@ class Renewal:
 
     @after.setter
     def after(self, value: float) -> None:
-        self._rule.after = value
+        if self._rule is None:
+            self._rule = Resubscription(value)
+        else:
+            self._rule.after = value
 
     @property
     def renewals(self) -> int:
