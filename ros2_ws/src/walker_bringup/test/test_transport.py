@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from walker_bringup.transport import (PROFILES_VARIABLE, udp_loopback_environment,
-                                      udp_loopback_profile)
+from walker_bringup.run import parse_arguments
+from walker_bringup.transport import (DEFAULT_TRANSPORT, PROFILES_VARIABLE, graph_environment,
+                                      udp_loopback_environment, udp_loopback_profile)
 
 # A node that prints "ready" once its participant is up, then lives until its stdin closes.
 _NODE = """
@@ -52,6 +53,23 @@ def test_the_profile_is_installed_and_selected_without_replacing_another():
     assert udp_loopback_environment(env) == env  # selected twice: the same
     with pytest.raises(ValueError, match=PROFILES_VARIABLE):
         udp_loopback_environment({PROFILES_VARIABLE: '/etc/other_profiles.xml'})
+
+
+def test_a_graph_runs_over_udp_on_loopback_unless_told_otherwise():
+    """run_all.py's graph and --serve: a node restarted after a crash is heard as before."""
+    assert DEFAULT_TRANSPORT == 'udp' and parse_arguments([]).transport == 'udp'
+    assert parse_arguments(['--serve']).transport == 'udp'
+    env = {'ROS_DOMAIN_ID': '3'}
+    assert graph_environment(env) == udp_loopback_environment(env)
+    assert graph_environment(env, 'shm') == env and graph_environment(env, 'shm') is not env
+    own = {PROFILES_VARIABLE: '/etc/other_profiles.xml'}
+    assert graph_environment(own, 'shm') == own  # the user's profile kept on shared memory
+    with pytest.raises(ValueError, match=PROFILES_VARIABLE):
+        graph_environment(own)
+    with pytest.raises(ValueError, match="unknown transport 'tcp'"):
+        graph_environment(env, 'tcp')
+    with pytest.raises(SystemExit):
+        parse_arguments(['--transport', 'tcp'])
 
 
 def test_a_node_with_the_profile_is_reached_over_udp_only(ros_env):

@@ -46,6 +46,8 @@ from walker_bringup.core.respawn import DEFAULT_DELAY, DEFAULT_LIMIT, RespawnPol
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
+from walker_bringup.transport import (
+    DEFAULT_TRANSPORT, PROFILES_VARIABLE, TRANSPORTS, graph_environment)
 from walker_report.walk_report import report_after_walk
 from walker_teleop.core.progress import walk_progress
 
@@ -125,6 +127,12 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                              'start) before the graph is given up as dead: the walker is held '
                              'and everything shut down (exit code 5); 0: never start a node '
                              'again (default: %(default)s)')
+    parser.add_argument('--transport', choices=TRANSPORTS, default=DEFAULT_TRANSPORT,
+                        help="how the graph's node processes reach each other: udp (UDP on "
+                             'loopback, walker_bringup/config/fastdds_udp_loopback.xml; a node '
+                             'started again after a crash is heard as before) or shm (the rmw '
+                             "default, Fast DDS's shared memory, with any profile "
+                             'FASTRTPS_DEFAULT_PROFILES_FILE names) (default: %(default)s)')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
@@ -430,8 +438,16 @@ def main(argv: list[str] | None = None) -> int:
     params_file = configuration.path
     stamp = datetime.datetime.now().strftime('%Y%m%d-%H%M%S')
     out = Path(args.out or Path('runs') / stamp).resolve()
-    env = dict(os.environ)
-    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    try:
+        env = graph_environment({**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'},
+                                args.transport)
+    except ValueError as error:
+        progress.error(f'[walker] error: --transport {args.transport}: {error} (--transport '
+                       'shm keeps that profile)')
+        return 2
+    # this process's own participant (the walk's client) is reached as the nodes are
+    if PROFILES_VARIABLE in env:
+        os.environ[PROFILES_VARIABLE] = env[PROFILES_VARIABLE]
     if args.walkers > 1 and args.namespace != '/walker':
         progress.error('[walker] error: --walkers names the namespaces itself (/walker, '
                        '/walker_2, ...): leave --namespace out')

@@ -10,17 +10,29 @@ package (``config/fastdds_udp_loopback.xml``) has every node's readers reached o
 
 ``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` does not do this: under the LOCALHOST discovery range
 rmw_fastrtps sets its own transports and the variable is ignored.
+
+A graph's transport is chosen here, once (:func:`graph_environment`): ``udp`` (the default of
+``run_all.py``, its graph and ``--serve``, and of the fault graphs) or ``shm`` (the rmw
+default, the environment left as it is). ``benchmarks/transport_benchmark.py`` measured both
+(docs/reliability.md): a reader whose shared-memory port was removed while it lived stays deaf
+to a restarted writer whatever its subscriptions do, and UDP costs less than a tenth of a
+millisecond on the 500 Hz ``joint_states`` path.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ['PROFILES_VARIABLE', 'udp_loopback_profile', 'udp_loopback_environment']
+__all__ = ['PROFILES_VARIABLE', 'TRANSPORTS', 'DEFAULT_TRANSPORT', 'udp_loopback_profile',
+           'udp_loopback_environment', 'graph_environment']
 
 #: The environment variable naming Fast DDS's XML profiles file (Fast DDS 2.x, ROS 2 Jazzy).
 PROFILES_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 _PROFILE_NAME = 'fastdds_udp_loopback.xml'
+#: The transports a graph may run on: UDP on loopback, or the rmw default (shared memory).
+TRANSPORTS = ('udp', 'shm')
+#: What a graph of ``run_all.py`` runs on unless told otherwise.
+DEFAULT_TRANSPORT = 'udp'
 
 
 def udp_loopback_profile() -> Path:
@@ -45,3 +57,26 @@ def udp_loopback_environment(env: dict[str, str]) -> dict[str, str]:
         raise ValueError(f'{PROFILES_VARIABLE} is already {chosen!r}; the UDP-on-loopback '
                          f'profile {profile!r} would replace it')
     return {**env, PROFILES_VARIABLE: profile}
+
+
+def graph_environment(env: dict[str, str], transport: str = DEFAULT_TRANSPORT) -> dict[str, str]:
+    """Return ``env`` for the nodes of a graph on ``transport`` (a new dict; ``env`` is kept).
+
+    Parameters
+    ----------
+    env : dict
+        The environment the nodes would otherwise get.
+    transport : str
+        ``'udp'``: the UDP-on-loopback profile selected (:func:`udp_loopback_environment`);
+        ``'shm'``: the rmw default, ``env`` unchanged (a profile it names is kept).
+
+    Raises
+    ------
+    ValueError
+        An unknown transport, or ``'udp'`` with another profiles file already named.
+    """
+    if transport == 'udp':
+        return udp_loopback_environment(env)
+    if transport == 'shm':
+        return dict(env)
+    raise ValueError(f'unknown transport {transport!r}: one of {", ".join(TRANSPORTS)}')

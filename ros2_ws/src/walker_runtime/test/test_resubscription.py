@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from walker_runtime.core.resubscription import Resubscription, clock_ran_past
+from walker_runtime.core.resubscription import Resubscription, clock_ran_past, peers_alive
 
 
 def test_a_silent_stream_is_resubscribed_after_the_interval_then_every_interval():
@@ -19,6 +19,33 @@ def test_a_silent_stream_is_resubscribed_after_the_interval_then_every_interval(
     assert not resubscription.due(12.9, 12.2)
     assert resubscription.due(13.2, 12.2)
     assert resubscription.attempts == 3
+
+
+def test_a_silence_while_the_peers_are_not_alive_is_theirs_and_counts_no_attempt():
+    resubscription = Resubscription(1.0)
+    assert resubscription.silent(12.0, 10.0) and not resubscription.silent(10.5, 10.0)
+    assert not resubscription.silent(12.0, None)
+    assert not resubscription.due(12.0, 10.0, alive=False)
+    assert resubscription.attempts == 0
+    # the peers back (a publisher rejoined the graph, its clock runs): due at once
+    assert resubscription.due(12.1, 10.0, alive=True)
+    assert resubscription.attempts == 1
+
+
+@pytest.mark.parametrize('peers, evidence, alive', [
+    (0, True, False),    # no publisher in the graph: gone, or never started
+    (0, False, False),
+    (1, True, True),     # in the graph, and nothing speaks against it
+    (2, True, True),
+    (1, False, False),   # in the graph, but its clock stands still: stopped, not unheard
+])
+def test_peers_are_alive_when_in_the_graph_and_no_evidence_speaks_against_them(peers, evidence,
+                                                                                alive):
+    assert peers_alive(peers, evidence) is alive
+
+
+def test_peers_alive_without_other_evidence_is_the_graph_alone():
+    assert peers_alive(1) and not peers_alive(0)
 
 
 @pytest.mark.parametrize('after', [0.0, -1.0, math.nan, math.inf])

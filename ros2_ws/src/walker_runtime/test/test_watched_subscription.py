@@ -74,8 +74,9 @@ def test_a_silent_subscription_is_made_anew_and_the_stream_flows_again(node):
     assert watched.subscription is not first
     assert list(node.subscriptions) == [watched.subscription]
     assert watched.renewals == 1
-    assert logger.warnings == ['numbers: silent for 1.0 s, subscription made anew (a restarted '
-                               'or resumed publisher is matched again)']
+    assert logger.warnings == ['numbers: silent for 1.0 s while 1 publisher(s) in the graph, '
+                               'subscription made anew (a restarted or resumed peer is matched '
+                               'again)']
     steady.now += 0.5
     assert not watched.check(), 'once per interval while the silence lasts'
     steady.now += 0.5
@@ -86,6 +87,7 @@ def test_a_silent_subscription_is_made_anew_and_the_stream_flows_again(node):
 
 def test_a_stream_never_heard_from_is_left_alone_unless_counted_from_the_start(node):
     steady, logger = _Steady(), _Logger()
+    node.create_publisher(Int32, 'numbers', COMMAND_QOS)
     alone = _watched(node, [], steady, logger)
     counted = _watched(node, [], steady, logger, count_from_start=True)
     steady.now += 5.0
@@ -96,6 +98,7 @@ def test_a_stream_never_heard_from_is_left_alone_unless_counted_from_the_start(n
 def test_a_silence_counts_only_while_the_condition_holds(node):
     steady, logger, heard = _Steady(), _Logger(), {'at': 100.0}
     running = {'clock': False}
+    node.create_publisher(Int32, 'numbers', COMMAND_QOS)
     watched = _watched(node, [], steady, logger, last_heard=lambda: heard['at'],
                        counts=lambda: running['clock'])
     steady.now += 3.0
@@ -107,8 +110,25 @@ def test_a_silence_counts_only_while_the_condition_holds(node):
     assert not watched.check()
 
 
+def test_a_silence_with_no_publisher_in_the_graph_is_the_publishers_and_left_alone(node):
+    """Gone (or never started): a new subscription would hear nothing more."""
+    steady, logger = _Steady(), _Logger()
+    watched = _watched(node, [], steady, logger)
+    watched.heard()
+    steady.now += 5.0
+    assert watched.peers() == 0
+    assert not watched.check() and watched.renewals == 0 and logger.warnings == []
+    publisher = node.create_publisher(Int32, 'numbers', COMMAND_QOS)
+    assert watched.peers() == 1
+    assert watched.check(), "a publisher back in the graph: the silence is the reader's"
+    node.destroy_publisher(publisher)
+    steady.now += 5.0
+    assert not watched.check() and watched.renewals == 1
+
+
 def test_the_interval_follows_a_parameter_change_and_refuses_nonsense(node):
     steady, logger, received = _Steady(), _Logger(), []
+    node.create_publisher(Int32, 'numbers', COMMAND_QOS)
     watched = _watched(node, received, steady, logger)
     watched.heard()
     watched.after = 4.0
@@ -173,9 +193,30 @@ def test_a_sampled_subscription_is_made_anew_and_takes_again(node):
         steady.now += 1.0
         assert sampled.check() and sampled.subscription is not first
         assert list(sampler.node.subscriptions) == [sampled.subscription]
-        assert logger.warnings[0].startswith('numbers: silent for 1.0 s, subscription made anew')
+        assert logger.warnings[0].startswith('numbers: silent for 1.0 s while 1 publisher(s) '
+                                             'in the graph, subscription made anew')
         assert _take_until(sampled, publisher, 2), 'the new subscription receives'
         sampled.destroy()
         assert sampled.subscription is None and list(sampler.node.subscriptions) == []
     finally:
         sampler.destroy()
+
+
+def test_a_renewable_publisher_is_made_anew_by_its_owner_only_and_delivers_again(node):
+    """The supervisor's control_mode publisher: renewed when its commands have no effect."""
+    from walker_runtime.watched_subscription import RenewablePublisher
+
+    steady, logger, received = _Steady(), _Logger(), []
+    node.create_subscription(Int32, 'numbers', lambda m: received.append(m.data), COMMAND_QOS)
+    renewable = RenewablePublisher(node, Int32, 'numbers', COMMAND_QOS, logger=logger,
+                                   steady_now=steady)
+    assert renewable.after is None and renewable.peers() == 1
+    first = renewable.publisher
+    steady.now += 1e6
+    assert not renewable.check() and renewable.publisher is first  # no silence rule
+    renewable.renew()
+    assert renewable.publisher is not first and list(node.publishers)[-1] is renewable.publisher
+    assert len([p for p in node.publishers if p.topic_name == '/numbers']) == 1
+    assert _deliver(node, renewable, received, 3), 'the new publisher delivers'
+    renewable.destroy()
+    assert renewable.publisher is None

@@ -9,12 +9,14 @@ a steady-clock timer (its watchdog's): silent for ``after`` seconds, the subscri
 destroyed and created again, with the same callback and QoS, once per ``after`` while the
 silence lasts, and the node's log says so.
 
-What counts as heard, and when a silence counts at all, the caller may say: ``last_heard``
-(the stream's newest message as the node's own watchdog judges it; by default, the last time
-the callback ran) and ``counts`` (a silence counts only while it returns True: a clock that
-runs past the newest message, peers that are heard from). The renewal itself is
+A silence counts only while the stream's peers are alive
+(:func:`~walker_runtime.core.resubscription.peers_alive`): the topic has a publisher in the ROS
+graph, and the caller's ``counts`` (a clock that runs past the newest message, peers heard
+from otherwise) holds. What counts as heard the caller may say too: ``last_heard`` (the
+stream's newest message as the node's own watchdog judges it; by default, the last time the
+callback ran). The renewal itself is
 :class:`Renewal`'s, which holds nothing of a subscription: a publisher that must be made anew
-when its commands have no effect is another small subclass; a subscription read on demand
+when its commands have no effect is :class:`RenewablePublisher`; a subscription read on demand
 through a :class:`~walker_runtime.spinning.TopicSampler` is :class:`SampledSubscription`.
 """
 
@@ -27,9 +29,9 @@ from typing import Any
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 
-from walker_runtime.core.resubscription import Resubscription
+from walker_runtime.core.resubscription import Resubscription, peers_alive
 
-__all__ = ['Renewal', 'WatchedSubscription', 'SampledSubscription']
+__all__ = ['Renewal', 'WatchedSubscription', 'SampledSubscription', 'RenewablePublisher']
 
 
 class Renewal:
@@ -44,13 +46,14 @@ class Renewal:
         Where the renewal is reported (a warning).
     label : str
         What the log line names (the topic).
-    after : float
-        [s] steady time: silence before the first renewal, and between renewals.
+    after : float or None
+        [s] steady time: silence before the first renewal, and between renewals; None: made
+        anew only when its owner calls :meth:`renew` (:meth:`check` never does).
     last_heard : callable, optional
         Returns the steady time [s] of the stream's newest message, or None when it has not
         been heard from; by default the time :meth:`heard` was last called.
     counts : callable, optional
-        A silence counts only while ``counts()`` is True.
+        A silence counts only while ``counts()`` is True (and the entity has peers).
     count_from_start : bool
         Count a silence from the entity's creation when nothing has been heard yet (for a
         stream ``counts`` already knows to be running); by default a stream never heard from
@@ -59,11 +62,11 @@ class Renewal:
         Steady time [s] (default: :func:`time.monotonic`).
     """
 
-    def __init__(self, logger, label: str, after: float, *,
+    def __init__(self, logger, label: str, after: float | None, *,
                  last_heard: Callable[[], float | None] | None = None,
                  counts: Callable[[], bool] | None = None, count_from_start: bool = False,
                  steady_now: Callable[[], float] = time.monotonic) -> None:
-        self._rule = Resubscription(after)
+        self._rule = Resubscription(after) if after is not None else None
         self._logger = logger
         self.label = label
         self._last_heard_source = last_heard
@@ -75,18 +78,21 @@ class Renewal:
         self._retired = False  # destroyed for good: never made anew
 
     @property
-    def after(self) -> float:
+    def after(self) -> float | None:
         """[s] steady time of silence before a renewal (settable: a parameter changed)."""
-        return self._rule.after
+        return self._rule.after if self._rule is not None else None
 
     @after.setter
     def after(self, value: float) -> None:
-        self._rule.after = value
+        if self._rule is None:
+            self._rule = Resubscription(value)
+        else:
+            self._rule.after = value
 
     @property
     def renewals(self) -> int:
         """How many times the entity was made anew for a silence."""
-        return self._rule.attempts
+        return self._rule.attempts if self._rule is not None else 0
 
     def heard(self, now: float | None = None) -> None:
         """Note a message of the stream, at steady time ``now`` [s] (default: now)."""
@@ -103,22 +109,38 @@ class Renewal:
     def check(self, now: float | None = None) -> bool:
         """Make the entity anew if its stream has been silent for long; say whether it was.
 
+        Only while its peers are alive (:meth:`peers` in the graph, and ``counts``): the
+        silence of a peer that is gone or stopped is left to the node's watchdog.
+
         Parameters
         ----------
         now : float, optional
             [s] steady time now (default: the ``steady_now`` given).
         """
-        now = self._steady_now() if now is None else now
-        if self._retired or (self._counts is not None and not self._counts()):
+        if self._rule is None or self._retired:
             return False
+        now = self._steady_now() if now is None else now
         last_heard = self.last_heard
-        if not self._rule.due(now, last_heard):
+        if not self._rule.silent(now, last_heard):
+            return False
+        peers = self.peers()
+        alive = peers_alive(peers, self._counts is None or bool(self._counts()))
+        if not self._rule.due(now, last_heard, alive):
             return False
         self.renew()
         self._logger.warning(
-            f'{self.label}: silent for {now - last_heard:.1f} s, subscription made anew (a '
-            'restarted or resumed publisher is matched again)')
+            f'{self.label}: silent for {now - last_heard:.1f} s while {peers} '
+            f'{self._peer_kind} in the graph, {self._entity_kind} made anew (a restarted or '
+            'resumed peer is matched again)')
         return True
+
+    #: what the log line calls the entity and its peers
+    _entity_kind = 'subscription'
+    _peer_kind = 'publisher(s)'
+
+    def peers(self) -> int:
+        """Count the entity's peers in the ROS graph now (a subscription's: its publishers)."""
+        raise NotImplementedError
 
     def renew(self) -> None:
         """Destroy the entity and create it again, now (no silence needed, nothing logged).
@@ -192,6 +214,10 @@ class WatchedSubscription(Renewal):
         self.heard()
         self._callback(message)
 
+    def peers(self) -> int:
+        """Count the publishers of the subscription's topic (as remapped) in the ROS graph."""
+        return self._node.count_publishers(self.subscription.topic_name)
+
     def _create(self) -> None:
         events = self._event_callbacks if self._event_callbacks is not None \
             else SubscriptionEventCallbacks(use_default_callbacks=False)
@@ -249,6 +275,10 @@ class SampledSubscription(Renewal):
             self.heard()
         return taken
 
+    def peers(self) -> int:
+        """Count the publishers of the subscription's topic in the ROS graph now."""
+        return self._sampler.node.count_publishers(self.subscription.topic_name)
+
     def _create(self) -> None:
         self.subscription = self._sampler.subscribe(self._message_type, self._topic, self._qos)
 
@@ -256,3 +286,63 @@ class SampledSubscription(Renewal):
         if self.subscription is not None:
             self._sampler.unsubscribe(self.subscription)
             self.subscription = None
+
+
+class RenewablePublisher(Renewal):
+    """A publisher its owner makes anew when its commands have no effect.
+
+    The supervisor's ``control_mode`` publisher: a controller still in HOLD after the mode was
+    repeated several times is not hearing it (``walker_supervisor.core.health.ModeRepetition``
+    decides), and a new publisher is matched anew with every subscriber. The owner calls
+    :meth:`renew`; a silence-driven :meth:`check` is there too, with ``last_heard`` saying
+    when the commands last had their effect.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Creates the publisher (and, unless ``logger`` is given, logs).
+    message_type : type
+        The message type.
+    topic : str
+        The topic.
+    qos : rclpy.qos.QoSProfile
+        The publisher's QoS.
+    after : float, optional
+        [s] steady time before a silence-driven renewal (see :class:`Renewal`); by default
+        none: made anew by its owner only.
+    logger : rclpy logger, optional
+        Where renewals are logged (default: ``node``'s).
+    **watch
+        As for :class:`Renewal`.
+    """
+
+    _entity_kind = 'publisher'
+    _peer_kind = 'subscriber(s)'
+
+    def __init__(self, node: Node, message_type: type, topic: str, qos, *,
+                 after: float | None = None, logger=None, label: str | None = None,
+                 **watch) -> None:
+        super().__init__(logger if logger is not None else node.get_logger(),
+                         label or topic, after, **watch)
+        self._node = node
+        self._message_type = message_type
+        self._topic = topic
+        self._qos = qos
+        self.publisher = None
+        self._create()
+
+    def publish(self, message) -> None:
+        """Publish ``message`` on the current publisher."""
+        self.publisher.publish(message)
+
+    def peers(self) -> int:
+        """Count the subscribers of the publisher's topic in the ROS graph now."""
+        return self._node.count_subscribers(self.publisher.topic_name)
+
+    def _create(self) -> None:
+        self.publisher = self._node.create_publisher(self._message_type, self._topic, self._qos)
+
+    def _destroy(self) -> None:
+        if self.publisher is not None:
+            self._node.destroy_publisher(self.publisher)
+            self.publisher = None

@@ -3,10 +3,11 @@
 The plant's joint states (500 Hz), the tip pose and each controller's state are sampled at the
 decision rate, not handled message by message: a Python callback per message would cost more
 CPU than every decision the supervisor makes. The gripper states and the latched mode arrive by
-callback. A source silent for long has its subscription made anew, and again as often while
-the silence lasts (:class:`walker_runtime.core.resubscription.Resubscription`): a controller
-process restarted after a crash, or a graph frozen and resumed, can leave a subscription that
-no longer receives while its publisher lives on.
+callback. A source silent for long while its publisher is in the graph has its subscription
+made anew, and again as often while the silence lasts, through the helper every reader of the
+walker uses (:mod:`walker_runtime.watched_subscription`, silence as the walk runner's health
+judges it): a controller process restarted after a crash, or a graph frozen and resumed, can
+leave a subscription that no longer receives while its publisher lives on.
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from walker_msgs.msg import ControllerState, ControlMode, GripperState, GripperS
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.mode_command import mode_command_refusal
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_SUBSCRIPTION_QOS, SENSOR_QOS
-from walker_runtime.core.resubscription import Resubscription
 from walker_runtime.spinning import TopicSampler
+from walker_runtime.watched_subscription import SampledSubscription, WatchedSubscription
 from walker_supervisor.clocks import Clocks
 from walker_supervisor.core.process_deaths import ProcessDeaths
 from walker_supervisor.core.runner import PLANT_GRIPPER_STATES, PLANT_JOINT_STATES, WalkRunner
@@ -63,31 +64,45 @@ class SupervisorInputs:
         self._node, self._runner, self._clocks, self._execute = node, runner, clocks, execute
         self._sampler = TopicSampler(f'{node.get_name()}_sampler', node.get_namespace(),
                                      node.context)
-        self._joint_states = self._sampler.subscribe(JointState, 'joint_states', SENSOR_QOS)
+        after = RESUBSCRIBE_AFTER_TIMEOUTS * runner.settings.watchdog_timeout
+        logger = node.get_logger()
+
+        def watch(name: str) -> dict:
+            # silence as the runner's health judges it, on the supervisor's steady clock
+            return {'after': after, 'label': name, 'steady_now': clocks.steady,
+                    'last_heard': lambda: runner.health.last_heard(name)}
+        self._joint_states = SampledSubscription(
+            self._sampler, JointState, 'joint_states', SENSOR_QOS, logger=logger,
+            **watch(PLANT_JOINT_STATES))
         self._tip_poses = self._sampler.subscribe(PoseStamped, 'tip_pose', _POSES)
         self._controllers = {
-            joint: self._sampler.subscribe(ControllerState, f'controllers/{joint}/state',
-                                           _CONTROLLER_STATES)
+            joint: SampledSubscription(
+                self._sampler, ControllerState, f'controllers/{joint}/state',
+                _CONTROLLER_STATES, logger=logger, **watch(f'controller {joint}'))
             for joint in PHYSICAL_JOINT_NAMES}
-        self._grippers = self._subscribe_grippers()
+        self._grippers = WatchedSubscription(
+            node, GripperStates, 'gripper_states', self._on_grippers, LATCHED_QOS,
+            **watch(PLANT_GRIPPER_STATES))
+        self._watched = [self._joint_states, *self._controllers.values(), self._grippers]
+        missing = set(runner.health.names) - {w.label for w in self._watched}
+        if missing:
+            raise RuntimeError(f'sources watched by the runner with no subscription: {missing}')
         self.gripper_messages: dict[str, GripperState] = {}
         node.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
                                  MODE_SUBSCRIPTION_QOS)
         self.deaths = ProcessDeaths(node.get_namespace())
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
                                  COMMAND_QOS)
-        after = RESUBSCRIBE_AFTER_TIMEOUTS * runner.settings.watchdog_timeout
-        self._resubscriptions = {name: Resubscription(after) for name in runner.health.names}
 
     def set_watchdog_timeout(self, timeout: float) -> None:
         """Follow a new ``supervisor.watchdog_timeout`` [s] at once."""
-        for resubscription in self._resubscriptions.values():
-            resubscription.after = RESUBSCRIBE_AFTER_TIMEOUTS * timeout
+        for watched in self._watched:
+            watched.after = RESUBSCRIBE_AFTER_TIMEOUTS * timeout
 
     def sample(self) -> None:
         """Hand the runner what the sampled subscriptions received since the last call."""
         runner, steady = self._runner, self._clocks.steady()
-        states = self._sampler.take(self._joint_states)
+        states = self._joint_states.take()
         if states:
             runner.joint_states(*joint_arrays(states[-1]), steady)
         for pose in self._sampler.take(self._tip_poses):
@@ -95,7 +110,7 @@ class SupervisorInputs:
             runner.tip_pose(seconds(pose.header.stamp), (p.x, p.y, p.z))
         reports = {}
         for joint, subscription in self._controllers.items():
-            taken = self._sampler.take(subscription)
+            taken = subscription.take()
             if taken:
                 reports[joint] = controller_report(taken[-1])
         self._execute(runner.controller_states(reports, self._clocks.now(), steady))
@@ -112,10 +127,6 @@ class SupervisorInputs:
         for status in msg.status:
             self.deaths.status(status.name, status.level[0], status.message, steady)
 
-    def _subscribe_grippers(self):
-        return self._node.create_subscription(GripperStates, 'gripper_states',
-                                              self._on_grippers, LATCHED_QOS)
-
     def _on_grippers(self, msg: GripperStates) -> None:
         for state in msg.grippers:
             self.gripper_messages[state.name] = state
@@ -125,21 +136,8 @@ class SupervisorInputs:
     def resubscribe_silent(self) -> None:
         """Make anew the subscription of each source silent for long (see the module)."""
         steady = self._clocks.steady()
-        for name, resubscription in self._resubscriptions.items():
-            last_heard = self._runner.health.last_heard(name)
-            if not resubscription.due(steady, last_heard):
-                continue
-            if name == PLANT_JOINT_STATES:
-                self._joint_states = self._sampler.renew(self._joint_states)
-            elif name == PLANT_GRIPPER_STATES:
-                self._node.destroy_subscription(self._grippers)
-                self._grippers = self._subscribe_grippers()
-            else:
-                joint = name.removeprefix('controller ')
-                self._controllers[joint] = self._sampler.renew(self._controllers[joint])
-            self._node.get_logger().warning(
-                f'{name}: silent for {steady - last_heard:.1f} s, subscription made anew '
-                '(a restarted or resumed publisher is matched again)')
+        for watched in self._watched:
+            watched.check(steady)
 
     def destroy(self) -> None:
         """Destroy the sampled subscriptions."""

@@ -36,6 +36,7 @@ from walker_runtime.node_parameters import declare_section, guard_section_update
 from walker_runtime.qos import LATCHED_QOS, MODE_QOS, latched_qos
 from walker_runtime.realtime import log_realtime_request
 from walker_runtime.spinning import destroy_actions
+from walker_runtime.watched_subscription import RenewablePublisher
 from walker_supervisor.clocks import Clocks
 from walker_supervisor.core.commands import (
     DecideNow, Feedback, ForgetRecordedStep, GoalEnded, Notice, PhaseRecord, RecordStep,
@@ -83,7 +84,8 @@ class SupervisorNode(Node):
                               lambda: self.runner.settings, self._apply_settings,
                               check=lambda s: check_with_gripper(s, self.params.gripper))
         self.clocks = Clocks(self)
-        self.mode_pub = self.create_publisher(ControlMode, 'control_mode', MODE_QOS)
+        # made anew when controllers do not take its commands (RenewModePublisher)
+        self.mode_pub = RenewablePublisher(self, ControlMode, 'control_mode', MODE_QOS)
         self.phase_pub = self.create_publisher(StepPhase, 'phase', LATCHED_QOS)
         self.phase_history_pub = self.create_publisher(StepPhase, 'phase_history',
                                                        _PHASE_HISTORY_QOS)
@@ -167,8 +169,7 @@ class SupervisorNode(Node):
             elif isinstance(command, StopJog):
                 self.teleop.stop(command.reason)
             elif isinstance(command, RenewModePublisher):
-                self.destroy_publisher(self.mode_pub)
-                self.mode_pub = self.create_publisher(ControlMode, 'control_mode', MODE_QOS)
+                self.mode_pub.renew()  # the runner's Notice says why
             elif isinstance(command, DecideNow):
                 self._tick()
             elif isinstance(command, Notice):

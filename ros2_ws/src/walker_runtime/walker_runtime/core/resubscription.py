@@ -4,14 +4,17 @@ A ROS-free rule shared by every node that watches its inputs on a steady clock (
 :class:`walker_runtime.watched_subscription.WatchedSubscription`): the joint controllers (their
 state and setpoint streams), the supervisor (the plant's and the controllers' reports) and the
 planner (the joint states its stream is paced by, which :func:`clock_ran_past` tells from a
-plant that stopped).
+plant that stopped). A silence is the subscription's, and making it anew worth trying, only while
+the stream's peers are alive (:func:`peers_alive`): a publisher that is gone or stopped is not
+healed by a new subscription, and one merely stalled by a loaded machine must not be
+re-matched (which lengthens the stall).
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ['Resubscription', 'clock_ran_past']
+__all__ = ['Resubscription', 'peers_alive', 'clock_ran_past']
 
 
 class Resubscription:
@@ -47,8 +50,8 @@ class Resubscription:
             raise ValueError(f'resubscription interval must be positive and finite, got {value!r}')
         self._after = float(value)
 
-    def due(self, now: float, last_heard: float | None) -> bool:
-        """Return True, and count an attempt, when the subscription should be made anew.
+    def silent(self, now: float, last_heard: float | None) -> bool:
+        """Say whether the stream has been silent for ``after`` seconds (nothing counted).
 
         Parameters
         ----------
@@ -58,7 +61,22 @@ class Resubscription:
             [s] steady time of the stream's last message; None when it has not been heard
             from (nothing to heal: it may not have started).
         """
-        if last_heard is None or now - last_heard < self.after:
+        return last_heard is not None and now - last_heard >= self.after
+
+    def due(self, now: float, last_heard: float | None, alive: bool = True) -> bool:
+        """Return True, and count an attempt, when the subscription should be made anew.
+
+        Parameters
+        ----------
+        now : float
+            [s] steady time now.
+        last_heard : float or None
+            [s] steady time of the stream's last message (see :meth:`silent`).
+        alive : bool
+            The stream's peers are alive (:func:`peers_alive`); a silence while they are not
+            is theirs, and no attempt is made.
+        """
+        if not (alive and self.silent(now, last_heard)):
             return False
         since = last_heard if self._last_attempt is None else max(last_heard,
                                                                    self._last_attempt)
@@ -67,6 +85,29 @@ class Resubscription:
         self._last_attempt = now
         self.attempts += 1
         return True
+
+
+def peers_alive(peers: int, evidence: bool = True) -> bool:
+    """Say whether a silent stream's peers are alive, so that the silence is the reader's own.
+
+    Parameters
+    ----------
+    peers : int
+        The stream's publishers in the ROS graph now (for a publisher made anew, its
+        subscribers): discovered, and their participants' leases not run out. None: a
+        publisher gone for good, or never started; a new subscription hears nothing more.
+    evidence : bool
+        What else the reader knows of them; True when it knows nothing else. A clock the
+        publisher drives running on (:func:`clock_ran_past`) tells a publisher that runs
+        unheard from one that stopped (a frozen plant stays in the graph for the length of
+        its lease).
+
+    Returns
+    -------
+    bool
+        True when there is at least one peer and the evidence does not speak against it.
+    """
+    return peers > 0 and evidence
 
 
 def clock_ran_past(clock_now: int, newest: int | None, margin: int, sim_time: bool) -> bool:
