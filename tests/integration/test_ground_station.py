@@ -121,7 +121,8 @@ def test_the_robot_finishes_its_step_alone_when_the_link_is_cut_and_the_operator
         env = ros_environment(domain)
         robot_env, ground_env = hosts.environment('robot', env), hosts.environment('ground', env)
         run_all = [sys.executable, str(REPO_ROOT / 'scripts' / 'run_all.py'), '--serve',
-                   '--sim-time', '--no-report', '--namespace', namespace, '--out', str(out)]
+                   '--sim-time', '--no-report', '--namespace', namespace, '--out', str(out),
+                   '--transport', 'shm']  # the loopback profile would not reach the link
         with NodeProcess(hosts.command('robot', run_all), robot_env, 'run_all') as run:
             assert run.wait_for_output('[walker] serving in namespace', TIMEOUT), run.output
             monitor = NodeProcess(hosts.command('robot', [sys.executable, '-c', MONITOR,
