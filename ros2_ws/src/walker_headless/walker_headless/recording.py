@@ -24,7 +24,7 @@ from walker_bag.core.qos import QosProfile
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 
 from walker_headless.cdr import (
-    ControllerStateEncoder, JointStateEncoder, PoseEncoder, clock_cdr)
+    ControllerStateEncoder, JointStateEncoder, PoseEncoder, TransformsEncoder, clock_cdr)
 
 __all__ = ['WalkRecording', 'TOPICS', 'CHUNK_SIZE']
 
@@ -104,6 +104,7 @@ class WalkRecording:
         self._pose = PoseEncoder(_TRUSS_FRAME)
         self._controllers = {joint: ControllerStateEncoder(joint)
                              for joint in PHYSICAL_JOINT_NAMES}
+        self._transforms: dict[tuple, TransformsEncoder] = {}  # frames -> its encoder
         self._write = self.writer.write
 
     @property
@@ -150,6 +151,18 @@ class WalkRecording:
                     self._controllers[joint].encode(stamp, output.role, int(output.mode),
                                                     [float(v) for v in values],
                                                     bool(output.saturated), stale), stamp)
+
+    def transforms(self, relative: str, stamp: int, frames: tuple[tuple[str, str], ...],
+                   values: list[float]) -> None:
+        """``/tf`` or ``/tf_static`` at ``stamp`` [ns]: transforms between ``frames``.
+
+        ``frames``: ``(parent, child)`` of each transform; ``values``: seven floats of each
+        (translation [m], rotation ``(x, y, z, w)``), one after the other.
+        """
+        encoder = self._transforms.get(frames)
+        if encoder is None:
+            encoder = self._transforms[frames] = TransformsEncoder(frames)
+        self._write(self.names[relative], encoder.encode(stamp, values), stamp)
 
     # ------------------------------------------------------------------ on change
     def serialize(self, relative: str, message, stamp: int) -> None:
