@@ -12,6 +12,7 @@ simulated time [ns], as the recorder's receive time under ``use_sim_time`` would
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +66,16 @@ CHUNK_SIZE = 8 * 1024 * 1024
 _NS_PER_S = 1_000_000_000
 
 
+@functools.cache
+def _typestore():
+    """Return the walker's rosbags typestore, one per process.
+
+    A store compiles a serializer per type on first use, which costs more than a walk's
+    messages of that type: a campaign records many walks.
+    """
+    return walker_typestore()
+
+
 class WalkRecording:
     """A walk's rosbag2 bag (MCAP), written as the graph's recorder writes it.
 
@@ -85,7 +96,7 @@ class WalkRecording:
 
     def __init__(self, bag_dir: str | Path, namespace: str = '/walker') -> None:
         self.namespace = namespace
-        self._store = walker_typestore()
+        self._store = _typestore()
         self.types = self._store.types
         self.names = {relative: relative if relative.startswith('/')
                       else f'{namespace.rstrip("/")}/{relative}' for relative in TOPICS}
