@@ -104,14 +104,14 @@ class _Capture:
         RobotLoop.step, WalkerPlant.command_gripper = self._step, self._command
 
 
-def plant_alone(sections, capture: _Capture) -> dict:
+def plant_alone(configuration, capture: _Capture) -> dict:
     """Replay a walk's torques and gripper commands on the plant core alone; time it."""
     import numpy as np
 
     from walker_sim.core.plant import WalkerPlant
 
-    period = sections.control.sample_time
-    with WalkerPlant(sections.walker, sections.sim) as plant:
+    period = configuration.controllers.sample_time
+    with WalkerPlant(configuration.walker, configuration.sim) as plant:
         commands = iter(capture.grippers)
         pending = next(commands, None)
         began_cpu, began_wall = time.process_time(), time.perf_counter()
@@ -129,14 +129,14 @@ def plant_alone(sections, capture: _Capture) -> dict:
             'same_final_state': bool(np.array_equal(state.position, capture.final))}
 
 
-def headless_walk(sections, target: str, record: bool, scratch: Path) -> dict:
+def headless_walk(configuration, target: str, record: bool, scratch: Path) -> dict:
     """One headless walk; its speed on one core and on the wall clock."""
     from walker_headless.recording import WalkRecording
     from walker_headless.runner import walk
 
     recording = WalkRecording(Path(tempfile.mkdtemp(dir=scratch)) / 'bag') if record else None
     try:
-        result = walk(sections, target, recording)
+        result = walk(configuration, target, recording)
     finally:
         if recording is not None:
             recording.close()
@@ -148,13 +148,13 @@ def headless_walk(sections, target: str, record: bool, scratch: Path) -> dict:
             'us_per_period_cpu': result.cpu_time / max(1, result.periods) * 1e6}
 
 
-def profile_walk(sections, target: str, count: int = 20) -> list[dict]:
+def profile_walk(configuration, target: str, count: int = 20) -> list[dict]:
     """Profile one headless walk (no bag); the functions costing most, by their own time."""
     from walker_headless.runner import walk
 
     profiler = cProfile.Profile()
     profiler.enable()
-    walk(sections, target)
+    walk(configuration, target)
     profiler.disable()
     stats = pstats.Stats(profiler)
     total = sum(row[2] for row in stats.stats.values())
@@ -192,10 +192,10 @@ def main() -> int:
     walker_env.reexec_in_environment(os.path.abspath(__file__), sys.argv[1:])
     args = _arguments()
     from bench_support import machine_info, write_json
-    from walker_headless.sections import load_sections
+    from walker_config.core.configuration import load_configuration
 
     target = args.target or ('n1_2' if args.quick else 'n4_3')
-    sections = load_sections()
+    configuration = load_configuration()
     machine = machine_info()
     scratch = Path(tempfile.mkdtemp(prefix='walker_headless_bench_'))
     print(f'[benchmark] headless walks to {target}, {args.repeats} of each kind, load average '
@@ -203,9 +203,9 @@ def main() -> int:
     bare, recorded, alone = [], [], []
     for _ in range(args.repeats):  # interleaved: each kind sees the same load
         with _Capture() as capture:
-            bare.append(headless_walk(sections, target, False, scratch))
-        alone.append(plant_alone(sections, capture))
-        recorded.append(headless_walk(sections, target, True, scratch))
+            bare.append(headless_walk(configuration, target, False, scratch))
+        alone.append(plant_alone(configuration, capture))
+        recorded.append(headless_walk(configuration, target, True, scratch))
     plant_rate = _median(alone, 'real_time_factor_cpu')
     document = {
         'machine': machine, 'target': target, 'repeats': args.repeats,
@@ -219,7 +219,7 @@ def main() -> int:
             'us_per_period_cpu': _median(runs, 'us_per_period_cpu'),
             'fraction_of_plant_alone': _median(runs, 'real_time_factor_cpu') / plant_rate})
     if args.profile:
-        document['profile'] = profile_walk(sections, target)
+        document['profile'] = profile_walk(configuration, target)
     if args.graph:
         seconds = args.graph_seconds or (15.0 if args.quick else 40.0)
         print(f'[benchmark] the sim-time graph walking: {seconds:g} s windows', flush=True)

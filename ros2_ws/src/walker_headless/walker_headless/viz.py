@@ -33,22 +33,22 @@ class HeadlessViz:
 
     Parameters
     ----------
-    sections : Sections
-        The parameter file's sections (``walker``, ``viz``).
+    configuration : WalkerConfiguration
+        The walker's configuration (``walker``, ``viz``).
     recording : WalkRecording
         The bag.
     """
 
-    def __init__(self, sections, recording) -> None:
-        self.scene = WalkerScene(sections.walker, sections.viz)
-        self.flexible = sections.viz.flexible
+    def __init__(self, configuration, recording) -> None:
+        self.scene = WalkerScene(configuration.walker, configuration.viz)
+        self.flexible = configuration.viz.flexible
         self._recording = recording
         self._types = recording.types
         bends = [joint.name for joint in
-                 flex_joints(sections.walker.robot.flexibility.segments_per_link)]
+                 flex_joints(configuration.walker.robot.flexibility.segments_per_link)]
         self._names = [*PHYSICAL_JOINT_NAMES, *bends] if self.flexible \
             else list(PHYSICAL_JOINT_NAMES)
-        self._period = round(1e9 / sections.viz.tf_rate)  # [ns]
+        self._period = round(1e9 / configuration.viz.tf_rate)  # [ns]
         self._next = 0  # [ns] the TF timer's next time
         self._states: list[tuple[int, list[float]]] = []  # (stamp, angles) not yet drawn
         self._tf('/tf_static', self.scene.tree.static_transforms(), 0)
