@@ -19,7 +19,9 @@ It sets up the environment like the other scripts, prints a table and writes
    captured period by period and replayed on a fresh
    :class:`~walker_sim.core.plant.WalkerPlant` (the plant is deterministic: the replay ends in
    the very state the walk ended in, which is checked). Its rate is the physical limit of the
-   loop; the headless rate is quoted as a fraction of it.
+   loop; the headless rate is quoted as a fraction of it. Within the replay, the CPU time of
+   pybullet's ``stepSimulation`` alone is measured too: the engine's floor, which no Python
+   around it can go below.
 3. The sim-time graph walking back and forth (``benchmarks/graph_runner.py``, as
    ``run_benchmarks.py`` measures it), composed in one process and as separate processes:
    CPU-seconds of the graph per simulated second.
@@ -111,7 +113,7 @@ def plant_alone(configuration, capture: _Capture) -> dict:
     from walker_sim.core.plant import WalkerPlant
 
     period = configuration.controllers.sample_time
-    with WalkerPlant(configuration.walker, configuration.sim) as plant:
+    with WalkerPlant(*configuration.plant) as plant, _EngineClock() as engine:
         commands = iter(capture.grippers)
         pending = next(commands, None)
         began_cpu, began_wall = time.process_time(), time.perf_counter()
@@ -123,10 +125,43 @@ def plant_alone(configuration, capture: _Capture) -> dict:
             state = plant.step(torques, period)
         cpu, wall = time.process_time() - began_cpu, time.perf_counter() - began_wall
     simulated = len(capture.torques) * period
+    periods = len(capture.torques)
     return {'simulated_s': simulated, 'cpu_s': cpu, 'wall_s': wall,
             'real_time_factor_cpu': simulated / cpu, 'real_time_factor_wall': simulated / wall,
-            'us_per_period_cpu': cpu / len(capture.torques) * 1e6,
+            'us_per_period_cpu': cpu / periods * 1e6,
+            'engine_cpu_s': engine.cpu, 'engine_steps': engine.steps,
+            'engine_us_per_period_cpu': engine.cpu / periods * 1e6,
+            'engine_us_per_step_cpu': engine.cpu / max(1, engine.steps) * 1e6,
             'same_final_state': bool(np.array_equal(state.position, capture.final))}
+
+
+class _EngineClock:
+    """CPU time spent inside ``pybullet.stepSimulation`` while in use (the engine's floor)."""
+
+    def __init__(self) -> None:
+        self.cpu = 0.0
+        self.steps = 0
+
+    def __enter__(self) -> '_EngineClock':
+        import pybullet
+
+        self._step = step = pybullet.stepSimulation
+        clock, meter = time.process_time, self
+
+        def timed(*args, **kwargs):
+            began = clock()
+            result = step(*args, **kwargs)
+            meter.cpu += clock() - began
+            meter.steps += 1
+            return result
+
+        pybullet.stepSimulation = timed
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        import pybullet
+
+        pybullet.stepSimulation = self._step
 
 
 def headless_walk(configuration, target: str, record: bool, scratch: Path) -> dict:
@@ -183,6 +218,19 @@ def graph_windows(seconds: float, scratch: Path) -> dict:
     return windows
 
 
+def _keep_graph(path: Path, document: dict) -> None:
+    """Carry the graph's part of an earlier result file over (``--no-graph`` measures none)."""
+    import json
+
+    try:
+        earlier = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return
+    if 'graph' in earlier:
+        document['graph'] = earlier['graph']
+        document['graph_machine'] = earlier.get('graph_machine', earlier.get('machine'))
+
+
 def _median(runs: list[dict], key: str) -> float:
     return statistics.median(run[key] for run in runs)
 
@@ -211,11 +259,16 @@ def main() -> int:
         'machine': machine, 'target': target, 'repeats': args.repeats,
         'headless': {'walks': bare}, 'headless_with_bag': {'walks': recorded},
         'plant_alone': {'runs': alone}, 'targets': TARGETS}
+    engine = [{'real_time_factor_cpu': run['simulated_s'] / run['engine_cpu_s'],
+               'us_per_period_cpu': run['engine_us_per_period_cpu']} for run in alone]
+    document['engine_alone'] = {'runs': engine, 'us_per_step_cpu': _median(
+        alone, 'engine_us_per_step_cpu')}
     for key, runs in (('headless', bare), ('headless_with_bag', recorded),
-                      ('plant_alone', alone)):
+                      ('plant_alone', alone), ('engine_alone', engine)):
         document[key].update({
             'real_time_factor_cpu': _median(runs, 'real_time_factor_cpu'),
-            'real_time_factor_wall': _median(runs, 'real_time_factor_wall'),
+            'real_time_factor_wall': (_median(runs, 'real_time_factor_wall')
+                                      if key != 'engine_alone' else None),
             'us_per_period_cpu': _median(runs, 'us_per_period_cpu'),
             'fraction_of_plant_alone': _median(runs, 'real_time_factor_cpu') / plant_rate})
     if args.profile:
@@ -224,6 +277,8 @@ def main() -> int:
         seconds = args.graph_seconds or (15.0 if args.quick else 40.0)
         print(f'[benchmark] the sim-time graph walking: {seconds:g} s windows', flush=True)
         document['graph'] = graph_windows(seconds, scratch)
+    else:  # the graph's figures come from their own run: kept as found, with its machine
+        _keep_graph(args.output, document)
     document['machine']['load_average_after'] = [round(x, 2) for x in os.getloadavg()]
     write_json(args.output, document)
     _print_table(document)
@@ -235,12 +290,15 @@ def _print_table(document: dict) -> None:
     rows = [('what', 'x real time (CPU)', 'x real time (wall)', 'us / period (CPU)',
              'of plant alone', 'target')]
     for key, name, target in (
+            ('engine_alone', 'pybullet stepSimulation alone (in the replay)', ''),
             ('plant_alone', 'plant core alone (same physics)', ''),
             ('headless', 'headless walk, no bag', '>= 10 x; >= 0.5 of plant'),
             ('headless_with_bag', 'headless walk, with its bag', '')):
         row = document[key]
+        wall = row['real_time_factor_wall']
         rows.append((name, f'{row["real_time_factor_cpu"]:.1f}',
-                     f'{row["real_time_factor_wall"]:.1f}', f'{row["us_per_period_cpu"]:.0f}',
+                     f'{wall:.1f}' if wall is not None else '-',
+                     f'{row["us_per_period_cpu"]:.0f}',
                      f'{row["fraction_of_plant_alone"]:.2f}', target))
     for kind, target in (('composed', '>= 3 x'), ('processes', '>= 1 x')):
         window = document.get('graph', {}).get(kind)
