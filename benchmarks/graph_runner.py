@@ -101,7 +101,7 @@ class GraphRun:
         from walker_bringup.graph import NodeSpec, several_walkers
         from walker_bringup.graph_client import GraphClient, init_context
         from walker_bringup.processes import ProcessGroup
-        from walker_bringup.core.configuration import load_configuration
+        from walker_config.core.configuration import load_configuration
 
         self.scratch.mkdir(parents=True, exist_ok=True)
         domain = self._stack.enter_context(isolated_domain())

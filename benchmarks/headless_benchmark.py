@@ -20,7 +20,9 @@ It sets up the environment like the other scripts, prints a table and writes
    captured period by period and replayed on a fresh
    :class:`~walker_sim.core.plant.WalkerPlant` (the plant is deterministic: the replay ends in
    the very state the walk ended in, which is checked). Its rate is the physical limit of the
-   loop; the headless rate is quoted as a fraction of it.
+   loop; the headless rate is quoted as a fraction of it. Within the replay, the CPU time of
+   pybullet's ``stepSimulation`` alone is measured too: the engine's floor, which no Python
+   around it can go below.
 3. The sim-time graph walking back and forth (``benchmarks/graph_runner.py``, as
    ``run_benchmarks.py`` measures it), composed in one process (the plant and the grouped
    controllers exchanging by call, ``run_all.py --composed``'s form in sim time), the same
@@ -111,14 +113,14 @@ class _Capture:
         RobotLoop.step, WalkerPlant.command_gripper = self._step, self._command
 
 
-def plant_alone(sections, capture: _Capture) -> dict:
+def plant_alone(configuration, capture: _Capture) -> dict:
     """Replay a walk's torques and gripper commands on the plant core alone; time it."""
     import numpy as np
 
     from walker_sim.core.plant import WalkerPlant
 
-    period = sections.control.sample_time
-    with WalkerPlant(sections.walker, sections.sim) as plant:
+    period = configuration.controllers.sample_time
+    with WalkerPlant(*configuration.plant) as plant, _EngineClock() as engine:
         commands = iter(capture.grippers)
         pending = next(commands, None)
         began_cpu, began_wall = time.process_time(), time.perf_counter()
@@ -130,20 +132,53 @@ def plant_alone(sections, capture: _Capture) -> dict:
             state = plant.step(torques, period)
         cpu, wall = time.process_time() - began_cpu, time.perf_counter() - began_wall
     simulated = len(capture.torques) * period
+    periods = len(capture.torques)
     return {'simulated_s': simulated, 'cpu_s': cpu, 'wall_s': wall,
             'real_time_factor_cpu': simulated / cpu, 'real_time_factor_wall': simulated / wall,
-            'us_per_period_cpu': cpu / len(capture.torques) * 1e6,
+            'us_per_period_cpu': cpu / periods * 1e6,
+            'engine_cpu_s': engine.cpu, 'engine_steps': engine.steps,
+            'engine_us_per_period_cpu': engine.cpu / periods * 1e6,
+            'engine_us_per_step_cpu': engine.cpu / max(1, engine.steps) * 1e6,
             'same_final_state': bool(np.array_equal(state.position, capture.final))}
 
 
-def headless_walk(sections, target: str, record: bool, scratch: Path) -> dict:
+class _EngineClock:
+    """CPU time spent inside ``pybullet.stepSimulation`` while in use (the engine's floor)."""
+
+    def __init__(self) -> None:
+        self.cpu = 0.0
+        self.steps = 0
+
+    def __enter__(self) -> '_EngineClock':
+        import pybullet
+
+        self._step = step = pybullet.stepSimulation
+        clock, meter = time.process_time, self
+
+        def timed(*args, **kwargs):
+            began = clock()
+            result = step(*args, **kwargs)
+            meter.cpu += clock() - began
+            meter.steps += 1
+            return result
+
+        pybullet.stepSimulation = timed
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        import pybullet
+
+        pybullet.stepSimulation = self._step
+
+
+def headless_walk(configuration, target: str, record: bool, scratch: Path) -> dict:
     """One headless walk; its speed on one core and on the wall clock."""
     from walker_headless.recording import WalkRecording
     from walker_headless.runner import walk
 
     recording = WalkRecording(Path(tempfile.mkdtemp(dir=scratch)) / 'bag') if record else None
     try:
-        result = walk(sections, target, recording)
+        result = walk(configuration, target, recording)
     finally:
         if recording is not None:
             recording.close()
@@ -155,13 +190,13 @@ def headless_walk(sections, target: str, record: bool, scratch: Path) -> dict:
             'us_per_period_cpu': result.cpu_time / max(1, result.periods) * 1e6}
 
 
-def profile_walk(sections, target: str, count: int = 20) -> list[dict]:
+def profile_walk(configuration, target: str, count: int = 20) -> list[dict]:
     """Profile one headless walk (no bag); the functions costing most, by their own time."""
     from walker_headless.runner import walk
 
     profiler = cProfile.Profile()
     profiler.enable()
-    walk(sections, target)
+    walk(configuration, target)
     profiler.disable()
     stats = pstats.Stats(profiler)
     total = sum(row[2] for row in stats.stats.values())
@@ -201,37 +236,55 @@ def graph_windows(seconds: float, scratch: Path) -> dict:
     return windows
 
 
+def _keep_graph(path: Path, document: dict) -> None:
+    """Carry the graph's part of an earlier result file over (``--no-graph`` measures none)."""
+    import json
+
+    try:
+        earlier = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return
+    if 'graph' in earlier:
+        document['graph'] = earlier['graph']
+        document['graph_machine'] = earlier.get('graph_machine', earlier.get('machine'))
+
+
 def _median(runs: list[dict], key: str) -> float:
     return statistics.median(run[key] for run in runs)
 
 
 def headless_rows(args: argparse.Namespace, target: str, machine: dict, scratch: Path) -> dict:
     """Measure the headless walks and the plant alone, interleaved; their document."""
-    from walker_headless.sections import load_sections
+    from walker_config.core.configuration import load_configuration
 
-    sections = load_sections()
+    configuration = load_configuration()
     print(f'[benchmark] headless walks to {target}, {args.repeats} of each kind, load average '
           f'{machine["load_average_1_5_15"][0]:.2f}', flush=True)
     bare, recorded, alone = [], [], []
     for _ in range(args.repeats):  # interleaved: each kind sees the same load
         with _Capture() as capture:
-            bare.append(headless_walk(sections, target, False, scratch))
-        alone.append(plant_alone(sections, capture))
-        recorded.append(headless_walk(sections, target, True, scratch))
+            bare.append(headless_walk(configuration, target, False, scratch))
+        alone.append(plant_alone(configuration, capture))
+        recorded.append(headless_walk(configuration, target, True, scratch))
     plant_rate = _median(alone, 'real_time_factor_cpu')
     document = {
         'machine': machine, 'target': target, 'repeats': args.repeats,
         'headless': {'walks': bare}, 'headless_with_bag': {'walks': recorded},
         'plant_alone': {'runs': alone}, 'targets': TARGETS}
+    engine = [{'real_time_factor_cpu': run['simulated_s'] / run['engine_cpu_s'],
+               'us_per_period_cpu': run['engine_us_per_period_cpu']} for run in alone]
+    document['engine_alone'] = {'runs': engine, 'us_per_step_cpu': _median(
+        alone, 'engine_us_per_step_cpu')}
     for key, runs in (('headless', bare), ('headless_with_bag', recorded),
-                      ('plant_alone', alone)):
+                      ('plant_alone', alone), ('engine_alone', engine)):
         document[key].update({
             'real_time_factor_cpu': _median(runs, 'real_time_factor_cpu'),
-            'real_time_factor_wall': _median(runs, 'real_time_factor_wall'),
+            'real_time_factor_wall': (_median(runs, 'real_time_factor_wall')
+                                      if key != 'engine_alone' else None),
             'us_per_period_cpu': _median(runs, 'us_per_period_cpu'),
             'fraction_of_plant_alone': _median(runs, 'real_time_factor_cpu') / plant_rate})
     if args.profile:
-        document['profile'] = profile_walk(sections, target)
+        document['profile'] = profile_walk(configuration, target)
     return document
 
 
@@ -257,6 +310,8 @@ def main() -> int:
         seconds = args.graph_seconds or (15.0 if args.quick else 40.0)
         print(f'[benchmark] the sim-time graph walking: {seconds:g} s windows', flush=True)
         document['graph'] = graph_windows(seconds, scratch)
+    elif not args.graph_only:  # the graph's figures come from their own run: kept as found
+        _keep_graph(args.output, document)
     document['graph_machine' if args.graph_only else 'machine']['load_average_after'] = [
         round(x, 2) for x in os.getloadavg()]
     write_json(args.output, document)
@@ -269,12 +324,15 @@ def _print_table(document: dict) -> None:
     rows = [('what', 'x real time (CPU)', 'x real time (wall)', 'us / period (CPU)',
              'of plant alone', 'target')]
     for key, name, target in (
+            ('engine_alone', 'pybullet stepSimulation alone (in the replay)', ''),
             ('plant_alone', 'plant core alone (same physics)', ''),
             ('headless', 'headless walk, no bag', '>= 10 x; >= 0.5 of plant'),
             ('headless_with_bag', 'headless walk, with its bag', '')):
         row = document[key]
+        wall = row['real_time_factor_wall']
         rows.append((name, f'{row["real_time_factor_cpu"]:.1f}',
-                     f'{row["real_time_factor_wall"]:.1f}', f'{row["us_per_period_cpu"]:.0f}',
+                     f'{wall:.1f}' if wall is not None else '-',
+                     f'{row["us_per_period_cpu"]:.0f}',
                      f'{row["fraction_of_plant_alone"]:.2f}', target))
     for kind, target in (('composed', '>= 3 x'), ('composed_five_controllers', ''),
                          ('processes', '>= 1 x')):

@@ -2,7 +2,7 @@
 
 import pytest
 
-from walker_bringup.core.configuration import load_configuration
+from walker_config.core.configuration import load_configuration
 from walker_bringup.graph import several_walkers, walker_graph
 from walker_bringup.run import REALTIME_PRIORITY, _graph_parameters, parse_arguments
 

@@ -10,7 +10,7 @@ from walker_bringup.composition import (
 from walker_bringup.graph import (
     NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
     walker_targets)
-from walker_bringup.core.configuration import load_configuration
+from walker_config.core.configuration import load_configuration
 from walker_bringup.run import parse_arguments as run_arguments
 from walker_core.robot_parameters import default_parameter_file
 from walker_core.truss import Truss, UnknownNodeError

@@ -235,7 +235,7 @@ def tf_remaps(namespace: str) -> tuple[tuple[str, str], ...]:
 def start_stances(configuration, count: int) -> list[StartStance]:
     """Distinct start stances for ``count`` walkers on the truss of a configuration.
 
-    ``configuration`` is a :class:`~walker_bringup.core.configuration.WalkerConfiguration`.
+    ``configuration`` is a :class:`~walker_config.core.configuration.WalkerConfiguration`.
     The first stance is its own ``sim.start.*``; the others are the same pair of neighbouring
     nodes moved to other rows (and then by two columns at a time), so that no two walkers
     start on a common node. The walkers' plants are separate physics worlds: walkers on one

@@ -409,7 +409,7 @@ def main(argv: list[str] | None = None) -> int:
         from walker_headless.run import run_headless
 
         return run_headless(args)
-    from walker_bringup.core.configuration import load_configuration
+    from walker_config.core.configuration import load_configuration
     from walker_core.parameter_schema import ParameterError
     from walker_core.truss import Truss
 

@@ -131,3 +131,20 @@ def test_the_shipped_specs_are_valid(name):
 
     spec = load_spec(shipped_spec(name))
     assert spec.name == name
+
+
+@pytest.mark.parametrize('changes, words', [
+    # a rule between the supervisor's and the gripper's sections
+    ({'supervisor.insertion_alignment': 0.004, 'supervisor.coarse_to_fine_region': 0.01,
+      'supervisor.descent_region': 0.005, 'supervisor.descent_axis_tolerance': 0.006},
+     'smaller than gripper.insertion_position_tolerance'),
+    # and one of the plant's, on the model's set
+    ({'sim.physics_rate': 1250.0}, 'integer multiple of timing.control_rate'),
+])
+def test_a_model_set_is_checked_by_every_rule_the_graph_checks(changes, words):
+    from walker_campaign.core.parameter_sets import check_model
+    from walker_core.parameter_file import default_values
+    from walker_core.parameter_schema import ParameterError
+
+    with pytest.raises(ParameterError, match=words):
+        check_model({**default_values(), **changes})

@@ -4,7 +4,7 @@ A file is parsed once per :meth:`ParameterFile.read`, and every section is built
 values (:meth:`ParameterFile.section`); the installed ``config/walker.yaml``, which every node
 declares its parameters with as defaults, is parsed once per process (:func:`default_values`).
 The sections come from the packages that own them; the whole set, with the rules between
-sections, is ``walker_bringup.core.configuration.load_configuration`` (docs/architecture.md,
+sections, is ``walker_config.core.configuration.load_configuration`` (docs/architecture.md,
 Configuration).
 """
 

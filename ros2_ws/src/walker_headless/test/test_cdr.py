@@ -6,7 +6,7 @@ import pytest
 from walker_bag.core.bag_reader import walker_typestore
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_headless.cdr import (
-    ControllerStateEncoder, JointStateEncoder, PoseEncoder, clock_cdr)
+    ControllerStateEncoder, JointStateEncoder, PoseEncoder, TransformsEncoder, clock_cdr)
 
 STORE = walker_typestore()
 TYPES = STORE.types
@@ -63,3 +63,22 @@ def test_controller_states(joint, saturated, stale):
     encoded = ControllerStateEncoder(joint).encode(2_004_000_000, 4, 3, values, saturated,
                                                    stale)
     assert encoded == serialized(message, 'walker_msgs/msg/ControllerState')
+
+
+@pytest.mark.parametrize('frames', [
+    (), (('truss', 'a_gripper'),),
+    (('a_gripper', 'a_wrist'), ('a_wrist', 'link_1'), ('link_1_seg_2', 'x'), ('world', 'ab'))])
+@pytest.mark.parametrize('stamp', [0, 123_456_789_012])
+def test_transforms(frames, stamp):
+    rng = np.random.default_rng(len(frames))
+    values = rng.normal(size=(len(frames), 7))
+    t = TYPES
+    message = t['tf2_msgs/msg/TFMessage'](transforms=[
+        t['geometry_msgs/msg/TransformStamped'](
+            header=header(stamp, parent), child_frame_id=child,
+            transform=t['geometry_msgs/msg/Transform'](
+                translation=t['geometry_msgs/msg/Vector3'](*row[:3]),
+                rotation=t['geometry_msgs/msg/Quaternion'](*row[3:])))
+        for (parent, child), row in zip(frames, values.tolist(), strict=True)])
+    encoded = TransformsEncoder(frames).encode(stamp, values.ravel().tolist())
+    assert encoded == serialized(message, 'tf2_msgs/msg/TFMessage')

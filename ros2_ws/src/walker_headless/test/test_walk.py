@@ -12,9 +12,9 @@ from mcap.reader import make_reader
 
 from walker_bag.core.bag_reader import BagReader
 from walker_bringup.graph import RECORDED_TOPICS
+from walker_config.core.configuration import load_configuration
 from walker_headless.recording import WalkRecording
 from walker_headless.runner import walk
-from walker_headless.sections import load_sections
 from walker_report.core.walk_data import load_walk
 from walker_supervisor.core.phases import Phase
 
@@ -23,19 +23,19 @@ STEP_PHASES = [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]
 
 
 @pytest.fixture(scope='module')
-def sections():
-    return load_sections()
+def configuration():
+    return load_configuration()
 
 
 @pytest.fixture(scope='module')
-def walks(sections, tmp_path_factory):
+def walks(configuration, tmp_path_factory):
     """Two recorded walks of the same step, and their bags."""
     results = []
     for name in ('first', 'second'):
         bag = tmp_path_factory.mktemp(name) / 'bag'
         recording = WalkRecording(bag)
         try:
-            result = walk(sections, TARGET, recording)
+            result = walk(configuration, TARGET, recording)
         finally:
             recording.close()
         results.append((result, bag))
@@ -69,8 +69,8 @@ def test_the_same_parameters_give_the_same_walk_and_bag_bit_for_bit(walks):
     assert messages(first_bag) == messages(second_bag)
 
 
-def test_a_walk_without_a_bag_is_the_same_walk(sections, walks):
-    assert walk(sections, TARGET).reports == walks[0][0].reports
+def test_a_walk_without_a_bag_is_the_same_walk(configuration, walks):
+    assert walk(configuration, TARGET).reports == walks[0][0].reports
 
 
 def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
@@ -97,10 +97,10 @@ def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
     assert abs(data.tip.position[-1][0] - data.tip.position[0][0]) > 0.1  # the tip moved
 
 
-def test_an_unknown_target_is_refused_before_anything_moves(sections, tmp_path):
+def test_an_unknown_target_is_refused_before_anything_moves(configuration, tmp_path):
     recording = WalkRecording(tmp_path / 'bag')
     try:
-        result = walk(sections, 'n9_9', recording)
+        result = walk(configuration, 'n9_9', recording)
     finally:
         recording.close()
     assert not result.reached and 'not on the truss' in result.message

@@ -1,9 +1,10 @@
 """CDR bytes of the messages a walk records every period, packed with precompiled layouts.
 
 A walk's bag holds about three messages per control period (the joint states, the controller
-states and the gripper poses at their rates, ``/clock``): encoded through rosbags' generic
-serializer they would cost more than the controllers. Their layout is fixed (the joint names,
-the frames), so each is packed here by one :class:`struct.Struct` built once: little-endian
+states and the gripper poses at their rates, ``/clock``, the viz node's ``/tf``): encoded
+through rosbags' generic serializer they would cost more than the controllers. Their layout is
+fixed (the joint names, the frames), so each is packed here by one :class:`struct.Struct` built
+once: little-endian
 CDR (XCDR1, the encapsulation ``00 01 00 00``), each primitive aligned to its size from the
 start of the data, as rosbags and Fast DDS write it. ``test_cdr.py`` checks every encoder
 against rosbags' serializer of the message type's definition.
@@ -17,7 +18,8 @@ import itertools
 import struct
 from collections.abc import Sequence
 
-__all__ = ['clock_cdr', 'JointStateEncoder', 'PoseEncoder', 'ControllerStateEncoder']
+__all__ = ['clock_cdr', 'JointStateEncoder', 'PoseEncoder', 'ControllerStateEncoder',
+           'TransformsEncoder']
 
 _HEADER = b'\x00\x01\x00\x00'
 _NS_PER_S = 1_000_000_000
@@ -77,6 +79,9 @@ class _Layout:
                 pieces.append(struct.pack(codes, *(value for _, value in run)))
             else:
                 pieces.append((struct.Struct(codes).pack, len(run)))
+        if len(pieces) == 1 and type(pieces[0]) is bytes:  # nothing variable
+            message = _HEADER + pieces[0]
+            return lambda: message
         if len(pieces) == 1:
             only = pieces[0][0]
             return lambda *values: _HEADER + only(*values)
@@ -174,3 +179,32 @@ class ControllerStateEncoder:
                saturated: bool, stale: bool) -> bytes:
         """Return the state stamped ``stamp`` [ns]; ``values`` in the order of :attr:`FLOATS`."""
         return self._pack(*_split(stamp), role, mode, *values, saturated, stale)
+
+
+class TransformsEncoder:
+    """``tf2_msgs/TFMessage`` of fixed frames, every transform stamped alike.
+
+    Parameters
+    ----------
+    frames : sequence of (str, str)
+        ``(parent, child)`` frame ids of each transform, in order.
+    """
+
+    def __init__(self, frames: Sequence[tuple[str, str]]) -> None:
+        layout = _Layout().primitive('I', len(frames))
+        for parent, child in frames:
+            layout.stamp().string(parent).string(child).primitives('d', 7)
+        self._pack = layout.packer()
+        self._count = len(frames)
+
+    def encode(self, stamp: int, values: Sequence[float]) -> bytes:
+        """Return the transforms stamped ``stamp`` [ns].
+
+        ``values``: for each transform its translation [m] and rotation ``(x, y, z, w)``,
+        seven floats, one transform after the other.
+        """
+        sec, nanosec = _split(stamp)
+        flat: list = []
+        for k in range(self._count):
+            flat += (sec, nanosec, *values[7 * k:7 * k + 7])
+        return self._pack(*flat)

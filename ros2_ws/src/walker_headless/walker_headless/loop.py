@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 
+from walker_config.core.configuration import WalkerConfiguration
 from walker_control.core.channel import ControllerChannel
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import Measurement
@@ -46,7 +47,6 @@ from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_supervisor.core.controller_watch import ControllerReport
 
-from walker_headless.sections import Sections
 from walker_headless.viz import HeadlessViz
 
 __all__ = ['RobotLoop', 'stamp_seconds', 'MODES']
@@ -67,8 +67,8 @@ class RobotLoop:
 
     Parameters
     ----------
-    sections : Sections
-        The parameter file's sections.
+    configuration : WalkerConfiguration
+        The walker's configuration (:func:`~walker_config.core.configuration.load_configuration`).
     recording : WalkRecording, optional
         Where the loop's messages go (none recorded without it).
 
@@ -78,25 +78,25 @@ class RobotLoop:
         If the plant refuses its settings.
     """
 
-    def __init__(self, sections: Sections, recording=None) -> None:
-        self.sections = sections
-        self.plant = WalkerPlant(*sections.plant)
-        self.period = sections.control.sample_time
+    def __init__(self, configuration: WalkerConfiguration, recording=None) -> None:
+        self.configuration = configuration
+        self.plant = WalkerPlant(*configuration.plant)
+        self.period = configuration.controllers.sample_time
         self.period_ns = seconds_to_ns(self.period)
-        self.channels = [ControllerChannel(sections.control, joint)
+        self.channels = [ControllerChannel(configuration.controllers, joint)
                          for joint in PHYSICAL_JOINT_NAMES]
-        stream = sections.planner.stream
+        stream = configuration.planner.stream
         self.streamer = TrajectoryStreamer(self.period_ns, stream.lookahead,
                                            stream.start_tolerance, self._take_setpoints)
-        self.commands = EffortCommands(sections.sim.command_timeout)
+        self.commands = EffortCommands(configuration.sim.command_timeout)
         self.recording = recording
         #: the viz node's TF and markers, drawn into the bag (None without one)
-        self.viz = HeadlessViz(sections, recording) if recording is not None else None
-        self._clock_rate = StampedRate(sections.sim.clock_rate)
-        self._pose_rate = StampedRate(sections.sim.pose_rate)
+        self.viz = HeadlessViz(configuration, recording) if recording is not None else None
+        self._clock_rate = StampedRate(configuration.sim.clock_rate)
+        self._pose_rate = StampedRate(configuration.sim.pose_rate)
         # the node's heartbeat of the gripper states runs on the steady clock; here on the
         # only clock there is
-        self._heartbeat = StampedRate(sections.sim.gripper_state_rate)
+        self._heartbeat = StampedRate(configuration.sim.gripper_state_rate)
         self._gripper_key: tuple | None = None
         self.stamp = 0  # [ns] of the state in self.state
         self.state: PlantState = self.plant.state()

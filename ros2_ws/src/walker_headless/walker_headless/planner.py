@@ -75,9 +75,10 @@ class HeadlessPlanner:
 
     def __init__(self, loop: RobotLoop) -> None:
         self.loop = loop
-        sections = loop.sections
-        self._robot = sections.walker
-        self._context = PlanningContext.from_parameters(sections.walker, sections.planner)
+        configuration = loop.configuration
+        self._robot = configuration.walker
+        self._context = PlanningContext.from_parameters(configuration.walker,
+                                                        configuration.planner)
 
     def plan(self, call: PlanRequest) -> PlanAnswer:
         """Answer a ``plan_trajectory`` request."""

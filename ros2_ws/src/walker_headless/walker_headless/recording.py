@@ -12,6 +12,7 @@ simulated time [ns], as the recorder's receive time under ``use_sim_time`` would
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,7 @@ from walker_bag.core.qos import QosProfile
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 
 from walker_headless.cdr import (
-    ControllerStateEncoder, JointStateEncoder, PoseEncoder, clock_cdr)
+    ControllerStateEncoder, JointStateEncoder, PoseEncoder, TransformsEncoder, clock_cdr)
 
 __all__ = ['WalkRecording', 'TOPICS', 'CHUNK_SIZE']
 
@@ -65,6 +66,16 @@ CHUNK_SIZE = 8 * 1024 * 1024
 _NS_PER_S = 1_000_000_000
 
 
+@functools.cache
+def _typestore():
+    """Return the walker's rosbags typestore, one per process.
+
+    A store compiles a serializer per type on first use, which costs more than a walk's
+    messages of that type: a campaign records many walks.
+    """
+    return walker_typestore()
+
+
 class WalkRecording:
     """A walk's rosbag2 bag (MCAP), written as the graph's recorder writes it.
 
@@ -85,7 +96,7 @@ class WalkRecording:
 
     def __init__(self, bag_dir: str | Path, namespace: str = '/walker') -> None:
         self.namespace = namespace
-        self._store = walker_typestore()
+        self._store = _typestore()
         self.types = self._store.types
         self.names = {relative: relative if relative.startswith('/')
                       else f'{namespace.rstrip("/")}/{relative}' for relative in TOPICS}
@@ -104,6 +115,7 @@ class WalkRecording:
         self._pose = PoseEncoder(_TRUSS_FRAME)
         self._controllers = {joint: ControllerStateEncoder(joint)
                              for joint in PHYSICAL_JOINT_NAMES}
+        self._transforms: dict[tuple, TransformsEncoder] = {}  # frames -> its encoder
         self._write = self.writer.write
 
     @property
@@ -150,6 +162,18 @@ class WalkRecording:
                     self._controllers[joint].encode(stamp, output.role, int(output.mode),
                                                     [float(v) for v in values],
                                                     bool(output.saturated), stale), stamp)
+
+    def transforms(self, relative: str, stamp: int, frames: tuple[tuple[str, str], ...],
+                   values: list[float]) -> None:
+        """``/tf`` or ``/tf_static`` at ``stamp`` [ns]: transforms between ``frames``.
+
+        ``frames``: ``(parent, child)`` of each transform; ``values``: seven floats of each
+        (translation [m], rotation ``(x, y, z, w)``), one after the other.
+        """
+        encoder = self._transforms.get(frames)
+        if encoder is None:
+            encoder = self._transforms[frames] = TransformsEncoder(frames)
+        self._write(self.names[relative], encoder.encode(stamp, values), stamp)
 
     # ------------------------------------------------------------------ on change
     def serialize(self, relative: str, message, stamp: int) -> None:

@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 
 from walker_bag.core.errors import BagError
+from walker_config.core.configuration import load_configuration
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.parameter_schema import ParameterError
 from walker_report.core.steps import format_table, rows_from_reports, write_json
@@ -29,7 +30,6 @@ from walker_teleop.core.progress import ProgressLine, walk_progress
 
 from walker_headless.recording import WalkRecording
 from walker_headless.runner import WalkResult, walk
-from walker_headless.sections import load_sections
 
 __all__ = ['run_headless', 'loop_record']
 
@@ -41,7 +41,7 @@ def run_headless(args) -> int:
     refused (nothing ran); 6: walked, but the report could not be made.
     """
     try:
-        sections = load_sections(args.params_file,
+        configuration = load_configuration(args.params_file,
                                  plant_path=getattr(args, 'plant_params_file', None))
     except (ParameterError, ValueError) as error:
         print(f'[walker] error: {error}', flush=True)
@@ -64,7 +64,7 @@ def run_headless(args) -> int:
     except BagError as error:
         print(f'[walker] error: {error}', flush=True)
         return 2
-    rate = sections.walker.timing.control_rate
+    rate = configuration.walker.timing.control_rate
 
     def on_feedback(feedback, time: float) -> None:
         text = walk_progress(feedback.step_index, feedback.step_count, int(feedback.phase),
@@ -73,7 +73,7 @@ def run_headless(args) -> int:
         progress.update(f'[walker] {text}', key=(feedback.step_index, int(feedback.phase)))
 
     try:
-        result = walk(sections, args.target, recording, on_feedback,
+        result = walk(configuration, args.target, recording, on_feedback,
                       wall_timeout=args.walk_timeout)
     except ParameterError as error:
         progress.end()
@@ -85,7 +85,7 @@ def run_headless(args) -> int:
     progress.end()
     code = _summarise(result, out, rate)
     if args.record and args.report:
-        if not report_after_walk(bag, out / 'report', sections.path, args.quiet):
+        if not report_after_walk(bag, out / 'report', configuration.path, args.quiet):
             code = code or 6
     return code
 

@@ -2,13 +2,13 @@
 
 :func:`walk` builds the robot side (:class:`~walker_headless.loop.RobotLoop`) and the
 supervisor's walk runner in its shell (:class:`~walker_headless.shell.WalkShell`) from the
-parameter file's sections, gives the runner a ``walk_to`` goal and runs them period by period
+walker's configuration, gives the runner a ``walk_to`` goal and runs them period by period
 until the goal has ended::
 
     state t_k out (recorded, to the planner's stream) -> the controllers answer ->
     the supervisor hears and decides at t_k -> the plant steps to t_(k+1)
 
-Deterministic: the same sections and target give the same walk, bit for bit, on any machine
+Deterministic: the same configuration and target give the same walk, bit for bit, on any machine
 load (nothing in it reads a wall clock but the optional time limit). One process, one core,
 no DDS: a campaign runs many at once.
 """
@@ -20,13 +20,13 @@ import math
 import time
 from collections.abc import Callable
 
+from walker_config.core.configuration import WalkerConfiguration
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import description_urdf
 from walker_supervisor.core.commands import Feedback
 
 from walker_headless.loop import RobotLoop
 from walker_headless.records import PhaseRecord, StepReportRecord
-from walker_headless.sections import Sections
 from walker_headless.shell import WalkShell
 
 __all__ = ['WalkResult', 'walk', 'DIAGNOSTICS_PERIOD']
@@ -87,7 +87,7 @@ class WalkResult:
     timed_out: bool = False
 
 
-def walk(sections: Sections, target: str, recording=None,
+def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
          wall_timeout: float = math.inf) -> WalkResult:
@@ -95,8 +95,8 @@ def walk(sections: Sections, target: str, recording=None,
 
     Parameters
     ----------
-    sections : Sections
-        The parameter file's sections.
+    configuration : WalkerConfiguration
+        The walker's configuration (:func:`~walker_config.core.configuration.load_configuration`).
     target : str
         The truss node to walk to.
     recording : WalkRecording, optional
@@ -115,10 +115,10 @@ def walk(sections: Sections, target: str, recording=None,
         If the plant refuses its settings.
     """
     started = time.monotonic()
-    loop = RobotLoop(sections, recording)
+    loop = RobotLoop(configuration, recording)
     try:
         if recording is not None:
-            recording.robot_description(0, description_urdf(sections.walker))
+            recording.robot_description(0, description_urdf(configuration.walker))
         shell = WalkShell(loop, say, progress)
         shell.send_goal('walk_to', target)
         cpu_started = time.process_time()

@@ -72,8 +72,8 @@ class WalkShell:
                  progress: Callable[[Feedback, float], None] | None = None) -> None:
         self.loop = loop
         self.planner = HeadlessPlanner(loop)
-        sections = loop.sections
-        self.runner = WalkRunner(sections.walker, sections.supervisor, self.planner.join)
+        configuration = loop.configuration
+        self.runner = WalkRunner(configuration.walker, configuration.supervisor, self.planner.join)
         self._say = say or (lambda level, text: None)
         self._progress = progress
         self.phases: list[records.PhaseRecord] = []

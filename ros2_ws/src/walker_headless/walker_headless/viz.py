@@ -33,25 +33,25 @@ class HeadlessViz:
 
     Parameters
     ----------
-    sections : Sections
-        The parameter file's sections (``walker``, ``viz``).
+    configuration : WalkerConfiguration
+        The walker's configuration (``walker``, ``viz``).
     recording : WalkRecording
         The bag.
     """
 
-    def __init__(self, sections, recording) -> None:
-        self.scene = WalkerScene(sections.walker, sections.viz)
-        self.flexible = sections.viz.flexible
+    def __init__(self, configuration, recording) -> None:
+        self.scene = WalkerScene(configuration.walker, configuration.viz)
+        self.flexible = configuration.viz.flexible
         self._recording = recording
         self._types = recording.types
         bends = [joint.name for joint in
-                 flex_joints(sections.walker.robot.flexibility.segments_per_link)]
+                 flex_joints(configuration.walker.robot.flexibility.segments_per_link)]
         self._names = [*PHYSICAL_JOINT_NAMES, *bends] if self.flexible \
             else list(PHYSICAL_JOINT_NAMES)
-        self._period = round(1e9 / sections.viz.tf_rate)  # [ns]
+        self._period = round(1e9 / configuration.viz.tf_rate)  # [ns]
         self._next = 0  # [ns] the TF timer's next time
         self._states: list[tuple[int, list[float]]] = []  # (stamp, angles) not yet drawn
-        recording.serialize('/tf_static', self._tf(self.scene.tree.static_transforms(), 0), 0)
+        self._tf('/tf_static', self.scene.tree.static_transforms(), 0)
         self._send_markers(0)
 
     # ------------------------------------------------------------------ inputs
@@ -69,8 +69,7 @@ class HeadlessViz:
         while self._next <= stamp:
             self._next += self._period
         for state_stamp, angles in self._states:
-            edges = self.scene.transforms(self._names, angles)
-            self._recording.serialize('/tf', self._tf(edges, state_stamp), state_stamp)
+            self._tf('/tf', self.scene.transforms(self._names, angles), state_stamp)
         self._states.clear()
 
     def grippers(self, readings: dict[str, tuple[str, str]]) -> None:
@@ -94,18 +93,14 @@ class HeadlessViz:
             self._send_markers(stamp)
 
     # ------------------------------------------------------------------ messages
-    def _tf(self, edges, stamp: int):
-        t = self._types
-        transforms = []
+    def _tf(self, topic: str, edges, stamp: int) -> None:
+        """Write the transforms of ``edges`` on ``topic`` (``/tf``, ``/tf_static``), packed."""
+        frames, values = [], []
         for edge in edges:
-            x, y, z = (float(v) for v in edge.matrix[:3, 3])
-            qx, qy, qz, qw = (float(v) for v in quaternion_from_matrix(edge.matrix))
-            transforms.append(t['geometry_msgs/msg/TransformStamped'](
-                header=self._recording.header(stamp, edge.parent), child_frame_id=edge.child,
-                transform=t['geometry_msgs/msg/Transform'](
-                    translation=t['geometry_msgs/msg/Vector3'](x=x, y=y, z=z),
-                    rotation=t['geometry_msgs/msg/Quaternion'](x=qx, y=qy, z=qz, w=qw))))
-        return t['tf2_msgs/msg/TFMessage'](transforms=transforms)
+            frames.append((edge.parent, edge.child))
+            values += edge.matrix[:3, 3].tolist()
+            values += quaternion_from_matrix(edge.matrix).tolist()
+        self._recording.transforms(topic, stamp, tuple(frames), values)
 
     def _send_markers(self, stamp: int) -> None:
         specs, deleted = self.scene.markers()

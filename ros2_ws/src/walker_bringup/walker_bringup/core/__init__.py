@@ -1,1 +1,1 @@
-"""The bring-up's ROS-free part: the whole configuration, every section and every rule."""
+"""The bring-up's ROS-free part: when a node that died is started again."""

@@ -18,7 +18,7 @@ from typing import Any
 import yaml
 
 from walker_core.parameter_schema import (
-    ParameterError, flatten_mapping, load_parameter_file, section_from_flat)
+    ParameterError, flatten_mapping, load_parameter_file)
 
 __all__ = ['load_nominal', 'check_model', 'check_truth', 'parameter_document',
            'write_parameter_file', 'WILDCARD']
@@ -46,38 +46,26 @@ def load_nominal(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
     return flat, document
 
 
-def _controllers(flat: Mapping[str, Any]) -> None:
-    from walker_control.core.config import ControllerSettings
+def _model(flat: Mapping[str, Any]) -> None:
+    from walker_config.core.configuration import configuration_of
+    from walker_core.parameter_file import ParameterFile
 
-    ControllerSettings.from_flat(flat)
-
-
-def _planner(flat: Mapping[str, Any]) -> None:
-    from walker_planner.core.parameters import PlannerParameters
-
-    section_from_flat(PlannerParameters, flat, 'planner.')
+    configuration_of(ParameterFile(flat, Path('model.yaml')))
 
 
-def _supervisor(flat: Mapping[str, Any]) -> None:
-    from walker_supervisor.core.sequencer import SupervisorParameters
-    from walker_supervisor.core.teleop import TeleopParameters
+def _truth(flat: Mapping[str, Any]) -> None:
+    from walker_config.core.configuration import plant_sections
+    from walker_core.parameter_file import ParameterFile
 
-    section_from_flat(SupervisorParameters, flat, 'supervisor.')
-    section_from_flat(TeleopParameters, flat, 'teleop.')
+    plant_sections(ParameterFile(flat, Path('truth.yaml')))
 
 
-#: The model's checks, each with the prefixes of the values it reads: a check is run once per
-#: distinct set of those values (the controllers' stability check designs every filter of
-#: every mode over the inertia range: seconds on a loaded machine).
-_MODEL_CHECKS = ((_controllers, ('robot.', 'timing.', 'control.')),
-                 (_planner, ('planner.',)), (_supervisor, ('supervisor.', 'teleop.')))
 _CHECKED: dict[tuple[str, str], str | None] = {}
 _CACHE_SIZE = 1024
 
 
-def _check_once(check, prefixes: tuple[str, ...], flat: Mapping[str, Any]) -> None:
-    values = json.dumps({k: v for k, v in flat.items() if k.startswith(prefixes)},
-                        sort_keys=True, default=repr)
+def _check_once(check, flat: Mapping[str, Any]) -> None:
+    values = json.dumps(dict(flat), sort_keys=True, default=repr)
     key = (check.__name__, values)
     if key not in _CHECKED:
         if len(_CHECKED) >= _CACHE_SIZE:
@@ -92,16 +80,19 @@ def _check_once(check, prefixes: tuple[str, ...], flat: Mapping[str, Any]) -> No
 
 
 def check_model(flat: Mapping[str, Any]) -> None:
-    """Check the model's set as the controllers, planner, supervisor and plant would.
+    """Check the model's set as the walker's one configuration loader checks a file.
+
+    Every section and every rule between sections
+    (:func:`walker_config.core.configuration.configuration_of`), as ``run_all.py`` checks the
+    file it is given; once per distinct set (the controllers' stability check designs every
+    filter of every mode over the inertia range: seconds on a loaded machine).
 
     Raises
     ------
     ParameterError
         Naming the parameter and the rule (the controllers' stability check included).
     """
-    for check, prefixes in _MODEL_CHECKS:
-        _check_once(check, prefixes, flat)
-    check_truth(flat)
+    _check_once(_model, flat)
 
 
 def check_truth(flat: Mapping[str, Any]) -> None:
@@ -112,10 +103,7 @@ def check_truth(flat: Mapping[str, Any]) -> None:
     ParameterError
         Naming the parameter and the rule.
     """
-    from walker_core.robot_parameters import WalkerParameters
-    from walker_sim.core.config import SimParameters, check_against_walker
-
-    check_against_walker(SimParameters.from_flat(flat), WalkerParameters.from_flat(flat))
+    _truth(flat)
 
 
 def parameter_document(document: Mapping[str, Any], values: Mapping[str, Any]

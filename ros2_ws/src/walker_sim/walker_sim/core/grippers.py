@@ -41,6 +41,10 @@ class GripperMode(enum.IntEnum):
     JAMMED = 4
 
 
+#: The modes in which a gripper turns in its hole (the plant advances it every physics step)
+_TURNING = frozenset((GripperMode.SCREWING, GripperMode.UNSCREWING))
+
+
 class GripperCommandError(ValueError):
     """A gripper command that is refused; nothing changed. The message says why."""
 
@@ -235,6 +239,10 @@ class GripperLogic:
         """State of one gripper."""
         return self._status[validate_gripper(gripper)]
 
+    def statuses(self) -> dict[str, GripperStatus]:
+        """``'a'``/``'b'`` -> state of the gripper (a new dict)."""
+        return dict(self._status)
+
     @property
     def base(self) -> str:
         """The gripper holding the walker: the attached one, or the one attached longest."""
@@ -243,8 +251,7 @@ class GripperLogic:
     @property
     def busy(self) -> bool:
         """True while a screw-in or an unscrew is under way."""
-        return any(status.mode in (GripperMode.SCREWING, GripperMode.UNSCREWING)
-                   for status in self._status.values())
+        return not _TURNING.isdisjoint([status.mode for status in self._status.values()])
 
     def holds(self, gripper: str) -> bool:
         """Return True while the gripper is held by its node (screwing, attached, unscrewing)."""

@@ -22,6 +22,7 @@ All arrays are in physical joint order (``a_yaw_joint`` ... ``b_yaw_joint``).
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -76,6 +77,9 @@ class DriveModel:
             raise ValueError(f'stiction_velocity must be positive, got {self.stiction_velocity}')
         object.__setattr__(self, '_stiction_levels', tuple(self.stiction_torque.tolist()))
         object.__setattr__(self, '_coulomb_levels', tuple(self.friction_torque.tolist()))
+        object.__setattr__(self, '_limits', tuple(self.torque_limit.tolist()))
+        object.__setattr__(self, '_levels', tuple(zip(self._stiction_levels,
+                                                      self._coulomb_levels, strict=True)))
 
     @classmethod
     def from_parameters(cls, params, sim) -> 'DriveModel':
@@ -112,10 +116,18 @@ class DriveModel:
         if raw.shape != (5,):
             raise ValueError(f'a torque command needs 5 values ({", ".join(PHYSICAL_JOINT_NAMES)})'
                              f', got shape {raw.shape}')
-        refused = ~np.isfinite(raw)
-        safe = np.where(refused, 0.0, raw)
-        clamped = np.clip(safe, -self.torque_limit, self.torque_limit)
-        return DriveCommand(torque=clamped, saturated=clamped != safe, refused=refused)
+        # plain floats, as np.clip compares (max first, then min): the plant asks every period
+        applied, saturated, refused = [], [], []
+        for value, limit in zip(raw.tolist(), self._limits, strict=True):
+            bad = not math.isfinite(value)
+            safe = 0.0 if bad else value
+            low = safe if safe > -limit else -limit
+            clamped = low if low < limit else limit
+            applied.append(clamped)
+            saturated.append(clamped != safe)
+            refused.append(bad)
+        return DriveCommand(torque=np.array(applied), saturated=np.array(saturated),
+                            refused=np.array(refused))
 
     def friction_level(self, velocity) -> tuple[float, ...]:
         """Largest friction torque [N*m] each joint can exert during the next physics step.
@@ -132,5 +144,5 @@ class DriveModel:
             ``friction_torque``. Plain floats: the plant asks every physics step.
         """
         limit = self.stiction_velocity
-        return tuple(stiction if abs(v) < limit else coulomb for v, stiction, coulomb in zip(
-            velocity, self._stiction_levels, self._coulomb_levels, strict=True))
+        return tuple([stiction if -limit < v < limit else coulomb
+                      for v, (stiction, coulomb) in zip(velocity, self._levels, strict=True)])

@@ -60,6 +60,9 @@ _HOLD_TORQUE = 1.0e6
 #: where the time step, not the solver, is the larger error.
 SOLVER_ITERATIONS = 30
 SOLVER_RESIDUAL = 1e-7
+# Step durations whose number of physics steps a plant remembers (one, the control period,
+# in every caller; a few in tests)
+_REMEMBERED_DURATIONS = 8
 
 
 class PlantError(ValueError):
@@ -244,6 +247,7 @@ class WalkerPlant:
         self._friction_enabled = np.ones(5, dtype=bool)
         self._level_override: tuple[float | None, ...] | None = None
         self._motor_levels: tuple[float, ...] | None = None
+        self._steps_of: dict[float, int] = {}  # step duration [s] -> physics steps
 
     @property
     def client(self) -> int:
@@ -449,13 +453,16 @@ class WalkerPlant:
             If ``dt`` is not a positive whole number of physics steps or ``torques`` does not
             have five values (nothing happens).
         """
-        steps = self._whole_steps(dt)
+        steps = self._steps_of.get(dt) if type(dt) is float else None
+        if steps is None:
+            steps = self._whole_steps(dt)
         try:
             command = self.drive.command(torques)
         except ValueError as error:
             raise PlantError(str(error)) from None
         start_velocity = self._velocity
         torque_list = command.torque.tolist()
+        grippers = self._grippers
         for _ in range(steps):
             self._set_friction_motors()
             rooted = self._active
@@ -465,21 +472,25 @@ class WalkerPlant:
             pybullet.stepSimulation(physicsClientId=rooted.client)
             self._time_steps += 1
             self._read_joints()
-            if self._grippers.busy:
+            if grippers.busy:
                 self._advance_grippers()
         self.sensors.sample()
         self._command = command
-        self._acceleration = ((np.array(self._velocity) - np.array(start_velocity))
-                              / (steps * self.physics_step))
+        duration = steps * self.physics_step
+        self._acceleration = np.array([(end - start) / duration for end, start in zip(
+            self._velocity, start_velocity, strict=True)])
         return self.state()
 
     def _whole_steps(self, dt: float) -> int:
+        """Physics steps in ``dt`` seconds; remembered, as a plant steps by one period."""
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
             raise PlantError(f'step duration must be a positive number of seconds, got {dt!r}')
         steps = round(dt / self.physics_step)
         if steps < 1 or not math.isclose(steps * self.physics_step, dt, rel_tol=1e-9):
             raise PlantError(f'step duration {dt!r} s is not a whole number of physics steps of '
                              f'{self.physics_step:g} s')
+        if type(dt) is float and len(self._steps_of) < _REMEMBERED_DURATIONS:
+            self._steps_of[dt] = steps
         return steps
 
     def _set_friction_motors(self) -> None:
@@ -497,9 +508,8 @@ class WalkerPlant:
     def _read_joints(self) -> None:
         states = pybullet.getJointStates(self.body, self._active.joints,
                                          physicsClientId=self.client)
-        self._position = [s[0] for s in states]
-        self._velocity = [s[1] for s in states]
-        self._friction = [s[3] for s in states]
+        # (position, velocity, reaction forces, applied torque) per joint, as tuples
+        self._position, self._velocity, _, self._friction = zip(*states, strict=True)
 
     # ------------------------------------------------------------------ state
     def state(self) -> PlantState:
@@ -510,7 +520,7 @@ class WalkerPlant:
             acceleration=self._acceleration.copy(), effort=self._command.torque.copy(),
             friction=np.array(self._friction), saturated=self._command.saturated.copy(),
             refused=self._command.refused.copy(),
-            statuses={g: self._grippers.status(g) for g in GRIPPERS},
+            statuses=self._grippers.statuses(),
             poses={g: self._gripper_pose(g) for g in GRIPPERS}, base=self._grippers.base,
             measure=self._alignment)
 

@@ -1,7 +1,7 @@
 """The walker's configuration: the parameter file read once into every typed section.
 
 :func:`load_configuration` is the one entry point for whoever runs the whole walker (the graph
-of ``run_all.py``, the benchmarks): it reads the file once
+of ``run_all.py``, the headless runner, campaigns, the benchmarks): it reads the file once
 (:class:`walker_core.parameter_file.ParameterFile`), builds each package's section, and runs
 every rule that ties sections together, here and nowhere else. A bad file is refused with a
 :class:`~walker_core.parameter_schema.ParameterError` naming the parameter and the rule,
@@ -9,7 +9,13 @@ before anything starts.
 
 The sections stay with the packages that own them, and so do the rules between sections
 (each node checks its own at start and on every runtime update); this module, in the package
-that may depend on all of them, only gathers them (docs/architecture.md, Configuration).
+that may depend on all of them and that the bring-up and the headless runner both depend on,
+only gathers them (docs/architecture.md, Configuration).
+
+A plant may be given a parameter file of its own (``run_all.py --plant-params-file``, a
+campaign's *truth*): the robot as it really is, where every other part works on the model.
+Of that file the plant's sections alone are read (:func:`plant_sections`): the rules between
+the others are the model's.
 """
 
 from __future__ import annotations
@@ -32,7 +38,8 @@ from walker_supervisor.core.parameters import (
 from walker_supervisor.core.teleop import TeleopParameters
 from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 
-__all__ = ['WalkerConfiguration', 'load_configuration', 'check_cross_section_rules']
+__all__ = ['WalkerConfiguration', 'load_configuration', 'configuration_of', 'plant_sections',
+           'check_cross_section_rules']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,6 +68,9 @@ class WalkerConfiguration:
         ``viz.*`` (the TF and marker publisher's).
     values : mapping
         The flat values all sections were built from (the file's, then the overrides).
+    plant : tuple of (WalkerParameters, SimParameters)
+        The plant's robot and ``sim.*``: from a parameter file of the plant's own, or (none
+        given) the same as ``walker`` and ``sim``.
     """
 
     path: Path
@@ -73,6 +83,11 @@ class WalkerConfiguration:
     recorder: RecorderParameters
     viz: VizParameters
     values: Mapping[str, Any]
+    plant: tuple[WalkerParameters, SimParameters] | None = None
+
+    def __post_init__(self) -> None:
+        if self.plant is None:
+            object.__setattr__(self, 'plant', (self.walker, self.sim))
 
 
 def check_cross_section_rules(configuration: WalkerConfiguration) -> None:
@@ -97,26 +112,33 @@ def check_cross_section_rules(configuration: WalkerConfiguration) -> None:
     check_with_control(supervisor, configuration.controllers.control.relaxation.duration)
 
 
-def load_configuration(path: str | Path | None = None,
-                       overrides: Mapping[str, Any] | None = None) -> WalkerConfiguration:
-    """Read a parameter file once into every section and check every rule between them.
-
-    Parameters
-    ----------
-    path : str or Path, optional
-        The ``ros__parameters`` file, naming every parameter (default: the installed
-        ``walker.yaml``).
-    overrides : mapping, optional
-        Flat values over the file's, ``{'sim.clock_mode': 'sim_time'}`` (as ``-p`` over
-        ``--params-file``).
+def plant_sections(file: ParameterFile) -> tuple[WalkerParameters, SimParameters]:
+    """Return the plant's sections of a parameter file: the robot and ``sim.*``, checked.
 
     Raises
     ------
     ParameterError
-        If the file cannot be read or parsed, or a value or rule is broken: the message names
-        the parameter. Nothing is half-built.
+        Naming the parameter: a value of either section, or the rule between them (start
+        nodes off the truss, a physics rate that is not a multiple of the control rate).
     """
-    file = ParameterFile.read(path, overrides)
+    walker, sim = file.section(WalkerParameters), file.section(SimParameters, 'sim.')
+    check_sim_against_walker(sim, walker)
+    return walker, sim
+
+
+def configuration_of(file: ParameterFile,
+                     plant: tuple[WalkerParameters, SimParameters] | None = None
+                     ) -> WalkerConfiguration:
+    """Build every section of a parameter file's values and check every rule between them.
+
+    ``plant`` is the plant's own sections (:func:`plant_sections` of its file), if it has a
+    file of its own.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter and the rule; nothing is half-built.
+    """
     configuration = WalkerConfiguration(
         path=file.path,
         walker=file.section(WalkerParameters),
@@ -127,6 +149,34 @@ def load_configuration(path: str | Path | None = None,
         teleop=file.section(TeleopParameters, 'teleop.'),
         recorder=file.section(RecorderParameters, RECORDER_PREFIX),
         viz=file.section(VizParameters, VIZ_PREFIX),
-        values=file.values)
+        values=file.values, plant=plant)
     check_cross_section_rules(configuration)
     return configuration
+
+
+def load_configuration(path: str | Path | None = None,
+                       overrides: Mapping[str, Any] | None = None,
+                       plant_path: str | Path | None = None) -> WalkerConfiguration:
+    """Read a parameter file once into every section and check every rule between them.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        The ``ros__parameters`` file, naming every parameter (default: the installed
+        ``walker.yaml``).
+    overrides : mapping, optional
+        Flat values over the file's, ``{'sim.clock_mode': 'sim_time'}`` (as ``-p`` over
+        ``--params-file``); over the plant's file too.
+    plant_path : str or Path, optional
+        A parameter file of the plant's own (``run_all.py --plant-params-file``): its robot
+        and ``sim.*`` go to the plant alone (:attr:`WalkerConfiguration.plant`).
+
+    Raises
+    ------
+    ParameterError
+        If a file cannot be read or parsed, or a value or rule is broken: the message names
+        the parameter. Nothing is half-built.
+    """
+    plant = None if plant_path is None \
+        else plant_sections(ParameterFile.read(plant_path, overrides))
+    return configuration_of(ParameterFile.read(path, overrides), plant)

@@ -7,8 +7,7 @@ from ros_test_support import write_parameter_file
 
 import walker_core.parameter_file as parameter_file
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
-from walker_bringup.core.configuration import load_configuration
-from walker_bringup.run import main as run_all
+from walker_config.core.configuration import load_configuration
 from walker_control.core.config import load_controller_settings
 from walker_core.parameter_file import ParameterFile, default_parameter_file, default_values
 from walker_core.parameter_schema import ParameterError
@@ -117,12 +116,3 @@ def test_a_file_that_is_not_a_parameter_file_is_refused(tmp_path, text, words):
         load_configuration(path)
     with pytest.raises(ParameterError, match='cannot read parameter file'):
         load_configuration(tmp_path / 'missing.yaml')
-
-
-def test_run_all_refuses_a_bad_file_before_it_starts_or_writes_anything(tmp_path, capsys):
-    path = _file(tmp_path, {'sim.start.other_node': 'n9_9'})
-    out = tmp_path / 'run'
-    assert run_all(['--params-file', str(path), '--out', str(out), '--sim-time']) == 2
-    said = capsys.readouterr()
-    assert 'sim.start.other_node' in said.err + said.out and str(path) in said.err + said.out
-    assert not out.exists()

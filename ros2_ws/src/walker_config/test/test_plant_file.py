@@ -3,9 +3,9 @@
 import pytest
 import yaml
 
+from walker_config.core.configuration import load_configuration
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import default_parameter_file
-from walker_headless.sections import load_sections
 
 
 def _truth_file(tmp_path, offset):
@@ -19,17 +19,18 @@ def _truth_file(tmp_path, offset):
 
 
 def test_without_a_plant_file_the_plant_takes_the_model():
-    sections = load_sections()
-    assert sections.plant == (sections.walker, sections.sim)
+    configuration = load_configuration()
+    assert configuration.plant == (configuration.walker, configuration.sim)
 
 
 def test_the_plant_file_reaches_the_plant_alone(tmp_path):
     truth = _truth_file(tmp_path, [1e-4, 0.0, 0.0, 0.0, -1e-4])
-    sections = load_sections(plant_path=truth)
-    model = load_sections()
-    assert sections.walker == model.walker and sections.sim == model.sim
-    assert sections.control == model.control and sections.planner == model.planner
-    plant_walker, plant_sim = sections.plant
+    configuration = load_configuration(plant_path=truth)
+    model = load_configuration()
+    assert configuration.walker == model.walker and configuration.sim == model.sim
+    assert configuration.controllers == model.controllers
+    assert configuration.planner == model.planner
+    plant_walker, plant_sim = configuration.plant
     assert plant_walker.robot.drive.yaw.friction_torque == pytest.approx(
         1.1 * model.walker.robot.drive.yaw.friction_torque)
     assert tuple(plant_sim.imperfections.joint_offset) == (1e-4, 0.0, 0.0, 0.0, -1e-4)
@@ -37,4 +38,4 @@ def test_the_plant_file_reaches_the_plant_alone(tmp_path):
 
 def test_a_plant_file_the_plant_refuses_is_refused(tmp_path):
     with pytest.raises(ParameterError, match='joint_offset'):
-        load_sections(plant_path=_truth_file(tmp_path, [1e-4]))
+        load_configuration(plant_path=_truth_file(tmp_path, [1e-4]))

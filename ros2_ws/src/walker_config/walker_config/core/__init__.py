@@ -1,0 +1,1 @@
+"""The configuration's core: the sections of one parameter file and the rules between them."""
