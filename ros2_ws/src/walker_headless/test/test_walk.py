@@ -111,8 +111,8 @@ def test_an_unknown_target_is_refused_before_anything_moves(configuration, tmp_p
     assert 'not on the truss' in rejections[0].reason
 
 
-def test_a_walk_stopped_at_its_wall_time_limit_says_it_timed_out(sections):
-    result = walk(sections, 'n1_2', wall_timeout=0.0)
+def test_a_walk_stopped_at_its_wall_time_limit_says_it_timed_out(configuration):
+    result = walk(configuration, 'n1_2', wall_timeout=0.0)
     assert not result.reached and result.timed_out
     assert 'did not end within 0 s of wall time' in result.message
     assert 0 < result.periods < 1000  # stopped at the first check, long before the step ends
