@@ -23,16 +23,9 @@ import threading
 from collections.abc import Callable, Sequence
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.stamps import stamp_seconds
 
 __all__ = ['SetpointHandover', 'stamp_seconds']
-
-_NS_PER_S = 1_000_000_000
-
-
-def stamp_seconds(stamp: int) -> float:
-    """Return a stamp [ns] in seconds as a controller reads a ``builtin_interfaces/Time``."""
-    sec, nanosec = divmod(int(stamp), _NS_PER_S)
-    return sec + nanosec * 1e-9
 
 
 class SetpointHandover:

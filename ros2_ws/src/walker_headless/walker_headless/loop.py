@@ -41,6 +41,7 @@ from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import Measurement
 from walker_control.core.modes import Mode
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
+from walker_core.stamps import stamp_seconds
 from walker_planner.core.streamer import TrajectoryStreamer
 from walker_sim.core.commands import EffortCommands, seconds_to_ns
 from walker_sim.core.outputs import StampedRate, gripper_states_key
@@ -51,15 +52,8 @@ from walker_headless.viz import HeadlessViz
 
 __all__ = ['RobotLoop', 'stamp_seconds', 'MODES']
 
-_NS_PER_S = 1_000_000_000
 #: The sequencer's mode names as ``walker_msgs/ControlMode`` values.
 MODES = {'off': Mode.OFF, 'hold': Mode.HOLD, 'coarse': Mode.COARSE, 'fine': Mode.FINE}
-
-
-def stamp_seconds(stamp: int) -> float:
-    """Return a stamp [ns] in seconds as a node reads a ``builtin_interfaces/Time``."""
-    sec, nanosec = divmod(int(stamp), _NS_PER_S)
-    return sec + nanosec * 1e-9
 
 
 class RobotLoop:
