@@ -82,6 +82,7 @@ def _deafened(env: dict[str, str]) -> str:
         return ''
 
 
+@pytest.mark.dds_faults  # Fast DDS's fault, not the walker's: it shows on some machines only
 def test_over_shared_memory_a_reader_whose_port_was_removed_stays_deaf_renewed_or_not(
         tmp_path, shared_memory_clean_up):
     """The fault deafened the reader in 7 of 8 tries on this machine: up to three are made."""
