@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 
 from walker_bringup.run import parse_arguments
-from walker_bringup.transport import (DEFAULT_TRANSPORT, PROFILES_VARIABLE, graph_environment,
-                                      udp_loopback_environment, udp_loopback_profile)
+from walker_bringup.transport import (DEFAULT_TRANSPORT, PROFILES_VARIABLE, default_transport,
+                                      graph_environment, udp_loopback_environment,
+                                      udp_loopback_profile)
 
 # A node that prints "ready" once its participant is up, then lives until its stdin closes.
 _NODE = """
@@ -57,8 +58,11 @@ def test_the_profile_is_installed_and_selected_without_replacing_another():
 
 def test_a_graph_runs_over_udp_on_loopback_unless_told_otherwise():
     """run_all.py's graph and --serve: a node restarted after a crash is heard as before."""
-    assert DEFAULT_TRANSPORT == 'udp' and parse_arguments([]).transport == 'udp'
-    assert parse_arguments(['--serve']).transport == 'udp'
+    assert DEFAULT_TRANSPORT == 'udp' and default_transport({'ROS_DOMAIN_ID': '3'}) == 'udp'
+    # none asked for: chosen from the environment the graph starts in
+    assert parse_arguments([]).transport is None
+    assert parse_arguments(['--serve']).transport is None
+    assert parse_arguments(['--transport', 'shm']).transport == 'shm'
     env = {'ROS_DOMAIN_ID': '3'}
     assert graph_environment(env) == udp_loopback_environment(env)
     assert graph_environment(env, 'shm') == env and graph_environment(env, 'shm') is not env
@@ -70,6 +74,16 @@ def test_a_graph_runs_over_udp_on_loopback_unless_told_otherwise():
         graph_environment(env, 'tcp')
     with pytest.raises(SystemExit):
         parse_arguments(['--transport', 'tcp'])
+
+
+def test_a_graph_with_peers_on_other_hosts_stays_reachable_from_them():
+    """A ground station named in ROS_STATIC_PEERS: readers on 127.0.0.1 alone would not do."""
+    ground = {'ROS_DOMAIN_ID': '3', 'ROS_STATIC_PEERS': '10.77.0.2'}
+    assert default_transport(ground) == 'shm'
+    assert graph_environment(ground, default_transport(ground)) == ground
+    assert default_transport({**ground, 'ROS_STATIC_PEERS': ' '}) == 'udp'  # names none
+    with pytest.raises(ValueError, match=r'ROS_STATIC_PEERS names peers on other hosts \(10.77'):
+        graph_environment(ground, 'udp')
 
 
 def test_a_node_with_the_profile_is_reached_over_udp_only(ros_env):

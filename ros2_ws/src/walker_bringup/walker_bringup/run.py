@@ -47,7 +47,8 @@ from walker_bringup.processes import ProcessGroup
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
 from walker_bringup.transport import (
-    DEFAULT_TRANSPORT, PROFILES_VARIABLE, TRANSPORTS, graph_environment)
+    DEFAULT_TRANSPORT, PROFILES_VARIABLE, STATIC_PEERS_VARIABLE, TRANSPORTS, default_transport,
+    graph_environment)
 from walker_report.walk_report import report_after_walk
 from walker_teleop.core.progress import walk_progress
 
@@ -127,12 +128,14 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                              'start) before the graph is given up as dead: the walker is held '
                              'and everything shut down (exit code 5); 0: never start a node '
                              'again (default: %(default)s)')
-    parser.add_argument('--transport', choices=TRANSPORTS, default=DEFAULT_TRANSPORT,
+    parser.add_argument('--transport', choices=TRANSPORTS, default=None,
                         help="how the graph's node processes reach each other: udp (UDP on "
                              'loopback, walker_bringup/config/fastdds_udp_loopback.xml; a node '
                              'started again after a crash is heard as before) or shm (the rmw '
                              "default, Fast DDS's shared memory, with any profile "
-                             'FASTRTPS_DEFAULT_PROFILES_FILE names) (default: %(default)s)')
+                             'FASTRTPS_DEFAULT_PROFILES_FILE names; reached from other hosts) '
+                             f'(default: {DEFAULT_TRANSPORT}, or shm when ROS_STATIC_PEERS names '
+                             'peers on other hosts)')
     parser.add_argument('--quiet', action='store_true', help='print only the summary')
     parser.add_argument('--composed', action='store_true',
                         help='run each graph in one process (composition) instead of one '
@@ -438,12 +441,16 @@ def main(argv: list[str] | None = None) -> int:
     params_file = configuration.path
     stamp = datetime.datetime.now().strftime('%Y%m%d-%H%M%S')
     out = Path(args.out or Path('runs') / stamp).resolve()
+    base_env = {**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
+    transport = args.transport or default_transport(base_env)
+    if transport != DEFAULT_TRANSPORT and args.transport is None:
+        progress.say(f'[walker] {STATIC_PEERS_VARIABLE} names peers on other hosts: the graph '
+                     f'runs on {transport} (--transport), reachable from them')
     try:
-        env = graph_environment({**os.environ, 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'},
-                                args.transport)
+        env = graph_environment(base_env, transport)
     except ValueError as error:
-        progress.error(f'[walker] error: --transport {args.transport}: {error} (--transport '
-                       'shm keeps that profile)')
+        progress.error(f'[walker] error: --transport {transport}: {error} (--transport shm '
+                       'leaves the rmw default)')
         return 2
     # this process's own participant (the walk's client) is reached as the nodes are
     if PROFILES_VARIABLE in env:

@@ -13,7 +13,10 @@ rmw_fastrtps sets its own transports and the variable is ignored.
 
 A graph's transport is chosen here, once (:func:`graph_environment`): ``udp`` (the default of
 ``run_all.py``, its graph and ``--serve``, and of the fault graphs) or ``shm`` (the rmw
-default, the environment left as it is). ``benchmarks/transport_benchmark.py`` measured both
+default, the environment left as it is). A graph whose environment names peers on other hosts
+(``ROS_STATIC_PEERS``, a ground station) runs on ``shm`` unless told otherwise
+(:func:`default_transport`): readers reached on 127.0.0.1 alone are out of those peers' reach,
+so ``udp`` is refused there. ``benchmarks/transport_benchmark.py`` measured both
 (docs/reliability.md): a reader whose shared-memory port was removed while it lived stays deaf
 to a restarted writer whatever its subscriptions do, and UDP costs less than a tenth of a
 millisecond on the 500 Hz ``joint_states`` path.
@@ -23,16 +26,28 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ['PROFILES_VARIABLE', 'TRANSPORTS', 'DEFAULT_TRANSPORT', 'udp_loopback_profile',
-           'udp_loopback_environment', 'graph_environment']
+from walker_bringup.core.host_link import STATIC_PEERS_VARIABLE
+
+__all__ = ['PROFILES_VARIABLE', 'STATIC_PEERS_VARIABLE', 'TRANSPORTS', 'DEFAULT_TRANSPORT',
+           'default_transport', 'udp_loopback_profile', 'udp_loopback_environment',
+           'graph_environment']
 
 #: The environment variable naming Fast DDS's XML profiles file (Fast DDS 2.x, ROS 2 Jazzy).
 PROFILES_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 _PROFILE_NAME = 'fastdds_udp_loopback.xml'
 #: The transports a graph may run on: UDP on loopback, or the rmw default (shared memory).
 TRANSPORTS = ('udp', 'shm')
-#: What a graph of ``run_all.py`` runs on unless told otherwise.
+#: What a graph of ``run_all.py`` runs on unless told otherwise (no peers on other hosts).
 DEFAULT_TRANSPORT = 'udp'
+
+
+def default_transport(env: dict[str, str]) -> str:
+    """Return the transport of a graph started in ``env`` when none is asked for.
+
+    :data:`DEFAULT_TRANSPORT`, or ``'shm'`` (the rmw default: readers reached on every
+    interface) when ``env`` names peers on other hosts in ``ROS_STATIC_PEERS``.
+    """
+    return 'shm' if env.get(STATIC_PEERS_VARIABLE, '').strip() else DEFAULT_TRANSPORT
 
 
 def udp_loopback_profile() -> Path:
@@ -76,6 +91,11 @@ def graph_environment(env: dict[str, str], transport: str = DEFAULT_TRANSPORT) -
         An unknown transport, or ``'udp'`` with another profiles file already named.
     """
     if transport == 'udp':
+        peers = env.get(STATIC_PEERS_VARIABLE, '').strip()
+        if peers:
+            raise ValueError(f'{STATIC_PEERS_VARIABLE} names peers on other hosts ({peers}); UDP '
+                             "on loopback keeps the graph's readers on 127.0.0.1, out of their "
+                             'reach')
         return udp_loopback_environment(env)
     if transport == 'shm':
         return dict(env)
