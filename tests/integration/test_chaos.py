@@ -55,7 +55,7 @@ def assert_survived(result: dict, count: int) -> dict:
 def test_a_short_seeded_chaos_step_is_survived(tmp_path):
     """Two faults (in a coarse motion and a screw-in) in one step to the next node."""
     count = 2
-    result = run_chaos(tmp_path / 'run', SEED, count, targets=('n1_2', 'n1_1'),
+    result = run_chaos(tmp_path / 'run', SEED, count, targets=('n1_2', 'n2_1'),
                        phases=('COARSE', 'INSERTION'), in_step_order=True)
     assert_survived(result, count)
 

@@ -76,7 +76,9 @@ class ChaosDriver:
     log_dir : Path
         The bring-up's log directory (its ``pids.json``).
     targets : sequence of str
-        Two truss nodes to walk between (the walker goes to the one it is not at).
+        Truss nodes to walk between: the walker goes to one no gripper is in, so two nodes
+        one step apart must not both hold a gripper once a step ends (the start's base node
+        is not one of them); :class:`ChaosError` when every target holds one.
     timeout : float
         Wall-clock seconds any one wait may take (a phase to come, a node to come back, the
         walker to move on after a fault).
@@ -176,10 +178,16 @@ class ChaosDriver:
         self._result = None
         if now < self._walk_retry_at:
             return
-        if self.target in self.attached_nodes():
+        attached = self.attached_nodes()
+        if self.target in attached:
             if self._finishing:
                 return
-            self.target = next(t for t in self.targets if t != self.target)
+            free = [t for t in self.targets if t not in attached]
+            if not free:  # each goal would end at once with nothing walked
+                raise ChaosError(f'every target ({", ".join(self.targets)}) has a gripper in '
+                                 'it: there is no step to walk; choose targets one step apart '
+                                 'from different nodes')
+            self.target = free[0]
         send = self.client.walk_client.send_goal_async(WalkTo.Goal(target_node=self.target))
         self._goal = (send, self.pids().get('supervisor'))
         try:
