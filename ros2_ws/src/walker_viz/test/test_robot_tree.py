@@ -12,7 +12,7 @@ from walker_core.kinematics import WalkerKinematics, invert_transform
 from walker_core.robot_parameters import load_walker_parameters
 from walker_core.urdf import GRIPPER_LINKS, description_urdf
 from walker_core.rotations import quaternion_from_matrix, rotation_from_quaternion
-from walker_viz.core.robot_tree import RobotTree
+from walker_viz.core.robot_tree import RobotTree, axis_rotation
 
 PARAMS = load_walker_parameters()
 KIN = WalkerKinematics.from_parameters(PARAMS)
@@ -80,3 +80,16 @@ def test_quaternions_round_trip(theta):
 def test_a_zero_quaternion_is_refused():
     with pytest.raises(ValueError, match='must not be zero'):
         rotation_from_quaternion([0.0, 0.0, 0.0, 0.0])
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3), st.floats(-4.0, 4.0))
+def test_axis_rotation_is_scipys_rotation_vector(axis, turn):
+    from scipy.spatial.transform import Rotation
+
+    axis = np.array(axis)
+    if np.linalg.norm(axis) < 1e-3:
+        axis = np.array([0.0, 0.0, 1.0])
+    axis = axis / np.linalg.norm(axis)
+    expected = Rotation.from_rotvec(turn * axis).as_matrix()
+    assert np.allclose(axis_rotation(axis, turn), expected, rtol=0.0, atol=1e-12)

@@ -43,10 +43,12 @@ def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
 
 def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation (3x3) by ``angle`` rad about the unit vector ``axis`` (Rodrigues)."""
-    x, y, z = axis
+    x, y, z = np.asarray(axis, dtype=float).tolist()
     c, s = math.cos(angle), math.sin(angle)
-    skew = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return c * np.eye(3) + s * skew + (1.0 - c) * np.outer(axis, axis)
+    t = 1.0 - c  # c I + s [axis]x + (1 - c) axis axis^T, element by element
+    return np.array([[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+                     [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+                     [t * x * z - s * y, t * y * z + s * x, t * z * z + c]])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -78,9 +80,9 @@ class UrdfJoint:
         """Pose of the child link in the parent link at ``angle`` [rad]."""
         if not self.moves:
             return self.origin
-        motion = np.eye(4)
-        motion[:3, :3] = axis_rotation(self.axis, angle)
-        return self.origin @ motion
+        pose = self.origin.copy()  # origin * rotation(axis, angle): the rotation has no shift
+        pose[:3, :3] = self.origin[:3, :3] @ axis_rotation(self.axis, angle)
+        return pose
 
 
 def _vector(element, attribute: str, default: str) -> np.ndarray:
