@@ -97,7 +97,8 @@ class GraphRun:
     def _start(self) -> None:
         sys.path.insert(0, str(REPO / 'tests'))
         from ros_test_support import isolated_domain, ros_environment
-        from walker_bringup.composition import LOOP_NODES, composed_command
+        from walker_bringup.composed_process import composed_command
+        from walker_bringup.composition import LOOP_NODES
         from walker_bringup.graph import NodeSpec, several_walkers
         from walker_bringup.graph_client import GraphClient, init_context
         from walker_bringup.processes import ProcessGroup

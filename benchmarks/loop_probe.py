@@ -86,10 +86,10 @@ def main(argv: list[str]) -> int:
 
             sys.argv = ['plant_node', *argv[1:]]
             return plant_node.main() or 0
-        from walker_bringup import composition
+        from walker_bringup import composed_process
 
         sys.argv = ['composed_graph', *argv[1:]]
-        return composition.main() or 0
+        return composed_process.main() or 0
     finally:
         _dump(events, path)
 

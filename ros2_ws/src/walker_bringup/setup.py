@@ -20,7 +20,7 @@ setup(
     description='Bring the walker node graph up as processes, walk, shut down cleanly.',
     license='Apache-2.0',
     entry_points={'console_scripts': [
-        'composed_graph = walker_bringup.composition:main',
+        'composed_graph = walker_bringup.composed_process:main',
         'lossy_link = walker_bringup.lossy_link_node:main',
     ]},
 )

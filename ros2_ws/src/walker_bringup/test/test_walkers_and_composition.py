@@ -4,9 +4,10 @@ from pathlib import Path
 
 import pytest
 
+from walker_bringup.composed_process import (
+    composed_command, graph_from_arguments, parse_arguments)
 from walker_bringup.composition import (
-    COMPONENTS, LOOP_NODES, ComposedGraph, CompositionError, component_of, composed_command,
-    graph_from_arguments, parse_arguments)
+    COMPONENTS, LOOP_NODES, ComposedGraph, CompositionError, component_of)
 from walker_bringup.graph import (
     NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
     walker_targets)

@@ -37,7 +37,8 @@ import threading
 import time
 from pathlib import Path
 
-from walker_bringup.composition import LOOP_NODES, composed_command
+from walker_bringup.composed_process import composed_command
+from walker_bringup.composition import LOOP_NODES
 from walker_bringup.graph import (
     FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, walker_graph, walker_targets)
 from walker_bringup.graph_client import (
