@@ -93,3 +93,18 @@ def test_axis_rotation_is_scipys_rotation_vector(axis, turn):
     axis = axis / np.linalg.norm(axis)
     expected = Rotation.from_rotvec(turn * axis).as_matrix()
     assert np.allclose(axis_rotation(axis, turn), expected, rtol=0.0, atol=1e-12)
+
+
+def test_the_poses_of_many_rows_are_each_rows_pose():
+    rng = np.random.default_rng(3)
+    rows = rng.uniform(-1.5, 1.5, (7, len(TREE.joint_names)))
+    columns = {name: rows[:, index] for index, name in enumerate(TREE.joint_names)}
+    for link in TREE.links:
+        many = TREE.links_in_root(link, columns)
+        for row, pose in zip(rows, many, strict=True):
+            one = TREE.link_in_root(link, dict(zip(TREE.joint_names, row, strict=True)))
+            assert np.allclose(pose, one, rtol=0.0, atol=1e-14)
+    with pytest.raises(ValueError, match='no angle for joint'):
+        TREE.links_in_root('gripper_b', {'a_yaw_joint': rows[:, 0]})
+    with pytest.raises(ValueError, match='non-finite'):
+        TREE.links_in_root('gripper_b', {**columns, 'vertex_joint': np.full(7, np.nan)})

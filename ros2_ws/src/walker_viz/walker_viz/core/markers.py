@@ -149,20 +149,18 @@ def tip_path(tree: RobotTree, anchor: BaseAnchor, joint_names: Sequence[str],
     missing = set(PHYSICAL_JOINT_NAMES) - set(joint_names)
     if missing:
         raise ValueError(f'the trajectory has no {", ".join(sorted(missing))}')
-    straight = {name: 0.0 for name in tree.joint_names if name not in joint_names}
     if len(positions) > max_points:
         positions = positions[np.unique(np.linspace(0, len(positions) - 1,
                                                     max_points).round().astype(int))]
+    straight = np.zeros(len(positions))
+    angles: Mapping[str, np.ndarray] = {
+        **{name: straight for name in tree.joint_names if name not in joint_names},
+        **{name: positions[:, index] for index, name in enumerate(joint_names)}}
     base_link = GRIPPER_LINKS[anchor.gripper]
     tip_link = GRIPPER_LINKS[other_gripper(anchor.gripper)]
-    base = anchor.matrix()
-    points = []
-    for row in positions:
-        angles: Mapping[str, float] = {**straight, **dict(zip(joint_names, row, strict=True))}
-        in_base = np.linalg.inv(tree.link_in_root(base_link, angles)) \
-            @ tree.link_in_root(tip_link, angles)
-        points.append((base @ in_base)[:3, 3])
-    return np.array(points)
+    in_base = np.linalg.inv(tree.links_in_root(base_link, angles)) \
+        @ tree.links_in_root(tip_link, angles)
+    return (anchor.matrix() @ in_base)[:, :3, 3]
 
 
 def tip_path_marker(points: np.ndarray) -> MarkerSpec:

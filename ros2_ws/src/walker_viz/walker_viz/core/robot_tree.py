@@ -24,7 +24,7 @@ import numpy as np
 from walker_core.kinematics import invert_transform
 
 __all__ = ['WORLD_FRAME', 'JointTransform', 'UrdfJoint', 'RobotTree', 'rpy_matrix',
-           'axis_rotation']
+           'axis_rotation', 'axis_rotations']
 
 #: The world-fixed frame: the truss face (z up out of it, node n0_0 at the origin).
 WORLD_FRAME = 'truss'
@@ -49,6 +49,16 @@ def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.array([[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
                      [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
                      [t * x * z - s * y, t * y * z + s * x, t * z * z + c]])
+
+
+def axis_rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Rotations (N, 3, 3) by each of ``angles`` [rad] about the unit vector ``axis``."""
+    axis = np.asarray(axis, dtype=float)
+    angles = np.asarray(angles, dtype=float)
+    x, y, z = axis.tolist()
+    skew = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    cos, sin = np.cos(angles)[:, None, None], np.sin(angles)[:, None, None]
+    return cos * np.eye(3) + sin * skew + (1.0 - cos) * np.outer(axis, axis)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -188,6 +198,44 @@ class RobotTree:
         for joint in reversed(chain):
             angle = self._angle(angles, joint.name) if joint.moves else 0.0
             pose = pose @ joint.transform(angle)
+        return pose
+
+    def links_in_root(self, link: str, angles: Mapping[str, np.ndarray]) -> np.ndarray:
+        """Poses (N, 4, 4) of ``link`` in the root link, one per row of joint angles.
+
+        ``angles`` maps each joint on the link's chain to its N angles [rad];
+        :meth:`link_in_root` of each row, computed for all rows at once.
+
+        Raises
+        ------
+        ValueError
+            If ``link`` is not a link of the tree, or an angle on its chain is missing or not
+            finite.
+        """
+        if link not in self.links:
+            raise ValueError(f'unknown link {link!r}')
+        chain = []
+        while link != self.root:
+            joint = self._by_child[link]
+            chain.append(joint)
+            link = joint.parent
+        rows = {len(np.atleast_1d(np.asarray(v))) for v in angles.values()}
+        count = rows.pop() if len(rows) == 1 else None
+        if count is None:
+            raise ValueError(f'joint angle rows of different lengths: {sorted(rows)}')
+        pose = np.broadcast_to(np.eye(4), (count, 4, 4))
+        for joint in reversed(chain):
+            if not joint.moves:
+                pose = pose @ joint.origin
+                continue
+            if joint.name not in angles:
+                raise ValueError(f'no angle for joint {joint.name!r}')
+            column = np.asarray(angles[joint.name], dtype=float).reshape(count)
+            if not np.all(np.isfinite(column)):
+                raise ValueError(f'joint {joint.name!r} has a non-finite angle')
+            motion = np.broadcast_to(joint.origin, (count, 4, 4)).copy()
+            motion[:, :3, :3] = joint.origin[:3, :3] @ axis_rotations(joint.axis, column)
+            pose = pose @ motion
         return pose
 
     def root_pose(self, holding_link: str, holding_pose: np.ndarray,
