@@ -5,8 +5,8 @@ import math
 import pytest
 
 from walker_bringup.core.chaos import (
-    FREEZE, KILL, NODES, PHASES, Fault, FaultOutcome, GripCount, moved_on, plan_faults,
-    summarise_outcomes)
+    FREEZE, KILL, NODES, PHASES, Fault, FaultOutcome, GripCount, moved_on, next_target,
+    plan_faults, summarise_outcomes)
 
 
 def test_a_seed_gives_one_plan_and_another_seed_another():
@@ -118,3 +118,13 @@ HOLD, MOVING = True, False
 def test_a_fault_is_recovered_once_the_walker_goes_on_without_a_hold_for_a_while(
         phases, now, expected):
     assert moved_on(phases, back=2.0, now=now, settle=5.0) == expected
+
+
+def test_the_walker_walks_to_a_target_until_a_gripper_is_in_it_then_to_a_free_one():
+    targets = ('n1_2', 'n2_1')
+    assert next_target(targets, 'n1_2', {'n1_1', 'n2_1'}) == 'n1_2'  # not there yet
+    assert next_target(targets, 'n1_2', {'n1_1', 'n1_2'}) == 'n2_1'
+    assert next_target(targets, 'n2_1', {'n1_1', 'n2_1'}) == 'n1_2'
+    # the start's base node and its neighbour both held after one step: nothing to walk
+    with pytest.raises(ValueError, match=r'every target \(n1_2, n1_1\) has a gripper in it'):
+        next_target(('n1_2', 'n1_1'), 'n1_2', {'n1_1', 'n1_2'})

@@ -27,7 +27,7 @@ from walker_msgs.action import WalkTo
 from walker_msgs.msg import GripperState, GripperStates, StepPhase
 
 from walker_bringup.core.chaos import (
-    FREEZE, PHASES, Fault, FaultOutcome, GripCount, moved_on)
+    FREEZE, PHASES, Fault, FaultOutcome, GripCount, moved_on, next_target)
 from walker_bringup.graph_client import GraphClient, GraphNotReadyError
 from walker_bringup.processes import read_pids
 from walker_runtime.qos import latched_qos
@@ -179,15 +179,12 @@ class ChaosDriver:
         if now < self._walk_retry_at:
             return
         attached = self.attached_nodes()
-        if self.target in attached:
-            if self._finishing:
-                return
-            free = [t for t in self.targets if t not in attached]
-            if not free:  # each goal would end at once with nothing walked
-                raise ChaosError(f'every target ({", ".join(self.targets)}) has a gripper in '
-                                 'it: there is no step to walk; choose targets one step apart '
-                                 'from different nodes')
-            self.target = free[0]
+        if self.target in attached and self._finishing:
+            return
+        try:
+            self.target = next_target(self.targets, self.target, attached)
+        except ValueError as error:
+            raise ChaosError(str(error)) from None
         send = self.client.walk_client.send_goal_async(WalkTo.Goal(target_node=self.target))
         self._goal = (send, self.pids().get('supervisor'))
         try:

@@ -25,7 +25,7 @@ from collections import Counter
 from collections.abc import Iterable, Sequence
 
 __all__ = ['NODES', 'PHASES', 'KILL', 'FREEZE', 'KINDS', 'Fault', 'plan_faults',
-           'FaultOutcome', 'GripCount', 'summarise_outcomes', 'moved_on', 'SETTLE']
+           'FaultOutcome', 'GripCount', 'summarise_outcomes', 'moved_on', 'next_target', 'SETTLE']
 
 #: The nine nodes of a recorded graph of separate processes (``run_all.py --serve``).
 NODES = ('recorder', 'plant', 'controller_a_yaw', 'controller_a_pitch', 'controller_vertex',
@@ -229,6 +229,34 @@ class FaultOutcome:
                 'held': self.held, 'recovered': self.recovered, 'resumes': self.resumes,
                 'time_to_recover': None if math.isnan(self.time_to_recover)
                 else round(self.time_to_recover, 3), 'reason': self.reason}
+
+
+def next_target(targets: Sequence[str], current: str, attached: set[str]) -> str:
+    """Return where the walker walks next: ``current`` until a gripper is in it, then another.
+
+    Parameters
+    ----------
+    targets : sequence of str
+        The truss nodes the walker walks between.
+    current : str
+        The target walked to so far.
+    attached : set of str
+        The nodes a gripper is screwed into now.
+
+    Raises
+    ------
+    ValueError
+        If every target holds a gripper: a walk goal would end at once with nothing walked
+        (two nodes one step apart that both hold a gripper once a step ends, such as the
+        start's base node and a node next to it).
+    """
+    if current not in attached:
+        return current
+    free = [target for target in targets if target not in attached]
+    if not free:
+        raise ValueError(f'every target ({", ".join(targets)}) has a gripper in it: there is '
+                         'no step to walk; choose targets one step apart from different nodes')
+    return free[0]
 
 
 def moved_on(phases: Sequence[tuple[float, bool]], back: float, now: float,
