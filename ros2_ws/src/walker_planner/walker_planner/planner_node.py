@@ -72,7 +72,7 @@ _RESUBSCRIBE_AFTER = 1.0
 #: yet in sim time, past zero) for a silence to be the subscription's, not a stopped plant's
 _CLOCK_AHEAD_PERIODS = 10
 
-#: [s] wall time start_streaming waits for the stream's executor to run its first timer
+#: [s] wall time to wait for the stream executor's first timer, or a stream for the first state
 _STREAM_START_WAIT = 5.0
 
 
@@ -322,6 +322,7 @@ class PlannerNode(Node):
 
     async def _on_execute(self, goal_handle):
         result = FollowTrajectory.Result()
+        self._streamer.wait_for_state(_STREAM_START_WAIT)
         try:
             trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
             with self._lock:

@@ -18,6 +18,8 @@ thread-safe: a caller with several threads holds its own lock around every call.
 
 from __future__ import annotations
 
+import threading
+
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -108,6 +110,7 @@ class TrajectoryStreamer:
         self._hold_sent: int | None = None  # [ns] stamp of the newest hold setpoint sent
         self._tracking = False  # the controllers are in COARSE or FINE (they need setpoints)
         self._ended: list[ActiveStream] = []
+        self._heard = threading.Event()  # a joint state was taken
 
     # ------------------------------------------------------------------ inputs
     def on_state(self, stamp: int, positions: np.ndarray) -> None:
@@ -119,6 +122,8 @@ class TrajectoryStreamer:
         final setpoint, as it would with each setpoint sent just in time.
         """
         self.measured = (int(stamp), positions)
+        if not self._heard.is_set():
+            self._heard.set()
         active = self.active
         if active is None:
             if self._holding is not None and self._tracking:
@@ -143,6 +148,16 @@ class TrajectoryStreamer:
             self._holding = np.array(self.measured[1])
             self._hold_sent = None  # from the next state on, over any sent before
         self._tracking = tracking
+
+    def wait_for_state(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` [s] of wall time for the first joint state; True once taken.
+
+        For a stream asked for before any state came (the plant's ``joint_states`` matched
+        late, on a loaded machine): started at once, :meth:`start` would refuse it for want of
+        a state to check its start against, and the step it serves would end. Returns at once
+        once a state was taken; called from another thread than :meth:`on_state`'s.
+        """
+        return self._heard.wait(timeout)
 
     # ------------------------------------------------------------------ streams
     def start(self, trajectory: SampledTrajectory, owner: object = None) -> ActiveStream:
