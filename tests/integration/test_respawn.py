@@ -74,7 +74,11 @@ def test_killed_nodes_are_started_again_and_the_walk_resumes_where_the_robot_is(
                 _wait(client, lambda: phases and phases[-1].phase == StepPhase.IDLE, TIMEOUT,
                       'the walker idle')
                 # a controller killed in coarse motion: started again, held, resumed
-                client.walk_client.send_goal_async(WalkTo.Goal(target_node=TARGET))
+                _wait(client, client.walk_client.server_is_ready, TIMEOUT, 'the walk_to server')
+                handle = client._wait(
+                    client.walk_client.send_goal_async(WalkTo.Goal(target_node=TARGET)), 30.0,
+                    None, 'the walk goal')
+                assert handle.accepted
                 _wait(client, lambda: phases[-1].phase == StepPhase.COARSE, TIMEOUT,
                       'coarse motion')
                 _kill(namespace, 'controller_vertex')
