@@ -25,7 +25,7 @@ import pytest
 
 from ros_test_support import REPO_ROOT, NodeProcess, isolated_domain, ros_environment
 
-pytestmark = [pytest.mark.integration, pytest.mark.timeout(600)]
+pytestmark = [pytest.mark.ground_station, pytest.mark.integration, pytest.mark.timeout(600)]
 
 TIMEOUT = 180.0  # [s] wall clock, for a loaded shared machine
 #: [s] wall clock from the cut until walkerctl has exited: the supervisor's status is judged
