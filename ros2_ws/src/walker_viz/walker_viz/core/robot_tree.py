@@ -179,6 +179,17 @@ class RobotTree:
             raise ValueError(f'joint {name!r} has a non-finite angle ({angle})')
         return angle
 
+    def _chain(self, link: str) -> list[UrdfJoint]:
+        """Return the joints from the root link to ``link``, root first (ValueError: no link)."""
+        if link not in self.links:
+            raise ValueError(f'unknown link {link!r}')
+        chain = []
+        while link != self.root:
+            joint = self._by_child[link]
+            chain.append(joint)
+            link = joint.parent
+        return chain[::-1]
+
     def link_in_root(self, link: str, angles: Mapping[str, float]) -> np.ndarray:
         """Pose [4x4] of ``link`` in the root link at ``angles``.
 
@@ -187,15 +198,9 @@ class RobotTree:
         ValueError
             If ``link`` is not a link of the tree, or an angle on its chain is missing.
         """
-        if link not in self.links:
-            raise ValueError(f'unknown link {link!r}')
-        chain = []
-        while link != self.root:
-            joint = self._by_child[link]
-            chain.append(joint)
-            link = joint.parent
+        chain = self._chain(link)
         pose = np.eye(4)
-        for joint in reversed(chain):
+        for joint in chain:
             angle = self._angle(angles, joint.name) if joint.moves else 0.0
             pose = pose @ joint.transform(angle)
         return pose
@@ -212,19 +217,13 @@ class RobotTree:
             If ``link`` is not a link of the tree, or an angle on its chain is missing or not
             finite.
         """
-        if link not in self.links:
-            raise ValueError(f'unknown link {link!r}')
-        chain = []
-        while link != self.root:
-            joint = self._by_child[link]
-            chain.append(joint)
-            link = joint.parent
+        chain = self._chain(link)
         rows = {len(np.atleast_1d(np.asarray(v))) for v in angles.values()}
         count = rows.pop() if len(rows) == 1 else None
         if count is None:
             raise ValueError(f'joint angle rows of different lengths: {sorted(rows)}')
         pose = np.broadcast_to(np.eye(4), (count, 4, 4))
-        for joint in reversed(chain):
+        for joint in chain:
             if not joint.moves:
                 pose = pose @ joint.origin
                 continue
