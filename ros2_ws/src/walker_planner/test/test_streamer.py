@@ -54,14 +54,11 @@ def test_a_stream_needs_a_joint_state_starting_where_the_trajectory_starts(strea
 def test_a_stream_asked_for_before_any_state_waits_for_the_first_then_starts(streamer):
     """A goal that came before the plant's states matched (another thread takes them)."""
     import threading
-    import time
 
     assert streamer.wait_for_state(0.0) is False  # nothing heard: the wait ends at its limit
     taken = threading.Timer(0.05, streamer.on_state, (0, START))
-    began = time.monotonic()
     taken.start()
-    assert streamer.wait_for_state(10.0) is True
-    assert time.monotonic() - began < 5.0  # ended by the state, not by the limit
+    assert streamer.wait_for_state(60.0) is True  # True only when ended by the state
     taken.join()
     assert streamer.start(ramp()).stream.origin == PERIOD
     assert streamer.wait_for_state(0.0) is True  # heard once: no wait again
