@@ -108,3 +108,7 @@ def test_the_poses_of_many_rows_are_each_rows_pose():
         TREE.links_in_root('gripper_b', {'a_yaw_joint': rows[:, 0]})
     with pytest.raises(ValueError, match='non-finite'):
         TREE.links_in_root('gripper_b', {**columns, 'vertex_joint': np.full(7, np.nan)})
+    with pytest.raises(ValueError, match='different lengths'):
+        TREE.links_in_root('gripper_b', {**columns, 'vertex_joint': np.zeros(3)})
+    with pytest.raises(ValueError, match='no joint angles given'):
+        TREE.links_in_root('gripper_b', {})

@@ -219,9 +219,10 @@ class RobotTree:
         """
         chain = self._chain(link)
         rows = {len(np.atleast_1d(np.asarray(v))) for v in angles.values()}
-        count = rows.pop() if len(rows) == 1 else None
-        if count is None:
-            raise ValueError(f'joint angle rows of different lengths: {sorted(rows)}')
+        if len(rows) != 1:
+            raise ValueError('joint angle columns of different lengths: '
+                             f'{sorted(rows)}' if rows else 'no joint angles given')
+        count = rows.pop()
         pose = np.broadcast_to(np.eye(4), (count, 4, 4))
         for joint in chain:
             if not joint.moves:
