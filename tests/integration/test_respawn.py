@@ -8,7 +8,8 @@ of its own; the test is the operator: it sends a one-step walk, SIGKILLs a joint
 coarse motion, sees the node started again and the supervisor holding, resumes until the step
 completes; then SIGKILLs the plant at rest and checks that the plant started again reports the
 joint angles and the grippers' nodes the killed one had, not its start pose. On Ctrl-C the
-summary records each node's deaths and restarts, and nothing is left running.
+summary records each node's deaths and restarts, and nothing is left running. With respawning
+off, a killed node ends the graph and the bag names it as the reason of the hold.
 """
 
 import json
@@ -130,3 +131,45 @@ def test_killed_nodes_are_started_again_and_the_walk_resumes_where_the_robot_is(
     # the step report is the interrupted step's (the resume completed it, checked above)
     assert [s['to_node'] for s in summary['steps']] == [TARGET], summary
     assert processes_with(namespace) == [], run.output
+
+
+def test_a_node_given_up_on_is_named_in_the_hold_and_in_the_bag(tmp_path):
+    """With respawning off, a killed controller ends the graph; the hold and the bag say why.
+
+    The bring-up reports the death on ``/diagnostics`` and asks the supervisor to hold over
+    ``hold`` (``std_srvs/Trigger``, no reason); the hold's reason names the dead node, not an
+    operator, in the phase history the bag keeps.
+    """
+    from walker_msgs.msg import StepPhase
+
+    from walker_bag.core.bag_reader import read_messages
+    from walker_bringup.graph_client import GraphClient, init_context
+
+    namespace = f'/walker_given_up_{os.getpid()}'
+    out = tmp_path / 'run'
+    with isolated_domain() as domain:
+        args = serve_command(namespace, out, '--respawn-limit', '0')
+        with NodeProcess(args, ros_environment(domain), 'run_all') as run:
+            assert run.wait_for_output('[walker] serving in namespace', TIMEOUT), run.output
+            context = init_context(domain)
+            client = GraphClient(namespace, context)
+            try:
+                _wait(client, lambda: client.phase is not None
+                      and client.phase.phase == StepPhase.IDLE, TIMEOUT, 'the walker idle')
+            finally:
+                client.close()
+                context.try_shutdown()
+            _kill(namespace, 'controller_vertex')
+            assert run.process.wait(timeout=TIMEOUT) == 5, run.output
+            output = run.output
+    assert 'node controller_vertex died (killed by SIGKILL) and is not started again' in output, \
+        output
+    messages = read_messages(out / 'bag', [f'{namespace}/phase', '/diagnostics'])
+    holds = [m.message.reason for m in messages
+             if m.topic.endswith('/phase') and m.message.phase == StepPhase.SAFE_HOLD]
+    dead = f'{namespace}/controller_vertex'
+    assert holds and all(dead in r and 'operator' not in r for r in holds), holds
+    deaths = [s for m in messages if m.topic == '/diagnostics' for s in m.message.status
+              if s.name == f'{dead} (process)' and s.level == 2]
+    assert deaths and 'died' in deaths[0].message, deaths
+    assert processes_with(namespace) == [], output
