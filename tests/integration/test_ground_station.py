@@ -69,6 +69,32 @@ def hosts():
         yield linked
 
 
+#: Lists the nodes a participant on a host discovers in 10 s, with their participant prefixes.
+NODE_LISTER = """
+import time, rclpy
+rclpy.init()
+node = rclpy.create_node('ground_link_lister')
+end = time.monotonic() + 10.0
+while time.monotonic() < end:
+    rclpy.spin_once(node, timeout_sec=0.2)
+print('nodes heard:', sorted(node.get_node_names_and_namespaces()))
+"""
+
+
+def _link_report(hosts, env) -> str:
+    """Say what each host has: addresses, link state, UDP sockets, the nodes it hears."""
+    import subprocess
+
+    lines = []
+    for role in ('robot', 'ground'):
+        for argv in (['ip', '-o', 'addr'], ['ip', '-o', 'link'], ['ss', '-ulpn'],
+                     [sys.executable, '-c', NODE_LISTER]):
+            done = subprocess.run(hosts.command(role, argv), env=hosts.environment(role, env),
+                                  capture_output=True, text=True, timeout=60)
+            lines.append(f'--- {role}: {" ".join(argv[:3])}\n{done.stdout}{done.stderr}')
+    return '\n'.join(lines)
+
+
 def _walkerctl(hosts, env, namespace: str, *args: str) -> list[str]:
     return hosts.command('ground', [sys.executable, str(REPO_ROOT / 'scripts' / 'walkerctl'),
                                     '--namespace', namespace, '--timeout', '60', *args])
@@ -131,7 +157,7 @@ def test_the_robot_finishes_its_step_alone_when_the_link_is_cut_and_the_operator
             recorder = _ground_recorder(hosts, ground_env, namespace, ground_bag)
             with monitor, recorder:
                 code, said = _run(hosts, ground_env, namespace, 'status')
-                assert code == 0 and 'IDLE' in said, said
+                assert code == 0 and 'IDLE' in said, f'{said}\n{_link_report(hosts, env)}'
 
                 # the step starts from the ground; in its coarse motion the link is cut
                 step = NodeProcess(_walkerctl(hosts, ground_env, namespace, 'step', FIRST),
