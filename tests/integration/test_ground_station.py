@@ -12,12 +12,14 @@ client notices within seconds that the supervisor has gone silent and exits with
 robot finishes the step on its own (its monitor sees the step end, with the link still down);
 the link comes back; the operator reconnects (``walkerctl status`` shows the step done) and
 the re-sent goal is answered as reached. Then the link is slowed to a thin one (a token
-bucket: ``tc netem`` is not in every kernel) and the operator walks one more step over it.
-Throughout, the robot's bag has a gripper attached in every gripper state, the ground's bag
-holds nothing from while the link was down, and both bags are readable.
+bucket: ``tc netem`` is not in every kernel) and the operator walks one more step over it. Each
+host has a ``/dev/shm`` of its own, as two machines do. Throughout, the robot's bag has a
+gripper attached in every gripper state, the ground's bag holds nothing from while the link was
+down, and both bags are readable.
 """
 
 import os
+import subprocess
 import sys
 import time
 
@@ -83,8 +85,6 @@ print('nodes heard:', sorted(node.get_node_names_and_namespaces()))
 
 def _link_report(hosts, env) -> str:
     """Say what each host has: addresses, link state, UDP sockets, the nodes it hears."""
-    import subprocess
-
     lines = []
     for role in ('robot', 'ground'):
         for argv in (['ip', '-o', 'addr'], ['ip', '-o', 'link'], ['ss', '-ulpn'],
@@ -152,6 +152,10 @@ def test_the_robot_finishes_its_step_alone_when_the_link_is_cut_and_the_operator
             assert run.wait_for_output('[walker] serving in namespace', TIMEOUT), run.output
             # the ground named in ROS_STATIC_PEERS: not the loopback-only profile
             assert 'the graph runs on shm' in run.output, run.output
+            # two machines share no memory: the robot's shared-memory ports are its own
+            ground_memory = subprocess.run(hosts.command('ground', ['ls', '-A', '/dev/shm']),
+                                           capture_output=True, text=True, check=True).stdout
+            assert ground_memory == '', ground_memory
             monitor = NodeProcess(hosts.command('robot', [sys.executable, '-c', MONITOR,
                                                           namespace]), robot_env, 'monitor')
             recorder = _ground_recorder(hosts, ground_env, namespace, ground_bag)

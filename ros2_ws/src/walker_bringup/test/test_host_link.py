@@ -24,6 +24,14 @@ def test_each_end_of_the_link_is_made_inside_its_namespace_never_on_the_machine(
     commands = link.create_commands()
     assert commands[:2] == [['ip', 'netns', 'add', 'wkn42-robot'],
                             ['ip', 'netns', 'add', 'wkn42-ground']]
+    # each host's shared memory made anew, empty, in the machine's /dev/shm
+    memory = [c for c in commands if c[0] != 'ip']
+    assert memory == [['rm', '-rf', '--one-file-system', '/dev/shm/wkn42-robot'],
+                      ['mkdir', '/dev/shm/wkn42-robot'], ['chmod', '1777', '/dev/shm/wkn42-robot'],
+                      ['rm', '-rf', '--one-file-system', '/dev/shm/wkn42-ground'],
+                      ['mkdir', '/dev/shm/wkn42-ground'],
+                      ['chmod', '1777', '/dev/shm/wkn42-ground']]
+    commands = [c for c in commands if c[0] == 'ip']
     veth = commands[2]
     assert veth[:3] == ['ip', 'link', 'add'] and 'veth' in veth
     # each end is created with its namespace named: it never exists in the machine's own
@@ -51,10 +59,22 @@ def test_cut_restore_degrade_and_remove_touch_only_the_two_namespaces():
                           'latency', '200ms']
     assert [c[2] for c in degrade + link.clear_commands()] == ['wkn42-robot', 'wkn42-ground'] * 2
     assert link.delete_commands() == [['ip', 'netns', 'delete', 'wkn42-robot'],
-                                      ['ip', 'netns', 'delete', 'wkn42-ground']]
-    assert link.exec_command('ground', ['walkerctl', 'status']) == [
-        'ip', 'netns', 'exec', 'wkn42-ground', 'walkerctl', 'status']
+                                      ['ip', 'netns', 'delete', 'wkn42-ground'],
+                                      ['rm', '-rf', '--one-file-system', '/dev/shm/wkn42-robot'],
+                                      ['rm', '-rf', '--one-file-system', '/dev/shm/wkn42-ground']]
     assert all(c[1:3] == ['-n', 'wkn42-robot'] for c in link.netem_probe_commands())
+
+
+def test_a_process_on_a_host_has_the_hosts_own_shared_memory_as_on_a_machine_of_its_own():
+    """Fast DDS's shared-memory ports of one host must not be seen from the other."""
+    link = plan_host_link('wkn42')
+    command = link.exec_command('ground', ['walkerctl', 'status'])
+    assert command[:4] == ['ip', 'netns', 'exec', 'wkn42-ground']
+    assert command[-2:] == ['walkerctl', 'status']
+    shell = command[4:-2]
+    assert shell[:2] == ['sh', '-c'] and shell[3] == '/dev/shm/wkn42-ground'
+    assert shell[2] == 'mount --bind "$0" /dev/shm && exec "$@"'
+    assert link.robot.shared_memory == '/dev/shm/wkn42-robot' != link.ground.shared_memory
 
 
 def test_a_process_on_a_host_keeps_localhost_discovery_and_names_its_peer():

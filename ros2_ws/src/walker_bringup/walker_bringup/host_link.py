@@ -19,7 +19,8 @@ import sys
 
 from walker_bringup.core.host_link import (
     DEFAULT_PREFIX, DEFAULT_SUBNET, ROLES, HostLink, QueueCounts, TokenBucket,
-    host_environment, namespaces_listed, plan_host_link, queue_counts, stale_namespaces)
+    host_environment, namespaces_listed, plan_host_link, queue_counts, shared_memory_of,
+    stale_namespaces)
 
 __all__ = ['LinkedHosts', 'LinkCommandError', 'existing_namespaces', 'remove_stale', 'main']
 
@@ -61,6 +62,7 @@ def remove_stale(prefix: str) -> list[str]:
     stale = stale_namespaces(existing_namespaces(), prefix, alive)
     for name in stale:
         _run(['ip', 'netns', 'delete', name], check=False)
+        _run(['rm', '-rf', '--one-file-system', shared_memory_of(name)], check=False)
     return stale
 
 
@@ -98,11 +100,14 @@ class LinkedHosts:
             raise
 
     def delete(self) -> None:
-        """Remove both namespaces (those that exist): the link and its settings go with them."""
+        """Remove both namespaces (those that exist) and the hosts' shared memory.
+
+        The link and its settings go with the namespaces.
+        """
         present = set(existing_namespaces())
-        for host in self.link.hosts:
-            if host.namespace in present:
-                _run(['ip', 'netns', 'delete', host.namespace], check=False)
+        for command in self.link.delete_commands():
+            if command[:3] != ['ip', 'netns', 'delete'] or command[3] in present:
+                _run(command, check=False)
 
     def cut(self) -> None:
         """Take the link down at both ends."""

@@ -16,6 +16,15 @@ static peers only; the participants then announce their data locators on every i
 their namespace, which is the loopback and the veth end. A namespace has no other interface
 and no route but the link's, so whatever DDS sends stays within the two namespaces.
 
+Shared memory
+-------------
+Network namespaces share the machine's ``/dev/shm``, where Fast DDS keeps its shared-memory
+ports, their locks and semaphores, named by domain and participant index: two hosts sharing it
+see each other's ports, which two machines never do. With it shared, the ground heard nothing
+from the robot in two of three runs inside the test suite (its recorder had taken participant
+index 1 although index 0 was free on its host). So each host has a ``/dev/shm`` of its own: a
+directory of the machine's, bound over ``/dev/shm`` for every process run on the host.
+
 Degraded link
 -------------
 ``tc qdisc ... netem`` (delay, loss) needs the kernel's ``sch_netem``, absent on some machines;
@@ -34,8 +43,8 @@ from collections.abc import Callable, Iterable
 
 __all__ = ['ROLES', 'Host', 'HostLink', 'TokenBucket', 'QueueCounts', 'plan_host_link',
            'host_environment', 'namespaces_listed', 'stale_namespaces', 'queue_counts',
-           'DEFAULT_PREFIX', 'DEFAULT_SUBNET', 'STATIC_PEERS_VARIABLE',
-           'DISCOVERY_RANGE_VARIABLE']
+           'shared_memory_of', 'DEFAULT_PREFIX', 'DEFAULT_SUBNET', 'STATIC_PEERS_VARIABLE',
+           'DISCOVERY_RANGE_VARIABLE', 'SHARED_MEMORY']
 
 #: The two hosts, in the order their addresses are given.
 ROLES = ('robot', 'ground')
@@ -45,6 +54,11 @@ DEFAULT_PREFIX = 'walker'
 DEFAULT_SUBNET = '10.231.0.0/30'
 STATIC_PEERS_VARIABLE = 'ROS_STATIC_PEERS'
 DISCOVERY_RANGE_VARIABLE = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
+#: The machine's shared memory, which each host replaces with a directory of its own in it.
+SHARED_MEMORY = '/dev/shm'
+#: What a process run on a host runs first: its own shared memory bound over the machine's
+#: (``$0``, in the private mount namespace ``ip netns exec`` gives it), then the command.
+_OWN_SHARED_MEMORY = f'mount --bind "$0" {SHARED_MEMORY} && exec "$@"'
 _IFNAME_MAX = 15  # Linux interface names: IFNAMSIZ (16) less the terminating NUL
 _PREFIX_PATTERN = re.compile(r'[a-z][a-z0-9]*\Z')
 
@@ -63,12 +77,15 @@ class Host:
         Its end of the veth pair.
     address : str
         Its IPv4 address on the link.
+    shared_memory : str
+        The directory that is its ``/dev/shm`` (:func:`shared_memory_of`).
     """
 
     role: str
     namespace: str
     interface: str
     address: str
+    shared_memory: str
 
 
 @dataclasses.dataclass(frozen=True)
@@ -164,10 +181,15 @@ class HostLink:
         """Make both namespaces and the link, each end made inside its namespace, all up.
 
         Each namespace's loopback is brought up too: its own nodes find each other over it.
+        Each host's shared memory is made empty, open to every user as ``/dev/shm`` is.
         """
         robot, ground = self.robot, self.ground
         commands = [['ip', 'netns', 'add', robot.namespace],
-                    ['ip', 'netns', 'add', ground.namespace],
+                    ['ip', 'netns', 'add', ground.namespace]]
+        for host in self.hosts:
+            commands += [['rm', '-rf', '--one-file-system', host.shared_memory],
+                         ['mkdir', host.shared_memory], ['chmod', '1777', host.shared_memory]]
+        commands += [
                     ['ip', 'link', 'add', robot.interface, 'netns', robot.namespace,
                      'type', 'veth', 'peer', 'name', ground.interface,
                      'netns', ground.namespace]]
@@ -179,8 +201,9 @@ class HostLink:
         return commands
 
     def delete_commands(self) -> list[list[str]]:
-        """Remove both namespaces; the veth pair goes with them."""
-        return [['ip', 'netns', 'delete', host.namespace] for host in self.hosts]
+        """Remove both namespaces (the veth pair goes with them) and their shared memory."""
+        return [['ip', 'netns', 'delete', host.namespace] for host in self.hosts] + [
+            ['rm', '-rf', '--one-file-system', host.shared_memory] for host in self.hosts]
 
     def cut_commands(self) -> list[list[str]]:
         """Take the link down at both ends: nothing passes, each host keeps its address."""
@@ -213,10 +236,16 @@ class HostLink:
                 ['tc', '-n', namespace, 'qdisc', 'del', 'dev', 'lo', 'root']]
 
     def exec_command(self, role: str, argv: list[str]) -> list[str]:
-        """Return ``argv`` run on the host of ``role`` (``ip netns exec``)."""
+        """Return ``argv`` run on the host of ``role``, with the host's own shared memory.
+
+        ``ip netns exec`` gives the command a private mount namespace, in which the host's
+        directory is bound over ``/dev/shm`` before the command starts.
+        """
         if not argv:
             raise ValueError('no command to run')
-        return ['ip', 'netns', 'exec', self.host(role).namespace, *argv]
+        host = self.host(role)
+        return ['ip', 'netns', 'exec', host.namespace, 'sh', '-c', _OWN_SHARED_MEMORY,
+                host.shared_memory, *argv]
 
     @staticmethod
     def _set_link(host: Host, state: str) -> list[str]:
@@ -259,9 +288,18 @@ def plan_host_link(prefix: str = DEFAULT_PREFIX, subnet: str = DEFAULT_SUBNET) -
     if len(addresses) < 2:
         raise ValueError(f'subnet {subnet} has room for {len(addresses)} hosts: the link needs '
                          'two (a /30 or larger)')
-    hosts = [Host(role, f'{prefix}-{role}', f'{prefix}-{role[0]}', str(address))
+    hosts = [Host(role, f'{prefix}-{role}', f'{prefix}-{role[0]}', str(address),
+                  shared_memory_of(f'{prefix}-{role}'))
              for role, address in zip(ROLES, addresses[:2], strict=True)]
     return HostLink(hosts[0], hosts[1], network.prefixlen)
+
+
+def shared_memory_of(namespace: str) -> str:
+    """Return the directory that is ``/dev/shm`` on the host of network namespace ``namespace``.
+
+    A directory of the machine's ``/dev/shm``, named after the namespace.
+    """
+    return f'{SHARED_MEMORY}/{namespace}'
 
 
 def host_environment(link: HostLink, role: str, env: dict[str, str]) -> dict[str, str]:
