@@ -92,15 +92,22 @@ def test_a_killed_child_restarts_with_its_log_continued(tmp_path):
         assert group.poll_deaths() == [second], 'the replaced process is not reported again'
 
 
+# A child that stops on SIGINT at once, as a node does, even when started with SIGINT ignored
+# (a shell that runs the suite in the background, `cmd &`, starts it so)
+_SLEEPER = ('import signal, time\n'
+            'signal.signal(signal.SIGINT, signal.default_int_handler)\n'
+            'time.sleep(30)\n')
+
+
 def test_the_group_names_each_nodes_newest_process_id_in_its_pid_file(tmp_path):
     assert read_pids(tmp_path) == {}
     other = NodeSpec('pkg', 'exe', 'other', '/walker', 'walker.yaml')
     with ProcessGroup(tmp_path, ENV) as group:
         first = group.start(SPEC, python_child('import sys; sys.exit(3)'))
-        beside = group.start(other, python_child('import time; time.sleep(30)'))
+        beside = group.start(other, python_child(_SLEEPER))
         assert read_pids(tmp_path) == {'child': first.popen.pid, 'other': beside.popen.pid}
         first.popen.wait(timeout=10)
-        second = group.restart(first, python_child('import time; time.sleep(30)'))
+        second = group.restart(first, python_child(_SLEEPER))
         assert read_pids(tmp_path) == {'child': second.popen.pid, 'other': beside.popen.pid}
         assert sorted(p.name for p in tmp_path.iterdir()) == ['child.log', 'other.log',
                                                               'pids.json']
@@ -158,15 +165,21 @@ def test_stop_all_stops_one_at_a_time_deciders_and_plant_first_recorder_last(tmp
              'supervisor']
     processes = {name: group.start(NodeSpec('p', 'e', name, '/w', 'f'), python_child(_TIMED))
                  for name in names}
+
+    def wait_ready(starts: dict) -> None:
+        deadline = time.monotonic() + 30.0
+        while not all(processes[n].log_tail().count('ready') == count
+                      for n, count in starts.items()):
+            assert time.monotonic() < deadline, {n: p.log_tail() for n, p in processes.items()}
+            time.sleep(0.05)
+
+    wait_ready(dict.fromkeys(names, 1))
     # a node killed and started again: its newest process is the one whose code counts
     processes['controller_a_yaw'].popen.kill()
     processes['controller_a_yaw'].popen.wait()
     processes['controller_a_yaw'] = group.restart(processes['controller_a_yaw'],
                                                   python_child(_TIMED))
-    deadline = time.monotonic() + 30.0
-    while not all(p.log_tail().count('ready') == (2 if n == 'controller_a_yaw' else 1)
-                  for n, p in processes.items()) and time.monotonic() < deadline:
-        time.sleep(0.05)
+    wait_ready({'controller_a_yaw': 2})
     codes = group.stop_all(timeout=10.0)
     assert codes == dict.fromkeys(names, 0)
 
