@@ -20,10 +20,8 @@ Shared memory
 -------------
 Network namespaces share the machine's ``/dev/shm``, where Fast DDS keeps its shared-memory
 ports, their locks and semaphores, named by domain and participant index: two hosts sharing it
-see each other's ports, which two machines never do. With it shared, the ground heard nothing
-from the robot in two of three runs inside the test suite (its recorder had taken participant
-index 1 although index 0 was free on its host). So each host has a ``/dev/shm`` of its own: a
-directory of the machine's, bound over ``/dev/shm`` for every process run on the host.
+see each other's ports, which two machines never do. So each host has a ``/dev/shm`` of its
+own: a directory of the machine's, bound over ``/dev/shm`` for every process run on the host.
 
 Degraded link
 -------------
