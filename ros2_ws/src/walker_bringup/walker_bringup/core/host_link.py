@@ -187,10 +187,9 @@ class HostLink:
         for host in self.hosts:
             commands += [['rm', '-rf', '--one-file-system', host.shared_memory],
                          ['mkdir', host.shared_memory], ['chmod', '1777', host.shared_memory]]
-        commands += [
-                    ['ip', 'link', 'add', robot.interface, 'netns', robot.namespace,
-                     'type', 'veth', 'peer', 'name', ground.interface,
-                     'netns', ground.namespace]]
+        commands.append(['ip', 'link', 'add', robot.interface, 'netns', robot.namespace,
+                         'type', 'veth', 'peer', 'name', ground.interface,
+                         'netns', ground.namespace])
         for host in self.hosts:
             commands += [['ip', '-n', host.namespace, 'addr', 'add',
                           f'{host.address}/{self.prefix_length}', 'dev', host.interface],
