@@ -71,7 +71,7 @@ def hosts():
         yield linked
 
 
-#: Lists the nodes a participant on a host discovers in 10 s, with their participant prefixes.
+#: Lists the nodes a participant on a host discovers in 10 s.
 NODE_LISTER = """
 import time, rclpy
 rclpy.init()
