@@ -41,7 +41,7 @@ class World:
                  stall_trajectories=False, coarse_miss=0.0, gripper_delay=0.0,
                  gripper_never=False, lift_lag=None, jam_seen_first=False, stale_states=0.0,
                  descent_miss=0.0, mouth_lines_miss=False, coarse_plan_delay=0.0,
-                 descent_runaway=(0.0, 0)):
+                 descent_runaway=(0.0, 0), fine_miss=(0.0, 0), start_lag=0.0):
         self.stance = stance
         # [s] the coarse motion asked ahead is planned this late (inf: its plan is refused)
         self.coarse_plan_delay = coarse_plan_delay
@@ -69,6 +69,9 @@ class World:
         self.mouth_lines_miss = mouth_lines_miss  # lines at the mouth stop as short
         # ([rad], n): in the first n descents J1 runs this far off as the gripper goes down
         self.runaway, self.runaway_descents = descent_runaway
+        # ([rad], n): the first n fine lines above the hole stop J1 this short of their end
+        self.fine_miss, self.fine_misses = fine_miss
+        self.start_lag = start_lag  # [s] every motion starts moving this late (tracking lag)
         self.gripper_delay = gripper_delay  # [s] screwing/unscrewing time the plant takes
         self.gripper_never = gripper_never  # the plant accepts but never completes
         self.pending = []  # (time, gripper, state) changes the plant will report
@@ -95,6 +98,10 @@ class World:
                 self.gripper(command)
             elif isinstance(command, TrajectoryRequest):
                 self.requested.append((self.now, command))
+                refusal = _vertical_line_refusal(command)
+                if refusal:  # as the planner refuses it
+                    self.execute(self.sequencer.trajectory_done(False, refusal, self.now))
+                    continue
                 if command.then is None:  # every motion takes 1 s
                     self.motion = [command, self.now, 1.0]
                     self.sequencer.trajectory_started(1.0, self.now)
@@ -156,13 +163,16 @@ class World:
         velocities = np.zeros(5)
         if self.motion is not None and not self.stall:
             request, started, duration = self.motion
-            fraction = min(1.0, (self.now - started) / duration)
+            fraction = min(1.0, max(0.0, self.now - started - self.start_lag) / duration)
             previous = self.theta
             goal = request.goal.copy()
             if request.purpose == 'coarse':
                 goal[0] -= self.coarse_miss * math.copysign(1.0, request.sweep)
             at_mouth = request.purpose == 'fine' and np.allclose(request.goal_point,
                                                                  self.targets.point_to)
+            missing = request.purpose == 'fine' and not at_mouth and self.fine_misses > 0
+            if missing:
+                goal[0] -= self.fine_miss
             if request.purpose == 'insertion' or (at_mouth and self.mouth_lines_miss):
                 goal[0] -= self.descent_miss
             runaway = request.purpose == 'insertion' and self.runaway_descents > 0
@@ -188,6 +198,7 @@ class World:
             if fraction >= 1.0:
                 self.motion = None
                 self.runaway_descents -= runaway
+                self.fine_misses -= missing
                 self.execute(self.sequencer.trajectory_done(True, '', self.now))
         if self.lagging is not None and self.motion is None:
             joint, end, caught_up = self.lagging
@@ -200,6 +211,16 @@ class World:
         self.execute(self.sequencer.tick(self.now, self.theta, velocities, dict(self.grippers)))
         for message in late:
             self.execute(self.sequencer.gripper_done(False, message, self.now))
+
+
+def _vertical_line_refusal(request):
+    """Return the planner's refusal of a line along the hole axis that goes the wrong way."""
+    rise = {'insertion': -1.0, 'retry_lift': 1.0, 'extraction': 1.0}.get(request.purpose)
+    if rise is None or request.start_point is None:
+        return ''
+    if rise * (request.goal_point[2] - request.start_point[2]) <= 0.0:
+        return f'{request.purpose} goes the wrong way along the hole axis'
+    return ''
 
 
 def other(gripper):

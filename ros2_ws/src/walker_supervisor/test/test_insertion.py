@@ -60,6 +60,23 @@ def test_a_descent_that_leaves_the_axis_is_stopped_lifted_back_and_inserted_agai
                for c in world.log)
 
 
+def test_a_descent_off_the_axis_before_it_went_down_is_brought_over_the_hole_not_lifted():
+    """Fine lines that all stopped 0.025 rad short: the descent is stopped where it began.
+
+    The joints lag the stream's start, so the tip is still at the approach height: there is no
+    lift to make (the planner refuses a lift that does not rise), a fine line brings it over
+    the hole and the step completes.
+    """
+    world = World(coarse_miss=0.025, fine_miss=(0.025, MAX_FINE_LINES), start_lag=0.05)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    purposes = motion_purposes(world)
+    assert purposes[purposes.index('insertion'):] == [
+        'insertion', 'cancel', 'fine', 'insertion', 'screw_in']
+    assert outcome.insertion_attempts == 2
+    assert any(isinstance(c, Notice) and 'before it went down' in c.message for c in world.log)
+
+
 def test_descents_that_keep_leaving_the_axis_end_in_safe_hold_attached():
     world = World(descent_runaway=(0.02, 99))
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])

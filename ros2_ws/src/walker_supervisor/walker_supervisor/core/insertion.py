@@ -2,7 +2,9 @@
 
 Insertion descends along the hole axis to its mouth (a descent whose tip leaves the axis by more
 than ``descent_axis_tolerance`` is stopped and the gripper lifted straight back to the approach
-height, to come over the hole again: an insertion attempt, as a jam is). The descent moves the
+height, to come over the hole again: an insertion attempt, as a jam is; stopped before it went
+``descent_region`` down, there is nothing to lift and a fine line brings it over the hole). The
+descent moves the
 joints, which stop in their friction again, so once they have been still for
 ``mouth_settle_time`` (the vertical descent hardly moves joint 1; after a line at the mouth,
 which does, for ``settle_time``) the tip is checked again, now across the hole's axis: more than
@@ -21,6 +23,7 @@ import math
 
 import numpy as np
 
+from walker_supervisor.core import approach
 from walker_supervisor.core.commands import (
     CancelTrajectory, GripperRequest, Notice, SetControlMode, TrajectoryRequest)
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
@@ -117,13 +120,28 @@ def left_the_axis(run: StepRun, now: float) -> list:
     if run.tries.insertions >= run.parameters.max_insertion_attempts:
         return run.abort(f'{reason}; {run.tries.insertions} insertion attempts', now)
     up = run.straight_up(run.targets.point_above_to)
-    if up is None:
+    if up is None and _below_the_approach(run):
         return run.abort(f'{reason}, and no straight lift from here', now)
     stop = [CancelTrajectory()] if run.motions.running else []
-    run.stage = Stage.RETRY_LIFT
     run.motions.running = False
+    if not _below_the_approach(run):
+        # stopped before it went down (the stream had only begun): nothing to lift out of,
+        # a fine line from where the tip is brings it over the hole
+        run.tries.fine_lines = 0
+        return stop + [Notice(f'{reason} before it went down: brought over the hole again')] \
+            + approach.enter_fine(run, now, correction=True)
+    run.stage = Stage.RETRY_LIFT
     return stop + [Notice(f'{reason}: lifted back to come over the hole again'),
                    run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
+
+
+def _below_the_approach(run: StepRun) -> bool:
+    """Return True if the tip is more than ``descent_region`` [m] below the approach height.
+
+    Only then is there a straight lift to make: the planner's extraction line must rise.
+    """
+    height = run.targets.point_above_to[2] - run.tip()[2]
+    return height > run.parameters.descent_region
 
 
 def jammed(run: StepRun, message: str, now: float) -> list:
