@@ -258,13 +258,18 @@ def test_a_report_that_cannot_be_made_is_said_and_leaves_nothing(tmp_path, capsy
 
 @pytest.mark.parametrize('walkers, taken', [(1, 'bag'), (2, 'bag_walker_2')])
 def test_an_output_directory_holding_a_bag_is_refused_before_anything_starts(
-        tmp_path, capsys, walkers, taken):
+        tmp_path, capsys, monkeypatch, walkers, taken):
     from walker_bringup.run import main
+    from walker_bringup.transport import PROFILES_VARIABLE
 
     (tmp_path / taken).mkdir()
+    monkeypatch.delenv(PROFILES_VARIABLE, raising=False)
     code = main(['--sim-time', '--quiet', '--walkers', str(walkers), '--out', str(tmp_path)])
     printed = capsys.readouterr().out
     assert code == 2
+    # the graph's transport profile is not left behind for the next graph of this process
+    # (one with peers on other hosts would otherwise inherit UDP on loopback)
+    assert PROFILES_VARIABLE not in os.environ
     assert f'[walker] error: {tmp_path / taken} already exists' in printed  # said, even quiet
     assert '--no-record' in printed
     assert not list(tmp_path.rglob('*.log'))  # no node was started

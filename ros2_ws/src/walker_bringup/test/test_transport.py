@@ -81,6 +81,9 @@ def test_a_graph_with_peers_on_other_hosts_stays_reachable_from_them():
     ground = {'ROS_DOMAIN_ID': '3', 'ROS_STATIC_PEERS': '10.77.0.2'}
     assert default_transport(ground) == 'shm'
     assert graph_environment(ground, default_transport(ground)) == ground
+    # the UDP-on-loopback profile inherited from a graph started before is not kept
+    inherited = udp_loopback_environment(ground)
+    assert graph_environment(inherited, default_transport(inherited)) == ground
     assert default_transport({**ground, 'ROS_STATIC_PEERS': ' '}) == 'udp'  # names none
     with pytest.raises(ValueError, match=r'ROS_STATIC_PEERS names peers on other hosts \(10.77'):
         graph_environment(ground, 'udp')

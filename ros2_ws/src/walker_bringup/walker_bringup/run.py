@@ -407,7 +407,23 @@ def _launch(walker: _Walker, args, params_file: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the main job; return the exit code (0 when every walk reached its target)."""
+    """Run the main job; return the exit code (0 when every walk reached its target).
+
+    The process's own participant is made with the graph's transport profile; the caller's
+    environment is given back as it was, so a later graph started from the same process (a
+    test, a campaign) chooses its own transport again.
+    """
+    before = os.environ.get(PROFILES_VARIABLE)
+    try:
+        return _run(argv)
+    finally:
+        if before is None:
+            os.environ.pop(PROFILES_VARIABLE, None)
+        else:
+            os.environ[PROFILES_VARIABLE] = before
+
+
+def _run(argv: list[str] | None) -> int:
     args = parse_arguments(argv)
     if args.headless:
         from walker_headless.run import run_headless

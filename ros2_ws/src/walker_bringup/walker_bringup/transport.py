@@ -83,7 +83,8 @@ def graph_environment(env: dict[str, str], transport: str = DEFAULT_TRANSPORT) -
         The environment the nodes would otherwise get.
     transport : str
         ``'udp'``: the UDP-on-loopback profile selected (:func:`udp_loopback_environment`);
-        ``'shm'``: the rmw default, ``env`` unchanged (a profile it names is kept).
+        ``'shm'``: the rmw default, ``env`` unchanged (a profile it names is kept), but for
+        the UDP-on-loopback profile, which is removed.
 
     Raises
     ------
@@ -98,5 +99,9 @@ def graph_environment(env: dict[str, str], transport: str = DEFAULT_TRANSPORT) -
                              'reach')
         return udp_loopback_environment(env)
     if transport == 'shm':
+        if env.get(PROFILES_VARIABLE) == str(udp_loopback_profile()):
+            # inherited from a graph on UDP started before: it would keep this one's readers
+            # on 127.0.0.1, out of reach of peers on other hosts
+            return {k: v for k, v in env.items() if k != PROFILES_VARIABLE}
         return dict(env)
     raise ValueError(f'unknown transport {transport!r}: one of {", ".join(TRANSPORTS)}')
