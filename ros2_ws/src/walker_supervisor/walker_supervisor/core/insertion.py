@@ -4,8 +4,7 @@ Insertion descends along the hole axis to its mouth (a descent whose tip leaves 
 than ``descent_axis_tolerance`` is stopped and the gripper lifted straight back to the approach
 height, to come over the hole again: an insertion attempt, as a jam is; stopped before it went
 ``descent_region`` down, there is nothing to lift and a fine line brings it over the hole). The
-descent moves the
-joints, which stop in their friction again, so once they have been still for
+descent moves the joints, which stop in their friction again, so once they have been still for
 ``mouth_settle_time`` (the vertical descent hardly moves joint 1; after a line at the mouth,
 which does, for ``settle_time``) the tip is checked again, now across the hole's axis: more than
 ``insertion_alignment`` off it, a fine line at the mouth takes it there (up to
@@ -119,12 +118,13 @@ def left_the_axis(run: StepRun, now: float) -> list:
               f'{run.parameters.descent_axis_tolerance * 1e3:.1f} mm)')
     if run.tries.insertions >= run.parameters.max_insertion_attempts:
         return run.abort(f'{reason}; {run.tries.insertions} insertion attempts', now)
-    up = run.straight_up(run.targets.point_above_to)
-    if up is None and _below_the_approach(run):
+    below = _below_the_approach(run)
+    up = run.straight_up(run.targets.point_above_to) if below else None
+    if below and up is None:
         return run.abort(f'{reason}, and no straight lift from here', now)
     stop = [CancelTrajectory()] if run.motions.running else []
     run.motions.running = False
-    if not _below_the_approach(run):
+    if not below:
         # stopped before it went down (the stream had only begun): nothing to lift out of,
         # a fine line from where the tip is brings it over the hole
         run.tries.fine_lines = 0
