@@ -12,7 +12,6 @@ import time
 from collections.abc import Callable
 
 import rclpy
-from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
@@ -27,8 +26,10 @@ from walker_bringup.loop_health import (
 from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, latched_qos
 from walker_runtime.spinning import (
     TopicSampler, destroy_actions, helper_node, hidden_name)
+from walker_teleop.core.goal_answer import ACCEPTED
 from walker_teleop.goal_monitor import GoalLostError, GoalMonitor
 from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
+from walker_teleop.goal_sender import GoalSender
 
 __all__ = ['GraphClient', 'GraphNotReadyError', 'WalkInterruptedError', 'GoalRejectedError',
            'Readiness', 'init_context']
@@ -74,9 +75,10 @@ class GraphClient:
         self.node = helper_node('walker_graph_client', namespace, context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
-        self.walk_client = ActionClient(self.node, WalkTo, 'walk_to')
-        self.step_client = ActionClient(self.node, Step, 'step')
         self.rejections = GoalRejections(self.node)
+        self.walk_goals = GoalSender(self.node, WalkTo, 'walk_to', self.rejections)
+        self.step_goals = GoalSender(self.node, Step, 'step', self.rejections)
+        self.walk_client, self.step_client = self.walk_goals.client, self.step_goals.client
         self.hold_client = self.node.create_client(Trigger, 'hold')
         self.resume_client = self.node.create_client(Trigger, 'resume')
         self.gripper_client = self.node.create_client(GripperCommand, 'gripper_command')
@@ -160,16 +162,31 @@ class GraphClient:
     def _wait(self, future, timeout: float, should_stop: Callable[[], bool] | None, what: str,
               answered_otherwise: Callable[[], bool] | None = None):
         """Spin until ``future`` is done (its result) or ``answered_otherwise()`` (None)."""
+        done = self._wait_until(future.done, timeout, should_stop, what, answered_otherwise)
+        return future.result() if done else None
+
+    def _wait_until(self, done: Callable[[], object], timeout: float,
+                    should_stop: Callable[[], bool] | None, what: str,
+                    answered_otherwise: Callable[[], bool] | None = None) -> bool:
+        """Spin until ``done()`` (True) or ``answered_otherwise()`` (False).
+
+        Raises
+        ------
+        WalkInterruptedError
+            ``should_stop()`` said so first.
+        TimeoutError
+            Neither within ``timeout`` [s].
+        """
         deadline = time.monotonic() + timeout
-        while not future.done():
+        while not done():
             if should_stop is not None and should_stop():
                 raise WalkInterruptedError(f'interrupted while waiting for {what}')
             if answered_otherwise is not None and answered_otherwise():
-                return None
+                return False
             if time.monotonic() > deadline:
                 raise TimeoutError(f'no answer to {what} within {timeout:.0f} s')
-            self.executor.spin_until_future_complete(future, timeout_sec=_POLL)
-        return future.result()
+            self.executor.spin_once(timeout_sec=_POLL)
+        return True
 
     def readiness(self, node_names: list[str]) -> Readiness:
         """Which expected nodes and servers of the walker graph are up now."""
@@ -254,30 +271,28 @@ class GraphClient:
         :class:`GoalRejectedError` with its reason.
         """
         goal = WalkTo.Goal(target_node=target)
-        return self._run_goal(self.walk_client, goal, timeout, feedback, should_stop,
+        return self._run_goal(self.walk_goals, goal, timeout, feedback, should_stop,
                               f'the walk to {target}')
 
     def step(self, target: str, timeout: float,
              feedback: Callable[[Step.Feedback], None] | None = None,
              should_stop: Callable[[], bool] | None = None) -> tuple[int, Step.Result]:
         """Send a ``step`` goal and wait for its result; return (status, result)."""
-        return self._run_goal(self.step_client, Step.Goal(target_node=target), timeout,
+        return self._run_goal(self.step_goals, Step.Goal(target_node=target), timeout,
                               feedback, should_stop, f'the step to {target}')
 
-    def _run_goal(self, client, goal, timeout, feedback, should_stop, what):
-        if not client.wait_for_server(timeout_sec=min(timeout, 10.0)):
+    def _run_goal(self, sender: GoalSender, goal, timeout, feedback, should_stop, what):
+        if not sender.client.wait_for_server(timeout_sec=min(timeout, 10.0)):
             raise GraphNotReadyError(f'no action server for {what}')
-        callback = (lambda msg: feedback(msg.feedback)) if feedback is not None else None
         deadline = time.monotonic() + min(timeout, 2.0)
         while not self.rejections.matched and time.monotonic() < deadline:
             self.spin_for(_POLL)  # the reason of a rejection is heard only once matched
-        sent_at = time.monotonic()
-        handle = self._wait(client.send_goal_async(goal, feedback_callback=callback), timeout,
-                            should_stop, f'acceptance of {what}')
-        if not handle.accepted:
-            action = 'walk_to' if client is self.walk_client else 'step'
-            raise GoalRejectedError(action, goal.target_node, self.rejections.reason(
-                action, goal.target_node, sent_at, self.spin_for))
+        sent = sender.send(goal, feedback)
+        self._wait_until(sent.answer, timeout, should_stop, f'acceptance of {what}')
+        if sent.answer() != ACCEPTED:
+            raise GoalRejectedError(sender.action, goal.target_node, self.rejections.reason(
+                sender.action, goal.target_node, sent.sent_at, self.spin_for))
+        handle = sent.handle()
         result = handle.get_result_async()
         monitor = GoalMonitor(self.node, self.namespace, what)
         probed: list = []

@@ -18,7 +18,6 @@ from collections.abc import Callable
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
-from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
@@ -30,7 +29,9 @@ from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 from walker_core.mode_command import mode_command_refusal
 from walker_runtime.qos import LATCHED_QOS, MODE_SUBSCRIPTION_QOS
 from walker_runtime.spinning import destroy_actions, helper_node
+from walker_teleop.core.goal_answer import ACCEPTED
 from walker_teleop.goal_monitor import GoalLostError, GoalMonitor
+from walker_teleop.goal_sender import GoalSender
 from walker_teleop.goal_rejections import GoalRejectedError, GoalRejections
 from walker_teleop.core.status import (
     GRIPPER_STATE_NAMES, MODE_NAMES, PHASE_NAMES, GripperView, StatusView, name_of)
@@ -79,9 +80,9 @@ class TeleopClient:
                          'jog_joint': create(JogJoint, 'jog_joint'),
                          'jog_tip': create(JogTip, 'jog_tip'),
                          'operate_gripper': create(GripperCommand, 'operate_gripper')}
-        self.actions = {'step': ActionClient(self.node, Step, 'step'),
-                        'walk_to': ActionClient(self.node, WalkTo, 'walk_to')}
         self.rejections = GoalRejections(self.node)
+        self.goals = {'step': GoalSender(self.node, Step, 'step', self.rejections),
+                      'walk_to': GoalSender(self.node, WalkTo, 'walk_to', self.rejections)}
 
     def close(self) -> None:
         """Destroy the node."""
@@ -190,6 +191,9 @@ class TeleopClient:
 
         The first Ctrl-C cancels the goal (the step under way finishes, the walker ends with
         both grippers attached) and keeps waiting for the result; a second one stops waiting.
+        The goal counts as answered by the supervisor's response or, when that response is lost
+        (a slow link: :mod:`walker_teleop.core.goal_answer`), by the goal seen running or
+        its rejection heard (:class:`~walker_teleop.goal_sender.GoalSender`).
         Meanwhile the supervisor is watched (:class:`~walker_teleop.goal_monitor.GoalMonitor`):
         dead or started again, it cannot answer, and the wait ends within seconds.
 
@@ -204,24 +208,22 @@ class TeleopClient:
         CommandInterruptedError
             Ctrl-C before the goal was accepted, or twice.
         """
-        client = self.actions[action]
-        if not self.spin_until(client.server_is_ready, self.timeout):
+        sender = self.goals[action]
+        if not self.spin_until(sender.client.server_is_ready, self.timeout):
             raise GraphUnavailableError(
                 f'the action {self.node.get_namespace().rstrip("/")}/{action} is not available '
                 f'(waited {self.timeout:g} s): {self.where()}')
         # the reason of a rejection is heard only once the rejections are matched
         self.spin_until(lambda: self.rejections.matched, min(self.timeout, _LATCHED_GRACE * 4))
-        goal = (WalkTo.Goal if action == 'walk_to' else Step.Goal)(target_node=target)
-        sent_at = time.monotonic()
-        sent = client.send_goal_async(goal, feedback_callback=lambda m: on_feedback(m.feedback))
-        if not self._wait_interruptible(sent.done, None, self.timeout):
+        sent = sender.send(sender.action_type.Goal(target_node=target), on_feedback)
+        if not self._wait_interruptible(sent.answer, None, self.timeout):
             raise GraphUnavailableError(f'the {action} goal was not answered within '
                                         f'{self.timeout:g} s: check with walkerctl status')
-        handle = sent.result()
-        if handle is None or not handle.accepted:
+        if sent.answer() != ACCEPTED:
             raise GoalRejectedError(action, target, self.rejections.reason(
-                action, target, sent_at, lambda seconds: self.spin_until(lambda: False,
-                                                                         seconds)))
+                action, target, sent.sent_at, lambda seconds: self.spin_until(lambda: False,
+                                                                              seconds)))
+        handle = sent.handle()
         result = handle.get_result_async()
         monitor = GoalMonitor(self.node, self.namespace,
                               f'the {"walk" if action == "walk_to" else "step"} to {target}')

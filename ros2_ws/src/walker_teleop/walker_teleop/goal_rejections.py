@@ -55,6 +55,17 @@ class GoalRejections:
         """True once the supervisor's publisher is matched (its rejections will be heard)."""
         return self._subscription.get_publisher_count() > 0
 
+    def heard(self, action: str, target: str, since: float) -> str | None:
+        """Return the reason of a rejection of this goal heard since ``since`` (monotonic [s]).
+
+        None when none was heard.
+        """
+        for received, message in self._heard:
+            if received >= since and message.action == action \
+                    and message.target_node == target:
+                return message.reason
+        return None
+
     def reason(self, action: str, target: str, since: float,
                spin: Callable[[float], None], wait: float = REASON_WAIT) -> str:
         """Return why the goal sent at ``since`` (monotonic [s]) was rejected.
@@ -64,10 +75,9 @@ class GoalRejections:
         """
         deadline = time.monotonic() + wait
         while True:
-            for received, message in self._heard:
-                if received >= since and message.action == action \
-                        and message.target_node == target:
-                    return message.reason
+            reason = self.heard(action, target, since)
+            if reason is not None:
+                return reason
             if time.monotonic() > deadline:
                 return ("no reason received: see the supervisor's log, or its "
                         'goal_rejections topic')
