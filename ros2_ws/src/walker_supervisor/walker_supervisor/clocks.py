@@ -24,6 +24,10 @@ class Clocks:
         """Return the ROS clock [s]."""
         return self._ros.now().nanoseconds * 1e-9
 
+    def now_ns(self) -> int:
+        """Return the ROS clock [ns]."""
+        return self._ros.now().nanoseconds
+
     def stamp(self):
         """Return the ROS clock as a message stamp."""
         return self._ros.now().to_msg()

@@ -12,6 +12,7 @@ leave a subscription that no longer receives while its publisher lives on.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -27,10 +28,11 @@ from walker_runtime.qos import COMMAND_QOS, LATCHED_QOS, MODE_SUBSCRIPTION_QOS, 
 from walker_runtime.spinning import TopicSampler
 from walker_runtime.watched_subscription import SampledSubscription, WatchedSubscription
 from walker_supervisor.clocks import Clocks
+from walker_supervisor.core.current_state import CurrentState
 from walker_supervisor.core.process_deaths import ProcessDeaths
 from walker_supervisor.core.runner import PLANT_GRIPPER_STATES, PLANT_JOINT_STATES, WalkRunner
 from walker_supervisor.messages import (
-    controller_report, gripper_readings, joint_arrays, seconds)
+    controller_report, gripper_readings, joint_arrays, seconds, stamp_nanoseconds)
 
 __all__ = ['SupervisorInputs', 'RESUBSCRIBE_AFTER_TIMEOUTS']
 
@@ -45,6 +47,7 @@ _CONTROLLER_STATES = QoSProfile(depth=20, reliability=ReliabilityPolicy.RELIABLE
 #: is in safe hold after one timeout; a second tells a dead or restarted publisher from a stall
 #: of a loaded machine.
 RESUBSCRIBE_AFTER_TIMEOUTS = 2.0
+_STATE_POLL = 0.0005  # [s] wall: how often a decision waiting for its state looks again
 
 
 class SupervisorInputs:
@@ -88,6 +91,8 @@ class SupervisorInputs:
         if missing:
             raise RuntimeError(f'sources watched by the runner with no subscription: {missing}')
         self.gripper_messages: dict[str, GripperState] = {}
+        self.current_state = CurrentState()
+        self._newest_state: int | None = None  # [ns] stamp of the newest joint state taken
         node.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
                                  MODE_SUBSCRIPTION_QOS)
         self.deaths = ProcessDeaths(node.get_namespace())
@@ -99,10 +104,18 @@ class SupervisorInputs:
         for watched in self._watched:
             watched.after = RESUBSCRIBE_AFTER_TIMEOUTS * timeout
 
-    def sample(self) -> None:
-        """Hand the runner what the sampled subscriptions received since the last call."""
-        runner, steady = self._runner, self._clocks.steady()
+    def sample(self, decision_time: int | None = None) -> None:
+        """Hand the runner what the sampled subscriptions received since the last call.
+
+        ``decision_time`` [ns] (sim time only): the joint state of that time is waited for
+        first, a bounded wall time (:class:`~walker_supervisor.core.current_state.CurrentState`).
+        """
         states = self._joint_states.take()
+        if decision_time is not None:
+            states = self._await_state(states, decision_time)
+        if states:
+            self._newest_state = stamp_nanoseconds(states[-1].header.stamp)
+        runner, steady = self._runner, self._clocks.steady()
         if states:
             runner.joint_states(*joint_arrays(states[-1]), steady)
         for pose in self._sampler.take(self._tip_poses):
@@ -114,6 +127,21 @@ class SupervisorInputs:
             if taken:
                 reports[joint] = controller_report(taken[-1])
         self._execute(runner.controller_states(reports, self._clocks.now(), steady))
+
+    def _await_state(self, states: list, decision_time: int) -> list:
+        """Take joint states until one stamped ``decision_time`` [ns] or later, or time is up."""
+        newest = stamp_nanoseconds(states[-1].header.stamp) if states else self._newest_state
+        if not self.current_state.awaits(newest, decision_time):
+            return states
+        deadline = time.monotonic() + self.current_state.wait
+        while (newest is None or newest < decision_time) and time.monotonic() < deadline:
+            time.sleep(_STATE_POLL)
+            more = self._joint_states.take()
+            if more:
+                states = states + more
+                newest = stamp_nanoseconds(more[-1].header.stamp)
+        self.current_state.waited(newest, decision_time)
+        return states
 
     def _on_control_mode(self, msg: ControlMode) -> None:
         # A restarted supervisor takes the base back from the latched mode: its own commands

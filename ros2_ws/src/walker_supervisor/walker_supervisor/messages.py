@@ -41,6 +41,11 @@ def seconds(stamp) -> float:
     return stamp.sec + stamp.nanosec * 1e-9
 
 
+def stamp_nanoseconds(stamp) -> int:
+    """Return a ``builtin_interfaces/Time`` in nanoseconds."""
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
 def joint_arrays(msg: JointState) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Return positions [rad] and velocities [rad/s] in physical order (None: not all there)."""
     index = {name: i for i, name in enumerate(msg.name)}

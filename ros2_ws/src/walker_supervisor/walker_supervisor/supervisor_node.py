@@ -285,8 +285,9 @@ class SupervisorNode(Node):
             self._tick_due = True
             while self._tick_due:
                 self._tick_due = False
-                now = self.clocks.now()
-                self.inputs.sample()
+                now_ns = self.clocks.now_ns()
+                now = now_ns * 1e-9
+                self.inputs.sample(now_ns if self._sim_time else None)
                 self.teleop.tick(now)
                 self._release_measurement_waiters()
                 self.links.send_waiting()
@@ -316,6 +317,9 @@ class SupervisorNode(Node):
         sequencer = self.runner.sequencer
         values = [('phase', sequencer.phase.name), ('base gripper', sequencer.base_gripper)]
         values += [(s.name, f'{s.level.name}: {s.message}') for s in statuses]
+        current = self.inputs.current_state
+        values += [('decisions that waited for their joint state', str(current.waits)),
+                   ('of them, waits that ran out', str(current.timeouts))]
         self._diagnostics.publish(diagnostics_message(
             f'{self.get_fully_qualified_name()}: walker', self.get_namespace(), level, summary,
             values, self.clocks.stamp()))
