@@ -31,6 +31,7 @@ from walker_bringup.core.chaos import (
 from walker_bringup.graph_client import GraphClient, GraphNotReadyError
 from walker_bringup.processes import read_pids
 from walker_runtime.qos import latched_qos
+from walker_teleop.core.goal_answer import ACCEPTED
 
 __all__ = ['ChaosDriver', 'ChaosError', 'GripMonitor', 'phase_name']
 
@@ -100,7 +101,7 @@ class ChaosDriver:
         self.pids_seen: set[int] = set()
         self.outcomes: list[FaultOutcome] = []
         self.target = self.targets[0]
-        self._goal = None  # (send future, supervisor pid) of the walk goal under way
+        self._goal = None  # (SentGoal, supervisor pid) of the walk goal under way
         self._result = None
         self._walk_retry_at = 0.0
         self._resume_retry_at = 0.0
@@ -173,7 +174,7 @@ class ChaosDriver:
         if self._result is not None and not self._result.done() and \
                 self._goal[1] == self.pids().get('supervisor'):
             return  # a walk goal under way (one of a supervisor since killed is lost)
-        if self._goal is not None and not self._goal[0].done():
+        if self._goal is not None and not self._goal[0].answer():
             return
         self._result = None
         if now < self._walk_retry_at:
@@ -185,15 +186,15 @@ class ChaosDriver:
             self.target = next_target(self.targets, self.target, attached)
         except ValueError as error:
             raise ChaosError(str(error)) from None
-        send = self.client.walk_client.send_goal_async(WalkTo.Goal(target_node=self.target))
-        self._goal = (send, self.pids().get('supervisor'))
+        sent = self.client.walk_goals.send(WalkTo.Goal(target_node=self.target))
+        self._goal = (sent, self.pids().get('supervisor'))
         try:
-            handle = self.client._wait(send, 30.0, None, f'the walk to {self.target}')
+            self.client._wait_until(sent.answer, 30.0, None, f'the walk to {self.target}')
         except TimeoutError:  # a supervisor frozen or gone: its successor is asked again
             self._goal, self._walk_retry_at = None, time.monotonic() + WALK_RETRY
             return
-        if handle.accepted:
-            self._result = handle.get_result_async()
+        if sent.answer() == ACCEPTED:  # its response, or the goal seen running
+            self._result = sent.handle().get_result_async()
             self.say(f'[chaos] walking to {self.target}')
         else:
             self._walk_retry_at = time.monotonic() + WALK_RETRY
