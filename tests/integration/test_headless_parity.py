@@ -12,10 +12,8 @@ What still differs, and why the bounds hold: the graph's supervisor decides at o
 gripper's state changes or a motion ends, at whatever simulated time its clock reads when
 the message arrives (up to a tick later than the plant's stamp); the headless loop decides
 at the stamp. Each of its ticks waits for the joint state of its time
-(``walker_supervisor.core.current_state``): taken at once, it was the previous period's at a
-fifth of the ticks, and the tip errors at insertion of two walks in 13 were 0.13 mm off
-(once in CI 0.37 mm). Measured since: phase boundaries one 20 ms tick apart, tip errors within
-0.05 mm.
+(``walker_supervisor.core.current_state``). Measured: phase boundaries one 20 ms tick apart,
+tip errors within 0.05 mm (docs/performance_log.md).
 """
 
 import json

@@ -1,10 +1,10 @@
 """A goal whose answer is lost is still known accepted (or rejected) and followed to its result.
 
 Over a slow link the server's response to a goal request can be dropped by Fast DDS while the
-goal runs: walkerctl used to wait for that response alone and gave up with exit code 3 after
-printing the walk's progress to its end. Here the client's executor discards every goal
-response (as the link did) while a stand-in supervisor in the same process runs or rejects the
-goal; everything else travels over DDS in the test's own domain.
+goal runs (walker_teleop.core.goal_answer); a client waiting for that response alone gives up
+with exit code 3 after printing the walk's progress to its end. Here the client's executor
+discards every goal response while a stand-in supervisor in the same process runs or rejects
+the goal; everything else travels over DDS in the test's own domain.
 """
 
 import threading

@@ -2,11 +2,10 @@
 
 In sim time the plant publishes ``/clock`` and then the joint state of the same stamp. The
 supervisor's tick fires when the clock reaches the tick's time; taken at once, the newest joint
-state it holds can be the plant's previous one (measured: a state 2 ms old at a fifth to a
-quarter of the ticks of a walk), so the graph decided on the state of an instant before the
-headless loop, which decides at the stamp, and the two walks drifted apart (the tip's error at
-insertion 0.37 mm apart once, where they agree within 0.05 mm). A decision in sim time
-therefore waits, for a bounded wall time, for a joint state stamped at its time or later.
+state it holds can be the plant's previous one (at a fifth to a quarter of the ticks of a
+walk), so the graph would decide on the state of an instant before the headless loop, which
+decides at the stamp, and the two walks would drift apart. A decision in sim time therefore
+waits, for a bounded wall time, for a joint state stamped at its time or later.
 
 A state that does not come within the bound (a plant frozen or gone, a subscription gone deaf)
 is not waited for again until a state arrives on time: a source that has fallen silent must not
