@@ -24,7 +24,7 @@ from walker_teleop.core.goal_answer import ACCEPTED, REJECTED, goal_answer
 
 NAMESPACE, TARGET, PATH = '/walker', 'n1_3', ['n1_3']
 REFUSAL = "n1_3 is not reachable from gripper b's node"
-WAIT = 20.0  # [s] the client's timeout: generous for a loaded machine, never reached when right
+WAIT = 20.0  # [s] the client's timeout: generous for a loaded machine (run_goal raises at it)
 
 
 @pytest.mark.parametrize('response, seen_running, rejection_heard, answer', [
@@ -109,14 +109,12 @@ def test_a_walk_whose_goal_response_is_lost_is_followed_to_its_result(
     supervisor = _StandInSupervisor(rclpy_context, reject=False, feedback=feedback)
     heard = []
     try:
-        started = time.monotonic()
         status, result = teleop.run_goal('walk_to', TARGET, heard.append, lambda: None)
     finally:
         supervisor.close()
     assert status == GoalStatus.STATUS_SUCCEEDED
     assert (result.success, list(result.path)) == (True, PATH)
     assert [f.phase for f in heard] == ([0, 1, 2] if feedback else [])
-    assert time.monotonic() - started < WAIT / 2  # answered by the signs, not the timeout
 
 
 def test_a_rejected_walk_whose_goal_response_is_lost_says_why(monkeypatch, rclpy_context,
