@@ -7,6 +7,7 @@ file) walked twice with its bag, once without: a few seconds of CPU each.
 import fnmatch
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mcap.reader import make_reader
 
@@ -95,6 +96,24 @@ def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
     assert set(data.controllers) == {'a_yaw_joint', 'a_pitch_joint', 'vertex_joint',
                                      'b_pitch_joint', 'b_yaw_joint'}
     assert abs(data.tip.position[-1][0] - data.tip.position[0][0]) > 0.1  # the tip moved
+
+
+def test_the_tip_pose_is_never_the_base_gripper_not_even_idle_after_the_step(walks):
+    """``tip_pose`` is the gripper that is not the supervisor's base (``phase``) in every
+    phase, idle with both grippers attached after the step included."""
+    data = load_walk(walks[0][1])
+    times = np.array([event.time for event in data.phases])
+    idle_after_step = 0
+    for t, position in zip(data.tip.time, data.tip.position, strict=True):
+        event = data.phases[int(np.searchsorted(times, t, side='right')) - 1]
+        tip = 'b' if event.base_gripper == 'a' else 'a'
+        poses = {g: data.gripper_poses[g] for g in 'ab'}
+        at = {g: int(np.searchsorted(poses[g].time, t)) for g in 'ab'}
+        assert poses[tip].time[at[tip]] == t
+        np.testing.assert_array_equal(position, poses[tip].position[at[tip]])
+        if event.phase == Phase.IDLE and event.step_count:
+            idle_after_step += 1
+    assert idle_after_step > 0  # the idle stance after the step was seen
 
 
 def test_an_unknown_target_is_refused_before_anything_moves(configuration, tmp_path):

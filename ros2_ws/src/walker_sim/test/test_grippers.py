@@ -97,6 +97,33 @@ def test_the_base_passes_to_the_other_gripper_when_the_base_is_released():
     assert [(s.name, s.mode) for s in changed] == [('a', GripperMode.FREE)]
 
 
+@pytest.mark.parametrize('base', ['a', 'b'])
+def test_the_tip_is_the_gripper_that_moves_or_moves_next_never_the_one_just_screwed_in(base):
+    """A step (release the old base, screw the other gripper in) leaves both attached: the tip
+    is then the gripper the next step releases, not the one that just screwed in and that the
+    supervisor makes its base."""
+    other = 'b' if base == 'a' else 'a'
+    grippers = logic(base=base)
+    assert grippers.tip == other  # both attached at the start: the start base's other gripper
+    grippers.request_unscrew(base)
+    assert grippers.tip == base
+    grippers.advance(SCREW_TIME)
+    assert grippers.tip == base and grippers.status(base).mode == GripperMode.FREE
+    grippers.request_screw_in(base, aligned())
+    grippers.advance(SCREW_TIME)
+    assert grippers.status(base).mode == GripperMode.ATTACHED
+    assert grippers.tip == other  # idle, both attached: the gripper the next step releases
+
+
+def test_a_restored_logic_keeps_its_tip():
+    grippers = logic()
+    timers = {g: (s.mode, s.node, t) for g, (s, t) in grippers.timers().items()}
+    grippers.restore(timers, 'a', 'a')
+    assert grippers.tip == 'a'
+    grippers.restore(timers, 'a')
+    assert grippers.tip == 'b'
+
+
 @pytest.mark.parametrize('mode_setup, command, words', [
     ('attached', 'screw_in', 'needs a free gripper'),
     ('free', 'unscrew', 'only an attached gripper'),

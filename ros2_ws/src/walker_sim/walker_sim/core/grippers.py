@@ -12,6 +12,11 @@ the message says by how much it missed. Unscrewing takes ``gripper.screw_time`` 
 (UNSCREWING, still attached) and is refused, by the plant itself as by the hardware's
 interlock, unless the other gripper is ATTACHED: the walker never lets go of the truss.
 
+The tip (:attr:`GripperLogic.tip`) is the gripper that moves or moves next: the one unscrewed
+last, free, screwing in or jammed; once it is ATTACHED, the other one (the gripper the next step
+releases, as the supervisor makes the gripper that just screwed in its base). While both are
+attached at the start, it is the gripper that is not the start's base.
+
 A fouled thread (debris, a damaged hole) can be injected for tests of the supervisor's retry and
 abort: :attr:`GripperLogic.fouled_screw_ins` coming screw-ins jam whatever the alignment.
 """
@@ -176,6 +181,7 @@ class GripperLogic:
         self._status = {g: GripperStatus(g, GripperMode.FREE) for g in GRIPPERS}
         self._elapsed = dict.fromkeys(GRIPPERS, 0.0)
         self._base = 'a'
+        self._tip = 'b'
         #: Coming screw-ins that jam whatever the alignment (an injected fouled thread); each
         #: one that jams counts it down.
         self.fouled_screw_ins = 0
@@ -204,15 +210,18 @@ class GripperLogic:
             self._status[gripper] = GripperStatus(gripper, mode, node or '')
             self._elapsed[gripper] = 0.0
         self._base = base
+        self._tip = other_gripper(base)
 
     def timers(self) -> dict[str, tuple[GripperStatus, float]]:
         """Each gripper's status and the seconds [s] its screw-in or unscrew has run."""
         return {g: (self._status[g], self._elapsed[g]) for g in GRIPPERS}
 
-    def restore(self, timers: dict[str, tuple[GripperMode, str, float]], base: str) -> None:
+    def restore(self, timers: dict[str, tuple[GripperMode, str, float]], base: str,
+                tip: str = '') -> None:
         """Put every gripper back in a recorded state: gripper -> ``(mode, node, elapsed)``.
 
-        The inverse of :meth:`timers` (a plant started again, :mod:`walker_sim.core.snapshot`).
+        The inverse of :meth:`timers` (a plant started again, :mod:`walker_sim.core.snapshot`);
+        ``tip`` is the recorded :attr:`tip` (empty: the gripper that is not ``base``).
 
         Raises
         ------
@@ -227,6 +236,7 @@ class GripperLogic:
         if timers[base][0] not in (GripperMode.ATTACHED, GripperMode.SCREWING,
                                    GripperMode.UNSCREWING):
             raise GripperCommandError(f'the base gripper {base!r} must be held by the truss')
+        tip = validate_gripper(tip) if tip else other_gripper(base)
         for gripper, (mode, node, elapsed) in timers.items():
             busy = mode in (GripperMode.SCREWING, GripperMode.UNSCREWING)
             progress = min(1.0, elapsed / self.screw_time) if busy else 0.0
@@ -234,6 +244,7 @@ class GripperLogic:
                                                   progress=progress)
             self._elapsed[gripper] = float(elapsed)
         self._base = base
+        self._tip = tip
 
     def status(self, gripper: str) -> GripperStatus:
         """State of one gripper."""
@@ -247,6 +258,11 @@ class GripperLogic:
     def base(self) -> str:
         """The gripper holding the walker: the attached one, or the one attached longest."""
         return self._base
+
+    @property
+    def tip(self) -> str:
+        """The gripper that moves or moves next (see the module's description)."""
+        return self._tip
 
     @property
     def busy(self) -> bool:
@@ -319,6 +335,7 @@ class GripperLogic:
                 f'truss')
         self._status[gripper] = GripperStatus(gripper, GripperMode.UNSCREWING, current.node)
         self._elapsed[gripper] = 0.0
+        self._tip = gripper
         if self._base == gripper:
             self._base = other.name
         return self._status[gripper]
@@ -341,6 +358,7 @@ class GripperLogic:
                 continue
             if status.mode == GripperMode.SCREWING:
                 self._status[gripper] = GripperStatus(gripper, GripperMode.ATTACHED, status.node)
+                self._tip = other_gripper(gripper)
             else:
                 self._status[gripper] = GripperStatus(gripper, GripperMode.FREE)
             changed.append(self._status[gripper])

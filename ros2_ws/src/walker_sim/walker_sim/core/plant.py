@@ -137,7 +137,12 @@ class PlantState:
     poses : dict
         ``'a'``/``'b'`` -> :class:`Pose` of the gripper's contact-point frame in the truss frame.
     base : str
-        The gripper holding the walker (``'a'`` or ``'b'``); the other one is the tip.
+        The gripper the simulated body is rooted at (``'a'`` or ``'b'``): the attached one, or
+        the one attached longest.
+    tip : str
+        The gripper that moves or moves next (:attr:`GripperLogic.tip`): the free one, and
+        while both are attached the one the next step releases (not the one that screwed in
+        last, which the supervisor makes its base).
     measure : callable
         Pose -> :class:`~walker_sim.core.grippers.HoleAlignment` against the nearest hole.
     """
@@ -153,6 +158,7 @@ class PlantState:
     statuses: dict[str, GripperStatus]
     poses: dict[str, Pose]
     base: str
+    tip: str
     measure: Callable[[Pose], HoleAlignment] = dataclasses.field(repr=False, compare=False)
 
     @functools.cached_property
@@ -165,18 +171,14 @@ class PlantState:
                 for g in GRIPPERS}
 
     @property
-    def tip(self) -> str:
-        """The gripper that is not the base."""
-        return other_gripper(self.base)
-
-    @property
     def tip_position(self) -> np.ndarray:
-        """True position [m] of the tip gripper's contact point in the base gripper's frame.
+        """True position [m] of the tip gripper's contact point in the other gripper's frame.
 
         Where the flexible robot's tip really is (links bent or not), in the frame of the
-        paper's eq (1); compare with the forward kinematics of ``position``.
+        paper's eq (1) with the other gripper as its base; compare with the forward kinematics
+        of ``position``.
         """
-        base = self.poses[self.base].matrix()
+        base = self.poses[other_gripper(self.tip)].matrix()
         tip = self.poses[self.tip].position
         return base[:3, :3].T @ (tip - base[:3, 3])
 
@@ -357,6 +359,7 @@ class WalkerPlant:
             holds[gripper] = (tuple(info[7]), tuple(info[9]))  # the child (world) frame
         return PlantSnapshot(
             time_steps=self._time_steps, root=rooted.root, base=self._grippers.base,
+            tip=self._grippers.tip,
             root_position=tuple(position), root_orientation=tuple(orientation),
             positions=tuple(s[0] for s in states), velocities=tuple(s[1] for s in states),
             grippers={g: {'mode': status.mode.name, 'node': status.node, 'elapsed': elapsed}
@@ -389,7 +392,8 @@ class WalkerPlant:
             pybullet.resetJointState(rooted.body, joint, angle, rate,
                                      physicsClientId=rooted.client)
         self._grippers.restore({g: (GripperMode[s['mode']], s['node'], s['elapsed'])
-                                for g, s in snapshot.grippers.items()}, snapshot.base)
+                                for g, s in snapshot.grippers.items()}, snapshot.base,
+                                snapshot.tip)
         self._grippers.fouled_screw_ins = snapshot.fouled_screw_ins
         for gripper, (position, orientation) in snapshot.holds.items():
             self._attach(gripper, Pose(np.array(position), np.array(orientation)))
@@ -404,9 +408,10 @@ class WalkerPlant:
         return self.state()
 
     def _check_snapshot(self, snapshot: PlantSnapshot) -> None:
-        if snapshot.root not in GRIPPERS or snapshot.base not in GRIPPERS:
-            raise PlantError(f'snapshot: unknown root or base gripper '
-                             f'({snapshot.root!r}, {snapshot.base!r})')
+        if (snapshot.root not in GRIPPERS or snapshot.base not in GRIPPERS
+                or snapshot.tip not in (*GRIPPERS, '')):
+            raise PlantError(f'snapshot: unknown root, base or tip gripper '
+                             f'({snapshot.root!r}, {snapshot.base!r}, {snapshot.tip!r})')
         movable = len(self._bodies[snapshot.root].index.movable)
         if len(snapshot.positions) != movable:
             raise PlantError(f'snapshot: {len(snapshot.positions)} joint angles for a model '
@@ -522,7 +527,7 @@ class WalkerPlant:
             refused=self._command.refused.copy(),
             statuses=self._grippers.statuses(),
             poses={g: self._gripper_pose(g) for g in GRIPPERS}, base=self._grippers.base,
-            measure=self._alignment)
+            tip=self._grippers.tip, measure=self._alignment)
 
     def true_joint_positions(self) -> np.ndarray:
         """Return the true joint angles [rad] now, whatever the joint sensors read."""

@@ -62,6 +62,9 @@ class PlantSnapshot:
         Gripper being screwed in -> ``(start, seat)``, each ``(position, orientation)``.
     fouled_screw_ins : int
         Screw-ins that will jam whatever the alignment (an injected fault).
+    tip : str
+        The gripper that moves or moves next (the gripper logic's tip; empty in a snapshot
+        written before it was recorded: the gripper that is not ``base``).
     """
 
     time_steps: int
@@ -75,6 +78,7 @@ class PlantSnapshot:
     holds: dict[str, tuple]
     pulls: dict[str, tuple]
     fouled_screw_ins: int = 0
+    tip: str = ''
 
     def as_dict(self) -> dict:
         """Return the snapshot as plain JSON data."""
@@ -92,7 +96,7 @@ class PlantSnapshot:
         if not isinstance(data, dict) or data.get('version') != _VERSION:
             raise SnapshotError(f'not a plant snapshot of version {_VERSION}')
         fields = {f.name for f in dataclasses.fields(cls)}
-        missing = sorted(fields - {'fouled_screw_ins'} - set(data))
+        missing = sorted(fields - {'fouled_screw_ins', 'tip'} - set(data))
         if missing:
             raise SnapshotError(f'the snapshot lacks {", ".join(missing)}')
         try:
@@ -107,7 +111,8 @@ class PlantSnapshot:
                           for g, s in data['grippers'].items()},
                 holds={str(g): _pose(p) for g, p in data['holds'].items()},
                 pulls={str(g): (_pose(p[0]), _pose(p[1])) for g, p in data['pulls'].items()},
-                fouled_screw_ins=int(data.get('fouled_screw_ins', 0)))
+                fouled_screw_ins=int(data.get('fouled_screw_ins', 0)),
+                tip=str(data.get('tip', '')))
         except (KeyError, TypeError, ValueError, IndexError) as error:
             raise SnapshotError(f'a malformed snapshot: {error}') from None
         if len(snapshot.positions) != len(snapshot.velocities):
