@@ -12,12 +12,14 @@ import pytest
 from mcap.reader import make_reader
 
 from walker_bag.core.bag_reader import BagReader
+from walker_core.rotations import rotation_from_quaternion
 from walker_bringup.graph import RECORDED_TOPICS
 from walker_config.core.configuration import load_configuration
 from walker_headless.recording import WalkRecording
 from walker_headless.runner import walk
 from walker_report.core.walk_data import load_walk
 from walker_supervisor.core.phases import Phase
+from walker_viz.core.robot_tree import WORLD_FRAME
 
 TARGET = 'n1_2'
 STEP_PHASES = [Phase.EXTRACTION, Phase.COARSE, Phase.FINE, Phase.INSERTION]
@@ -99,8 +101,10 @@ def test_the_bag_holds_the_graphs_topics_and_the_report_reads_it(walks):
 
 
 def test_the_tip_pose_is_never_the_base_gripper_not_even_idle_after_the_step(walks):
-    """``tip_pose`` is the gripper that is not the supervisor's base (``phase``) in every
-    phase, idle with both grippers attached after the step included."""
+    """``tip_pose`` is the gripper that is not the supervisor's base, in every phase.
+
+    Idle with both grippers attached after the step included.
+    """
     data = load_walk(walks[0][1])
     times = np.array([event.time for event in data.phases])
     idle_after_step = 0
@@ -114,6 +118,50 @@ def test_the_tip_pose_is_never_the_base_gripper_not_even_idle_after_the_step(wal
         if event.phase == Phase.IDLE and event.step_count:
             idle_after_step += 1
     assert idle_after_step > 0  # the idle stance after the step was seen
+
+
+def _matrix(transform):
+    t, q = transform.translation, transform.rotation
+    matrix = np.eye(4)
+    matrix[:3, :3] = rotation_from_quaternion((q.x, q.y, q.z, q.w))
+    matrix[:3, 3] = (t.x, t.y, t.z)
+    return matrix
+
+
+def test_tf_composed_from_the_bag_puts_both_grippers_where_the_plant_has_them(walks):
+    """``/tf`` + ``/tf_static`` composed as tf2 does: each gripper at the plant's pose.
+
+    ``gripper_<x>_pose`` of the same stamp, in every phase (the seat's compliance included).
+    """
+    frames, poses, worst, compared = {}, {'a': {}, 'b': {}}, 0.0, 0
+    with BagReader(walks[0][1]) as reader:
+        records = list(reader.messages([t for t in reader.topics
+                                        if t in ('/tf', '/tf_static')
+                                        or t.endswith(('gripper_a_pose', 'gripper_b_pose'))]))
+    for record in records:
+        if record.topic.endswith('_pose'):
+            stamp = record.message.header.stamp
+            p = record.message.pose.position
+            poses[record.topic[-6]][(stamp.sec, stamp.nanosec)] = np.array([p.x, p.y, p.z])
+    for record in records:
+        if record.topic not in ('/tf', '/tf_static'):
+            continue
+        for transform in record.message.transforms:
+            frames[transform.child_frame_id] = (transform.header.frame_id,
+                                                _matrix(transform.transform))
+        if record.topic == '/tf_static':
+            continue
+        stamp = record.message.transforms[0].header.stamp
+        for gripper in 'ab':
+            frame, pose = f'gripper_{gripper}', np.eye(4)
+            while frame != WORLD_FRAME:
+                parent, matrix = frames[frame]
+                pose, frame = matrix @ pose, parent
+            truth = poses[gripper][(stamp.sec, stamp.nanosec)]
+            worst = max(worst, float(np.linalg.norm(pose[:3, 3] - truth)))
+            compared += 1
+    assert compared > 100
+    assert worst < 1e-6, f'{worst * 1e3:.4f} mm'
 
 
 def test_an_unknown_target_is_refused_before_anything_moves(configuration, tmp_path):

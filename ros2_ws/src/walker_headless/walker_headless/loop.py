@@ -137,10 +137,12 @@ class RobotLoop:
         if viz is not None:
             if self.grippers_out:
                 viz.grippers(self.gripper_readings())
+            poses = ({g: state.poses[g].matrix() for g in GRIPPERS} if self.poses_out
+                     else None)  # the grippers' poses, heard at the plant's pose rate
             if not viz.flexible:
-                viz.joint_state(stamp, self.positions)
+                viz.joint_state(stamp, self.positions, poses)
             elif self.poses_out:  # the plant's flexible joint states go out with the poses
-                viz.joint_state(stamp, self.positions + self.plant.bending().tolist())
+                viz.joint_state(stamp, self.positions + self.plant.bending().tolist(), poses)
             viz.tick(stamp)
         if all(map(math.isfinite, self.positions)):  # the planner takes finite states only
             self.streamer.on_state(stamp, state.position)

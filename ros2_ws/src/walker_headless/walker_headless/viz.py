@@ -50,17 +50,21 @@ class HeadlessViz:
             else list(PHYSICAL_JOINT_NAMES)
         self._period = round(1e9 / configuration.viz.tf_rate)  # [ns]
         self._next = 0  # [ns] the TF timer's next time
-        self._states: list[tuple[int, list[float]]] = []  # (stamp, angles) not yet drawn
+        self._states: list[tuple] = []  # (stamp, angles, poses) not yet drawn
         self._tf('/tf_static', self.scene.tree.static_transforms(), 0)
         self._send_markers(0)
 
     # ------------------------------------------------------------------ inputs
-    def joint_state(self, stamp: int, angles: list[float]) -> None:
-        """Take a state the node hears (:attr:`flexible`: the bends follow the five)."""
+    def joint_state(self, stamp: int, angles: list[float], poses=None) -> None:
+        """Take a state the node hears (:attr:`flexible`: the bends follow the five).
+
+        ``poses``: gripper -> its pose [4x4, m] in the truss at ``stamp`` (the plant's
+        ``gripper_<x>_pose``), where the node hears them with the state.
+        """
         if self.flexible:
-            self._states.append((stamp, angles))
+            self._states.append((stamp, angles, poses))
         else:
-            self._states[:] = [(stamp, angles)]
+            self._states[:] = [(stamp, angles, poses)]
 
     def tick(self, stamp: int) -> None:
         """Run the TF timer at ``stamp`` [ns]: send the transforms of the states heard since."""
@@ -68,8 +72,8 @@ class HeadlessViz:
             return
         while self._next <= stamp:
             self._next += self._period
-        for state_stamp, angles in self._states:
-            self._tf('/tf', self.scene.transforms(self._names, angles), state_stamp)
+        for state_stamp, angles, poses in self._states:
+            self._tf('/tf', self.scene.transforms(self._names, angles, poses), state_stamp)
         self._states.clear()
 
     def grippers(self, readings: dict[str, tuple[str, str]]) -> None:

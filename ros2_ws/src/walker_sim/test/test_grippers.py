@@ -99,9 +99,10 @@ def test_the_base_passes_to_the_other_gripper_when_the_base_is_released():
 
 @pytest.mark.parametrize('base', ['a', 'b'])
 def test_the_tip_is_the_gripper_that_moves_or_moves_next_never_the_one_just_screwed_in(base):
-    """A step (release the old base, screw the other gripper in) leaves both attached: the tip
-    is then the gripper the next step releases, not the one that just screwed in and that the
-    supervisor makes its base."""
+    """After a step both are attached: the tip is the gripper the next step releases.
+
+    Not the one that just screwed in, which the supervisor makes its base.
+    """
     other = 'b' if base == 'a' else 'a'
     grippers = logic(base=base)
     assert grippers.tip == other  # both attached at the start: the start base's other gripper

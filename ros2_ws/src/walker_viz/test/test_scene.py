@@ -66,3 +66,38 @@ def test_the_target_and_the_planned_path_are_drawn_and_a_new_base_drops_the_path
     assert _namespaces(scene)[1] == ['planned_tip_path']
     with pytest.raises(ValueError):
         scene.base('c')
+
+
+def test_a_measured_base_pose_places_the_tree_where_the_simulator_has_the_base(scene):
+    """A base tilted in its seat (which the joint angles cannot tell) is drawn tilted."""
+    from walker_core.urdf import GRIPPER_LINKS
+    from walker_viz.core.robot_tree import axis_rotation
+    scene.grippers(BOTH)
+    scene.base('b')
+    tilted = np.eye(4)
+    tilted[:3, :3] = axis_rotation(np.array([1.0, 0.0, 0.0]), 3e-4)
+    tilted[:3, 3] = TRUSS.position('n2_1') + [0.0, 0.0, 1e-6]
+    edges = scene.transforms(PHYSICAL_JOINT_NAMES, START, {'b': tilted})
+    root = next(e.matrix for e in edges if e.parent == WORLD_FRAME)
+    angles = dict(zip(PHYSICAL_JOINT_NAMES, START, strict=True))
+    drawn_b = root @ scene.tree.link_in_root(GRIPPER_LINKS['b'], angles)
+    np.testing.assert_allclose(drawn_b, tilted, atol=1e-12)
+    modelled = next(e.matrix for e in scene.transforms(PHYSICAL_JOINT_NAMES, START)
+                    if e.parent == WORLD_FRAME)  # no measurement: upright at the node
+    assert np.linalg.norm(modelled[:3, 3] - root[:3, 3]) > 1e-4
+    # the other gripper's measured pose alone does not place the tree
+    other = next(e.matrix for e in scene.transforms(PHYSICAL_JOINT_NAMES, START, {'a': tilted})
+                 if e.parent == WORLD_FRAME)
+    np.testing.assert_allclose(other, modelled)
+
+
+def test_measured_poses_are_kept_by_stamp_and_the_oldest_dropped():
+    from walker_viz.core.measured_poses import MeasuredPoses
+    poses = MeasuredPoses(capacity=2)
+    for stamp in (10, 20, 30):
+        poses.add('a', stamp, np.eye(4) * 1.0)
+    poses.add('b', 30, np.eye(4))
+    poses.add('b', 40, np.full((4, 4), np.nan))  # not finite: ignored
+    assert poses.at(10) == {} and set(poses.at(30)) == {'a', 'b'} and poses.at(40) == {}
+    with pytest.raises(ValueError, match='gripper'):
+        poses.add('c', 50, np.eye(4))

@@ -12,10 +12,10 @@ from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
 from walker_viz.core.markers import MarkerSpec
-from walker_core.rotations import quaternion_from_matrix
+from walker_core.rotations import quaternion_from_matrix, rotation_from_quaternion
 from walker_viz.core.robot_tree import WORLD_FRAME, JointTransform
 
-__all__ = ['tf_message', 'marker_array', 'deleted_marker']
+__all__ = ['tf_message', 'marker_array', 'deleted_marker', 'pose_matrix']
 
 _KINDS = {'line_list': Marker.LINE_LIST, 'line_strip': Marker.LINE_STRIP,
           'sphere_list': Marker.SPHERE_LIST, 'cylinder': Marker.CYLINDER,
@@ -31,6 +31,15 @@ def _transform_msg(edge: JointTransform, stamp: Time) -> TransformStamped:
     t.x, t.y, t.z = (float(v) for v in edge.matrix[:3, 3])
     r.x, r.y, r.z, r.w = (float(v) for v in quaternion_from_matrix(edge.matrix))
     return message
+
+
+def pose_matrix(pose) -> np.ndarray:
+    """Return the 4x4 matrix [m] of a ``geometry_msgs/Pose``."""
+    p, q = pose.position, pose.orientation
+    matrix = np.eye(4)
+    matrix[:3, :3] = rotation_from_quaternion((q.x, q.y, q.z, q.w))
+    matrix[:3, 3] = (p.x, p.y, p.z)
+    return matrix
 
 
 def tf_message(edges: Iterable[JointTransform], stamp: Time) -> TFMessage:

@@ -12,8 +12,10 @@ A robot_state_publisher that also knows where the robot holds the truss. Thin la
   the step's target node and the planned tip path; every message holds them all);
 * subscribes to ``flexible_joint_states`` or ``joint_states`` (taken at the TF rate, not one
   callback per state; made anew when it falls silent while the clock runs on, see
-  :mod:`walker_runtime.watched_subscription`), ``gripper_states`` (which gripper is screwed
-  into which node), ``phase`` and ``control_mode`` (the supervisor's base gripper, and the
+  :mod:`walker_runtime.watched_subscription`), ``gripper_a_pose`` and ``gripper_b_pose``
+  (where a simulator publishes them: the base gripper's measured pose places the tree, see
+  :meth:`walker_viz.core.scene.WalkerScene.transforms`), ``gripper_states`` (which gripper is
+  screwed into which node), ``phase`` and ``control_mode`` (the supervisor's base gripper, and the
   step's target node) and ``planned_trajectory`` (the path drawn).
 
 Under ``use_sim_time`` the TF timer runs on the simulated clock. ``/tf`` is neither computed
@@ -28,11 +30,13 @@ import sys
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
+from walker_core.joint_roles import GRIPPERS
 from walker_core.robot_parameters import WalkerParameters
 from walker_runtime.core.resubscription import clock_ran_past
 from walker_runtime.node_main import run_node
@@ -42,10 +46,11 @@ from walker_runtime.listened import ListenedPublisher
 from walker_runtime.spinning import TopicSampler
 from walker_runtime.watched_subscription import SampledSubscription
 from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase
+from walker_viz.core.measured_poses import MeasuredPoses
 from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 from walker_viz.core.robot_tree import WORLD_FRAME
 from walker_viz.core.scene import WalkerScene
-from walker_viz.messages import marker_array, tf_message
+from walker_viz.messages import marker_array, pose_matrix, tf_message
 
 __all__ = ['VizNode', 'main']
 
@@ -90,6 +95,9 @@ class VizNode(Node):
             'flexible_joint_states' if self.settings.flexible else 'joint_states', _STATES_QOS,
             after=_RESUBSCRIBE_AFTER, logger=self.get_logger(),
             counts=self._clock_ran_past_the_states)
+        self._measured = MeasuredPoses()
+        self._poses = {g: self._sampler.subscribe(PoseStamped, f'gripper_{g}_pose', _STATES_QOS)
+                       for g in GRIPPERS}
         self.create_subscription(GripperStates, 'gripper_states', self._on_grippers,
                                  LATCHED_QOS)
         self.create_subscription(StepPhase, 'phase', self._on_phase, _PHASE_QOS)
@@ -119,21 +127,26 @@ class VizNode(Node):
     def _publish_tf(self) -> None:
         states = self._joint_states.take()
         self._joint_states.check()
+        for gripper, subscription in self._poses.items():
+            for pose in self._sampler.take(subscription):
+                try:
+                    self._measured.add(gripper, _ns(pose.header.stamp), pose_matrix(pose.pose))
+                except ValueError:  # a zero quaternion: no pose to place the tree at
+                    continue
         if states and not self._tf.heard:  # nobody draws it (walker_runtime.listened)
-            stamp = states[-1].header.stamp
-            self._newest_state = stamp.sec * 1_000_000_000 + stamp.nanosec
+            self._newest_state = _ns(states[-1].header.stamp)
             return
         # the links' bends change within a period of their modes: every flexible sample is
         # drawn; straight links, the newest joint state
         for state in states if self.settings.flexible else states[-1:]:
             try:
-                edges = self.scene.transforms(state.name, state.position)
+                edges = self.scene.transforms(state.name, state.position,
+                                              self._measured.at(_ns(state.header.stamp)))
             except ValueError as error:
                 self.get_logger().warning(f'joint state not drawn: {error}',
                                           throttle_duration_sec=1.0)
                 continue
-            self._newest_state = state.header.stamp.sec * 1_000_000_000 + \
-                state.header.stamp.nanosec
+            self._newest_state = _ns(state.header.stamp)
             self._tf.publish(tf_message(edges, state.header.stamp))
 
     # ------------------------------------------------------------------ inputs
@@ -171,6 +184,10 @@ class VizNode(Node):
     # ------------------------------------------------------------------ markers
     def _publish_markers(self) -> None:
         self._markers.publish(marker_array(*self.scene.markers()))
+
+
+def _ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 def main(args=None) -> int:

@@ -15,7 +15,7 @@ import numpy as np
 
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
-from walker_core.urdf import robot_urdf
+from walker_core.urdf import GRIPPER_LINKS, robot_urdf
 from walker_viz.core.base_anchor import BaseTracker
 from walker_viz.core.markers import (
     MarkerSpec, target_marker, tip_path, tip_path_marker, truss_markers)
@@ -47,9 +47,17 @@ class WalkerScene:
         self.path: np.ndarray | None = None  # [m] the planned tip path in the truss
         self._truss_markers = truss_markers(self.truss, params.truss.hole_depth)
 
-    def transforms(self, names: Sequence[str], positions: Sequence[float]
-                   ) -> list[JointTransform]:
+    def transforms(self, names: Sequence[str], positions: Sequence[float],
+                   measured: Mapping[str, np.ndarray] | None = None) -> list[JointTransform]:
         """Return the moving transforms of a joint state, and the root's pose while held.
+
+        ``measured`` maps a gripper to its pose [4x4, m] in the truss at the state's instant,
+        where a simulator measures it (the plant's ``gripper_<x>_pose``). With the base
+        gripper's, the tree is placed at it: a gripper screwed in sits in its seat up to the
+        seat's compliance (a tilt of a fraction of a milliradian under the arm's weight), which
+        the joint angles cannot tell and which, over the arm's 0.9 m, is a few tenths of a
+        millimetre at the other gripper. Without it (a real robot), the base is placed at its
+        node, upright, at the heading of the stance (:mod:`walker_viz.core.base_anchor`).
 
         Raises
         ------
@@ -61,7 +69,10 @@ class WalkerScene:
         angles = dict(zip(names, positions, strict=True))
         edges = self.tree.moving_transforms(angles)
         self.angles = angles
-        root = self.tracker.root_pose(angles)
+        root = self.tracker.root_pose(angles)  # the stance's heading kept up to date
+        base = self.tracker.base
+        if measured and base in measured:
+            root = self.tree.root_pose(GRIPPER_LINKS[base], measured[base], angles)
         if root is not None:
             edges.append(JointTransform(WORLD_FRAME, self.tree.root, root))
         return edges
