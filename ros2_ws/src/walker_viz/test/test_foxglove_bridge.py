@@ -144,6 +144,71 @@ def test_a_websocket_client_decodes_tf_and_joint_states(rclpy_context, ros_env):
     assert 'link_a_1' in moving  # a segment of the flexible link, beyond a bend
 
 
+async def _refusal_of_the_old_protocol(port: int) -> str:
+    """Connect offering only ``foxglove.websocket.v1``; return how the server refused."""
+    import websockets
+
+    try:
+        async with websockets.connect(f'ws://127.0.0.1:{port}',
+                                      subprotocols=['foxglove.websocket.v1']):
+            return 'accepted'
+    except (websockets.exceptions.InvalidHandshake, OSError) as error:
+        return str(error)
+
+
+def test_a_client_that_connects_late_gets_every_latched_topic(rclpy_context, ros_env):
+    """Latched topics published long before a client connects are sent when it subscribes.
+
+    Two clients, one after the other, each after the messages were published and passed on:
+    each gets the newest message of each latched topic (of the phase's history, the newest).
+    """
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from std_msgs.msg import String
+
+    from walker_msgs.msg import StepPhase
+    from walker_runtime.qos import LATCHED_QOS, latched_qos
+
+    node = Node('latched_publisher', namespace='/walker', context=rclpy_context)
+    description = node.create_publisher(String, 'robot_description', LATCHED_QOS)
+    phase = node.create_publisher(StepPhase, 'phase', latched_qos(10))
+    description.publish(String(data='<robot name="walker"/>'))
+    for index in range(3):
+        phase.publish(StepPhase(phase=StepPhase.IDLE, step_index=index))
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    bridge = NodeProcess([str(INSTALL / 'foxglove_bridge'), '--ros-args', '-r',
+                          '__ns:=/walker', '-p', 'port:=0'], ros_env, 'foxglove_bridge')
+    wanted = {'/walker/robot_description': 1, '/walker/phase': 1}
+    received = []
+    with bridge:
+        assert bridge.wait_for_output('to Foxglove at ws://127.0.0.1:', WAIT), bridge.output
+        port = int(bridge.output.split('to Foxglove at ws://127.0.0.1:')[1].split()[0])
+        for topic in wanted:
+            assert bridge.wait_for_output(f'serving {topic} ', WAIT), bridge.output
+        end = time.monotonic() + 2.0  # the bridge has passed them on to nobody
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+        for _client in range(2):
+            loop = asyncio.new_event_loop()
+            task = loop.create_task(_receive(port, wanted, time.monotonic() + WAIT))
+            while not task.done():
+                executor.spin_once(timeout_sec=0.01)
+                loop.run_until_complete(asyncio.sleep(0.01))
+            received.append(task.result())
+            loop.close()
+        old_protocol = asyncio.new_event_loop()
+        refusal = old_protocol.run_until_complete(_refusal_of_the_old_protocol(port))
+        old_protocol.close()
+        output = bridge.output
+    node.destroy_node()
+    assert '400' in refusal, refusal  # foxglove.sdk.v1 only, as foxglove_bridge 3.x
+    for decoded in received:
+        assert [m.data for m in decoded['/walker/robot_description']] == [
+            '<robot name="walker"/>'], output
+        assert decoded['/walker/phase'][-1].step_index == 2
+
+
 @pytest.mark.parametrize('executable, arguments, words', [
     ('viz_node', ['-p', 'viz.tf_rate:=0.0'], 'viz.tf_rate'),
     ('foxglove_bridge', ['-p', 'port:=70000'], 'port'),

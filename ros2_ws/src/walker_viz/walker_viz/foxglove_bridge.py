@@ -8,8 +8,12 @@ names or glob patterns as the recorder takes them; by default the robot's namesp
 channel with the ``ros2msg`` schema of its type (the ``.msg`` text with its dependencies, as
 rosbag2 stores it) and ``cdr`` message encoding, and its messages are passed on as the CDR
 bytes DDS delivered, never decoded here. Each topic is subscribed with a QoS that matches all
-its publishers (transient local where they all latch: a client connecting later gets the
-robot description, the static transforms and the markers). The subscriptions live on a helper
+its publishers (transient local where they all latch). A latched topic's newest messages (as
+many as its publishers keep, :mod:`walker_viz.core.latched`) are sent again whenever a client
+subscribes to its channel, so a client that connects at any time gets the robot description,
+the static transforms, the markers, the phase, the control mode and the step reports, as a
+transient-local subscriber would (the WebSocket server itself keeps no message; the others
+subscribed to that channel get them once more). The subscriptions live on a helper
 node no executor spins; what they received is taken every ``take_period`` seconds, all topics
 at once, oldest first, so the bridge costs no callback per message of the 500 Hz topics.
 
@@ -20,10 +24,11 @@ also broadcast to clients as the server's time, so Foxglove's time follows the s
 from __future__ import annotations
 
 import sys
+from collections import deque
 from typing import Any
 
 import foxglove
-from foxglove.websocket import Capability
+from foxglove.websocket import Capability, ChannelView, Client, ServerListener
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -36,6 +41,7 @@ from walker_bag.core.topic_selection import TopicSelection
 from walker_bag.recorder_node import message_class, offered_qos
 from walker_runtime.node_main import run_node
 from walker_runtime.spinning import TopicSampler
+from walker_viz.core.latched import LatchedMessages
 
 __all__ = ['FoxgloveBridge', 'DEFAULT_TOPICS', 'main']
 
@@ -50,6 +56,16 @@ _QUEUE_DEPTH = 100  # messages each subscription holds between two takes
 
 class BridgeError(ValueError):
     """The bridge cannot start: a bad parameter, or a port it cannot bind."""
+
+
+class _Subscriptions(ServerListener):
+    """Note the channels clients subscribe to (called on the server's thread)."""
+
+    def __init__(self) -> None:
+        self.subscribed: deque[str] = deque()
+
+    def on_subscribe(self, client: Client, channel: ChannelView) -> None:
+        self.subscribed.append(channel.topic)
 
 
 class FoxgloveBridge(Node):
@@ -79,10 +95,13 @@ class FoxgloveBridge(Node):
         if not 0 <= port <= 65535:
             raise BridgeError(f'port must be 0..65535, got {port}')
         self._sim_time = bool(self.get_parameter('use_sim_time').value)
+        self._latched = LatchedMessages()
+        self._joins = _Subscriptions()
         try:
             self.server = foxglove.start_server(
                 name=f'walker {self.get_namespace()}', host=HOST, port=port,
-                capabilities=[Capability.Time] if self._sim_time else [])
+                capabilities=[Capability.Time] if self._sim_time else [],
+                server_listener=self._joins)
         except (RuntimeError, OSError) as error:
             raise BridgeError(f'cannot serve on {HOST}:{port}: {error}') from None
         self._channels: dict[str, tuple[Any, foxglove.Channel]] = {}
@@ -132,20 +151,34 @@ class FoxgloveBridge(Node):
                                  data=definition.text.encode())
         channel = foxglove.Channel(topic, schema=schema, message_encoding='cdr')
         subscription = self._sampler.subscribe(type_class, topic, qos, raw=True)
+        if durability == 'transient_local':  # DDS discovery seldom tells a history's depth
+            self._latched.latch(topic, max(offered_qos(p).depth for p in publishers) or 1)
         self._channels[topic] = (subscription, channel)
         self.get_logger().info(f'serving {topic} [{type_name}] ({reliability}, {durability})')
 
     def forward_received(self) -> int:
-        """Send every message received since the last call, oldest first; return how many."""
+        """Send every message received since the last call, oldest first; return how many.
+
+        Then a latched topic's newest messages again on each channel a client subscribed to
+        since the last call.
+        """
         now = self.get_clock().now().nanoseconds
         batch = []
-        for subscription, channel in self._channels.values():
+        for topic, (subscription, channel) in self._channels.items():
             for data, info in self._sampler.take_with_info(subscription):
                 received = info.get('received_timestamp') or 0
-                batch.append((received, channel, data))
+                batch.append((received, topic, channel, data))
         batch.sort(key=lambda item: item[0])
-        for _, channel, data in batch:
+        for _, topic, channel, data in batch:
             channel.log(bytes(data), log_time=now)
+            self._latched.passed_on(topic, data, now)
+        replayed = set()
+        while self._joins.subscribed:
+            topic = self._joins.subscribed.popleft()
+            if topic in self._channels and topic not in replayed:
+                replayed.add(topic)
+                for data, log_time in self._latched.newest(topic):
+                    self._channels[topic][1].log(data, log_time=log_time)
         if self._sim_time and batch:
             self.server.broadcast_time(now)
         return len(batch)
