@@ -163,8 +163,9 @@ class RobotLoop:
                 receive(channel.joint, effort, stamp)
             if output is not None and channel.state_due(seconds):
                 stale = channel.reports_stale
-                self.reports[channel.joint] = ControllerReport(seconds, stale,
-                                                               output.mode == Mode.HOLD)
+                self.reports[channel.joint] = ControllerReport(
+                    seconds, stale, output.mode == Mode.HOLD, Mode(output.mode).name.lower(),
+                    int(channel.controller.role))
                 if recording is not None:
                     recording.controller_state(stamp, channel.joint, measurement, output,
                                                stale)

@@ -25,7 +25,7 @@ from walker_planner.core.streaming import SampledTrajectory
 from walker_supervisor.core.commands import (
     CancelFollow, DecideNow, FollowMotion, GoalEnded, GripperRequest, Notice, PhaseRecord,
     PlanMotion, RenewPlannerClient, SetControlMode)
-from walker_supervisor.core.controller_watch import ControllerReport
+from walker_supervisor.core.controller_watch import ControllerReport, expected_role
 from walker_supervisor.core.prepared_motions import PlanAnswer, stream_lead
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
 from walker_supervisor.core.parameters import SupervisorParameters
@@ -82,6 +82,8 @@ class World:
         self.changes = []  # (time, gripper, state, node) the plant will report
         self.stream = None  # (ticket, trajectory, start time)
         self.mode = 'hold'
+        self.base = 'a'  # the base the controllers follow
+        self.rogue = ''  # a mode another control_mode publisher keeps the controllers in
         self.planner_silent = False  # the planner answers nothing ...
         self.heard_after_renewal = False  # ... until a client of it is made anew
         self.acceptances_lost = 0  # stream requests whose acceptance is lost on the way back
@@ -143,8 +145,10 @@ class World:
         runner.tip_pose(self.now, self.tip())
         if 'grippers' not in self.silent:
             self.execute(runner.gripper_states(self.grippers, self.now, self.now))
+        mode = self.rogue or self.mode
         self.execute(runner.controller_states(
-            {joint: ControllerReport(self.now, False, self.mode == 'hold')
+            {joint: ControllerReport(self.now, False, mode == 'hold', mode,
+                                     expected_role(joint, self.base))
              for joint in PHYSICAL_JOINT_NAMES if joint not in self.silent}, self.now,
             self.now))
         if self.now >= self.next_tick - 1e-9:
@@ -174,7 +178,7 @@ class World:
             if isinstance(command, RenewPlannerClient) and self.heard_after_renewal:
                 self.planner_silent = False
             if isinstance(command, SetControlMode):
-                self.mode = command.mode
+                self.mode, self.base = command.mode, command.base_gripper
             elif isinstance(command, GripperRequest):
                 self._gripper(command)
             elif isinstance(command, (PlanMotion, FollowMotion)):

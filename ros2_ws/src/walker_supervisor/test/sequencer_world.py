@@ -26,6 +26,7 @@ TRUSS = Truss.from_parameters(PARAMS)
 SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
+                                  mode_mismatch_hold_time=1.0,
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,
                                   mouth_settle_time=0.1, descent_region=0.002,
                                   descent_axis_tolerance=0.005, descent_arrival_time=0.02,

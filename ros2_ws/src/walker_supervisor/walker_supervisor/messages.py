@@ -66,10 +66,16 @@ def gripper_readings(msg: GripperStates) -> dict[str, tuple[str, str]]:
             for state in msg.grippers}
 
 
+#: ``walker_msgs/ControllerState`` mode constants -> the supervisor's mode names
+_CONTROLLER_MODES = {ControllerState.OFF: 'off', ControllerState.HOLD: 'hold',
+                     ControllerState.COARSE: 'coarse', ControllerState.FINE: 'fine'}
+
+
 def controller_report(msg: ControllerState) -> ControllerReport:
     """Return a controller's state message as the runner reads it."""
     return ControllerReport(seconds(msg.header.stamp), bool(msg.stale),
-                            msg.mode == ControllerState.HOLD)
+                            msg.mode == ControllerState.HOLD,
+                            _CONTROLLER_MODES.get(msg.mode, 'unknown'), int(msg.role))
 
 
 def mode_message(command: SetControlMode, stamp, commander: str) -> ControlMode:

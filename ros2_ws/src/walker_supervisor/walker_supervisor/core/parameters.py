@@ -56,6 +56,10 @@ class SupervisorParameters:
         'silence of the plant or a controller (steady clock) that puts the walker in safe hold',
         's', 0.05, 60.0, read_only=False,
         source='chosen: a loaded 2-core machine starves a process for over a second at times')
+    mode_mismatch_hold_time: float = parameter(
+        'time a controller may stay in a mode the supervisor did not command before a hold',
+        's', 0.0, 60.0, read_only=False,
+        source='chosen: four corrections; a real controller takes a command at its next state')
     coarse_start_tolerance: float = parameter(
         'largest joint distance from the start of the coarse motion, or of a way back, to begin '
         'it', 'rad', 1e-4, 0.5, read_only=False,

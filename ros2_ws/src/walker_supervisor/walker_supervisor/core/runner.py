@@ -239,10 +239,23 @@ class WalkRunner:
                           steady: float) -> list:
         """Take each controller's newest report (joint -> report), of those that reported."""
         self._steady = steady
+        if self.sequencer.phase == Phase.IDLE and not self.sequencer.busy \
+                and self._recorded is None and not self._adoption_due:
+            self.controllers.expect_idle_hold()
         for joint, report in reports.items():
             self.health.seen(f'controller {joint}', steady,
-                             self.controllers.trouble(report, self.sequencer.busy))
+                             self.controllers.trouble(report, self.sequencer.busy, joint))
         self._emit(*self.controllers.fell_back(reports, self.sequencer.busy, now, steady))
+        self._emit(*self.controllers.unexpected_modes(reports, now, steady))
+        limit = self.settings.mode_mismatch_hold_time
+        if self.controllers.mismatch_lasted(steady, limit) \
+                and self.sequencer.phase != Phase.SAFE_HOLD:
+            reason = (f'a controller stayed in a mode this supervisor did not command for '
+                      f'{limit:g} s in spite of its corrections (another control_mode publisher?)')
+            self._emit(Notice(reason, 'error'))
+            self._execute(self.sequencer.hold(reason, now), now)
+            self._emit(StopJog(reason))
+            self._announce(now)
         return self._flush()
 
     def latched_mode(self, base: str) -> None:
