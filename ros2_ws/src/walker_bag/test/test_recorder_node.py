@@ -406,3 +406,42 @@ def test_the_bag_is_split_by_duration_keeps_its_newest_files_and_is_continued_on
             assert make_reader(file).get_summary().statistics.message_count > 0
     with BagReader(bag) as reader:
         assert reader.message_count == metadata.message_count
+
+
+def test_a_recorder_killed_and_started_again_records_what_it_missed_in_the_bag(ros_env,
+                                                                                tmp_path):
+    """The span each topic was not recorded and its estimated count, in the bag itself.
+
+    In its custom_data and as a diagnostic status written into it, the recorder started again
+    as the bring-up restarts one.
+    """
+    bag = tmp_path / 'restarted'
+    down = 1.0  # [s] at least this long with no recorder
+    with publisher(ros_env, 'stream') as stream:
+        assert stream.wait_for_output('streaming', START_TIMEOUT), stream.output
+        with recorder(ros_env, bag) as rec:
+            wait_until(lambda: flushed_counts(bag).get('/walker/joint_states', 0) > 0,
+                       START_TIMEOUT, 'joint states in the bag')
+            segments = dds_segments(rec.process.pid)
+            os.kill(rec.process.pid, signal.SIGKILL)
+            assert rec.process.wait(timeout=START_TIMEOUT) == -signal.SIGKILL
+        remove_orphaned(segments)
+        time.sleep(down)
+        with recorder(ros_env, bag, 'recorder.append:=true') as rec:
+            wait_until(lambda: 'recorder_gap /walker/joint_states'
+                       in read_metadata(bag).custom_data, START_TIMEOUT, 'the gap recorded')
+            rec.stop()
+            assert rec.process.returncode == 0, rec.output
+            output = rec.output
+    gap = read_metadata(bag).custom_data['recorder_gap /walker/joint_states']
+    start, end, estimated = (int(v) for v in gap.split())
+    assert (end - start) * 1e-9 >= down and estimated > 0
+    assert '/walker/joint_states: not recorded for' in output
+    with BagReader(bag) as reader:
+        statuses = [status for record in reader.messages(['/diagnostics'])
+                    for status in record.message.status]
+    missed = [s for s in statuses if s.message.startswith('/walker/joint_states: not recorded')]
+    assert len(missed) == 1
+    values = {kv.key: kv.value for kv in missed[0].values}
+    assert values['topic'] == '/walker/joint_states' and int(values['estimated_count']) == \
+        estimated and int(values['start_ns']) == start and int(values['end_ns']) == end

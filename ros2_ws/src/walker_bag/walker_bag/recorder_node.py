@@ -29,7 +29,10 @@ Messages the middleware reports lost on the way (the recorder stalled while publ
 best-effort ones dropped, reliable ones overwritten in the publisher's history) are counted per
 topic (:mod:`walker_bag.core.losses`) and said in the log, on ``/diagnostics`` (the status
 ``<node>: recording``, 1 Hz on the steady clock) and in the bag's ``custom_data``
-(``messages_lost``). All bag logic is in :mod:`walker_bag.core`.
+(``messages_lost``). A recorder started again on its bag measures what it did not record while
+it was down (:mod:`walker_bag.core.restart_gaps`): at each topic's first message, the span and
+an estimated count, logged, written into the bag as a ``DiagnosticStatus`` on ``/diagnostics``
+and into its ``custom_data`` (``recorder_gap``). All bag logic is in :mod:`walker_bag.core`.
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
+from rclpy.serialization import serialize_message
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 from walker_runtime.node_parameters import declare_section
@@ -63,6 +67,7 @@ from walker_bag.core.losses import LossLedger
 from walker_bag.core.message_definitions import message_definition, type_description_hash
 from walker_bag.core.qos import QosProfile, subscription_policies
 from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
+from walker_bag.core.restart_gaps import RestartGaps, TopicGap
 from walker_bag.core.topic_selection import TopicSelection
 
 __all__ = ['RecorderNode', 'offered_qos', 'message_class', 'main']
@@ -76,6 +81,9 @@ _DRAIN_STEP = 0.02
 _INVALID_HASH = 'INVALID'
 _DIAGNOSTICS_PERIOD = 1.0  # [s] steady clock
 _OK, _WARN = bytes([0]), bytes([1])  # diagnostic_msgs/DiagnosticStatus levels
+#: The QoS the recorder's own ``/diagnostics`` publisher offers (its gap records in the bag).
+_DIAGNOSTICS_OFFER = QosProfile(reliability='reliable', durability='volatile',
+                                history='keep_last', depth=10)
 
 
 def offered_qos(endpoint: TopicEndpointInfo) -> QosProfile:
@@ -125,6 +133,7 @@ class RecorderNode(Node):
             custom_data={'clock': 'sim_time' if self._use_sim_time else 'system_time',
                          **self._losses.custom_data()},
             split=self._settings.split, append=self._settings.append)
+        self._gaps = RestartGaps.after(self._writer.earlier_files, self._writer.custom_data)
         self._loss_handlers: list[EventHandler] = []
         self._subscriptions_by_topic: dict[str, Any] = {}
         # the subscriptions live on a node no executor spins: taken every take_period
@@ -262,8 +271,31 @@ class RecorderNode(Node):
         batch.sort(key=lambda message: message[:2])
         for received, published, topic, data, sequence in batch:
             self._writer.write(topic, data, received, published, sequence)
+            gap = self._gaps.first_message(topic, received) if self._gaps else None
+            if gap is not None:
+                self._record_gap(gap, received)
         self._received += len(batch)
         return len(batch)
+
+    def _record_gap(self, gap: TopicGap, now: int) -> None:
+        """Say in the log and in the bag (a diagnostic status, custom_data) what was missed."""
+        self.get_logger().warning(gap.text())
+        for key, value in self._gaps.custom_data().items():
+            self._writer.set_custom_data(key, value)
+        type_name = 'diagnostic_msgs/msg/DiagnosticArray'
+        self._writer.add_topic(TopicMetadata('/diagnostics', type_name, (_DIAGNOSTICS_OFFER,),
+                                             type_description_hash(type_name)),
+                               message_definition(type_name))
+        status = DiagnosticStatus(
+            name=f'{self.get_fully_qualified_name()}: not recorded', level=_WARN,
+            hardware_id=self.get_namespace(), message=gap.text(),
+            values=[KeyValue(key='topic', value=gap.topic),
+                    KeyValue(key='start_ns', value=str(gap.start_ns)),
+                    KeyValue(key='end_ns', value=str(gap.end_ns)),
+                    KeyValue(key='estimated_count', value=str(gap.estimated))])
+        message = DiagnosticArray(status=[status])
+        message.header.stamp.sec, message.header.stamp.nanosec = divmod(now, 1_000_000_000)
+        self._writer.write('/diagnostics', serialize_message(message), now, now)
 
     def drain(self, executor: SingleThreadedExecutor, limit: float = DRAIN_LIMIT) -> None:
         """Take and write the messages already received, for at most ``limit`` seconds."""

@@ -349,3 +349,28 @@ def test_a_bag_its_recorder_left_cut_is_completed_once_the_graph_is_down(tmp_pat
     with open(bag / 'bag_0.mcap', 'rb') as stream:
         assert len(list(make_reader(stream).iter_messages())) == 5
     assert _recover_bags([bag]) == []  # complete now: nothing to say
+
+
+def test_the_walk_summary_takes_what_the_bag_lacks_from_its_own_record(tmp_path):
+    """A frozen recorder's losses and a killed one's gap: from the bag's metadata, as flushed."""
+    from walker_bag.core.bag_writer import BagWriter
+    from walker_core.robot_parameters import default_parameter_file
+    from walker_bringup.run import _Walker
+
+    bag = tmp_path / 'bag'
+    nodes = walker_graph(default_parameter_file(), record=True, bag_path=bag)
+    walker = _Walker('/walker', None, nodes, ProcessGroup(
+        tmp_path / 'logs', {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}))
+    assert walker.recording() is None  # no bag yet
+    with BagWriter(bag, custom_data={
+            'messages_lost': '405', 'messages_lost /walker/joint_states': '405',
+            'recorder_gap /walker/joint_states': '1000000000 2670000000 834'}):
+        pass
+    recording = walker.recording()
+    assert recording['messages_lost'] == 405
+    assert recording['not_recorded'] == [pytest.approx(
+        {'topic': '/walker/joint_states', 'start': 1.0, 'end': 2.67, 'span': 1.67,
+         'estimated': 834})]
+    path = tmp_path / 'summary.json'
+    write_json([], path, {'recording': recording})
+    assert json.loads(path.read_text())['recording']['not_recorded'][0]['estimated'] == 834

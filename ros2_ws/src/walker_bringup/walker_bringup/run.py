@@ -47,6 +47,9 @@ from walker_bringup.core.respawn import DEFAULT_DELAY, DEFAULT_LIMIT, RespawnPol
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.summary import format_table, rows_from_reports, write_json
+from walker_bag.core.bag_metadata import read_metadata
+from walker_bag.core.errors import MetadataError
+from walker_bag.core.losses import loss_lines, recorded_losses
 from walker_bringup.transport import (
     DEFAULT_TRANSPORT, PROFILES_VARIABLE, STATIC_PEERS_VARIABLE, TRANSPORTS, default_transport,
     graph_environment)
@@ -310,6 +313,21 @@ class _Walker:
     def processes(self) -> dict[str, dict]:
         """Deaths and restarts of each node that died (the walk summary's ``processes``)."""
         return {} if self.respawner is None else self.respawner.summary()
+
+    def recording(self) -> dict | None:
+        """Return what the walker's bag says it lacks so far (None without a bag).
+
+        The messages lost on the way to the recorder and the spans a recorder started again
+        did not record, from the bag's ``metadata.yaml`` as the recorder last flushed it
+        (:func:`walker_bag.core.losses.recorded_losses`).
+        """
+        bags = _bag_paths([self])
+        if not bags:
+            return None
+        try:
+            return recorded_losses(dict(read_metadata(bags[0]).custom_data))
+        except (MetadataError, OSError):
+            return None
 
     @property
     def label(self) -> str:
@@ -723,12 +741,15 @@ def _walk(walker: _Walker, target: str, args, progress: _Progress, should_stop, 
         print(format_table(rows) if rows else '[walker] no step was taken')
         if client.loop is not None:
             print(f'[walker] {prefix}{client.loop.summary(args.control_rate)}')
+        recording = walker.recording()
+        for line in loss_lines(recording) if recording else []:
+            print(f'[walker] {prefix}the bag lacks messages: {line}')
         write_json(rows, out / summary_name,
                    {'target': target, 'reached': bool(result.success),
                     'message': result.message, 'path': list(result.path),
                     'wall_time': time.monotonic() - started,
                     'loop': None if client.loop is None else client.loop.as_dict(),
-                    'processes': walker.processes(),
+                    'processes': walker.processes(), 'recording': recording,
                     **({'namespace': client.namespace} if label else {})})
         if result.success:
             print(f'[walker] {prefix}reached {target} in {result.steps_taken} steps, '

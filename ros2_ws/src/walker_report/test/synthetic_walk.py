@@ -213,7 +213,8 @@ def error_at(joint: str, t: float) -> float:
 
 def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True,
                    description: bool = True, safe_hold: bool = False,
-                   leave_out: tuple[str, ...] = ()) -> Path:
+                   leave_out: tuple[str, ...] = (),
+                   custom_data: dict[str, str] | None = None) -> Path:
     """Write the synthetic walk as a bag at ``path`` and return it.
 
     Parameters
@@ -224,6 +225,8 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
         Stop step 2 in SAFE_HOLD during fine motion (no insertion, no report for it).
     leave_out : tuple of str
         Further topics (relative names) not to record.
+    custom_data : dict, optional
+        Further ``custom_data`` of the bag (a recorder's record of its losses).
     """
     steps = _steps(safe_hold)
     truss = walker_truss()
@@ -231,7 +234,7 @@ def build_walk_bag(path: Path, *, reports: bool = True, controllers: bool = True
               and (controllers or not t.startswith('controllers/'))
               and (description or t != 'robot_description') and t not in leave_out]
     store = walker_typestore()
-    with BagWriter(path, custom_data={'clock': 'sim_time'}) as bag:
+    with BagWriter(path, custom_data={'clock': 'sim_time', **(custom_data or {})}) as bag:
         w = _Writer(bag, store, topics)
         t_ = w.t
         messages = []  # (time, order, callable) written in time order

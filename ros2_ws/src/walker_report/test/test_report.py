@@ -227,3 +227,23 @@ def test_the_settling_window_is_the_parameter_files(tmp_path, walk_bag):
     result = make_report(walk_bag, tmp_path / 'out', params_file,
                          options=ReportOptions(animation=False))
     assert result.content.settle_time == 1.0
+
+
+def test_the_report_says_what_the_bag_lacks_losses_and_a_recorders_downtime(tmp_path):
+    """A frozen recorder's losses and a killed one's gap, from the bag's own record."""
+    bag = build_walk_bag(tmp_path / 'bag', custom_data={
+        'messages_lost': '477', 'messages_lost /walker/joint_states': '405',
+        'messages_lost /clock': '72',
+        'recorder_gap /walker/joint_states': '2000000000 3670000000 834'})
+    report = make_report(bag, tmp_path / 'report',
+                         options=ReportOptions(animation=False, settle_time=1.0))
+    assert report.content.walk.bag.losses['messages_lost'] == 477
+    text = report.markdown.read_text()
+    assert '**What the bag lacks**' in text
+    assert '477 messages lost on the way to the recorder: /clock 72, /walker/joint_states 405' \
+        in text
+    assert 'about 834 messages not recorded while the recorder was down (up to 1.67 s)' in text
+
+
+def test_a_bag_that_lacks_nothing_says_nothing_of_it(report):
+    assert 'What the bag lacks' not in report.markdown.read_text()

@@ -162,6 +162,11 @@ class BagWriter:
         return {name: stored.metadata for name, stored in self._topics.items()}
 
     @property
+    def earlier_files(self) -> list[tuple[FileInformation, Mapping[str, int]]]:
+        """The files this writer found and continued (``append``): information and counts."""
+        return [(f.information, dict(f.counts)) for f in self._finished]
+
+    @property
     def custom_data(self) -> dict[str, str]:
         """rosbag2's ``custom_data`` (a copy)."""
         return dict(self._custom_data)

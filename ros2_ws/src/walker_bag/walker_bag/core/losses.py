@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import dataclasses
 
-__all__ = ['TopicLoss', 'LossLedger', 'LOST_KEY']
+from walker_bag.core.restart_gaps import GAP_KEY
+
+__all__ = ['TopicLoss', 'LossLedger', 'LOST_KEY', 'recorded_losses', 'loss_lines']
 
 #: ``custom_data`` key of the total lost; ``<LOST_KEY> <topic>`` holds each topic's count.
 LOST_KEY = 'messages_lost'
@@ -76,3 +78,50 @@ class LossLedger:
         entries.update({f'{LOST_KEY} {topic}': str(loss.count)
                         for topic, loss in sorted(self._topics.items())})
         return entries
+
+
+def recorded_losses(custom_data: dict[str, str]) -> dict:
+    """Return what a bag says it lacks, from its ``custom_data``: plain data for a summary.
+
+    Returns ``{'messages_lost': total, 'lost': {topic: count}, 'not_recorded': [{'topic',
+    'start', 'end', 'span' [s], 'estimated'}]}``: the messages the middleware reported lost
+    (a recorder that stalled) and the spans a recorder started again did not record
+    (:mod:`walker_bag.core.restart_gaps`). Malformed entries are left out.
+    """
+    lost = {}
+    for key, value in custom_data.items():
+        if key.startswith(LOST_KEY + ' '):
+            try:
+                lost[key[len(LOST_KEY) + 1:]] = int(value)
+            except ValueError:
+                continue
+    gaps = []
+    for key, value in sorted(custom_data.items()):
+        if not key.startswith(GAP_KEY + ' '):
+            continue
+        for entry in value.split(';'):
+            try:
+                start, end, estimated = (int(v) for v in entry.split())
+            except ValueError:
+                continue
+            gaps.append({'topic': key[len(GAP_KEY) + 1:], 'start': start * 1e-9,
+                         'end': end * 1e-9, 'span': (end - start) * 1e-9,
+                         'estimated': estimated})
+    return {'messages_lost': sum(lost.values()), 'lost': lost, 'not_recorded': gaps}
+
+
+def loss_lines(losses: dict) -> list[str]:
+    """Lines for a console or a report of :func:`recorded_losses` (none when nothing lacks)."""
+    lines = []
+    if losses['messages_lost']:
+        lines.append(f'{losses["messages_lost"]} messages lost on the way to the recorder: '
+                     + ', '.join(f'{topic} {count}'
+                                 for topic, count in sorted(losses['lost'].items())))
+    if losses['not_recorded']:
+        total = sum(gap['estimated'] for gap in losses['not_recorded'])
+        worst = max(gap['span'] for gap in losses['not_recorded'])
+        lines.append(f'about {total} messages not recorded while the recorder was down (up to '
+                     f'{worst:.2f} s): ' + ', '.join(
+                         f'{gap["topic"]} ~{gap["estimated"]} ({gap["span"]:.2f} s from '
+                         f'{gap["start"]:.2f} s)' for gap in losses['not_recorded']))
+    return lines

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from walker_bag.core.losses import loss_lines
 from walker_report.core.analysis import JointStats
 from walker_report.core.animation import AnimationResult
 from walker_report.core.steps import PHASES, format_markdown
@@ -62,6 +63,10 @@ def write_markdown(path: Path, content, figures: dict[str, Path],
     if content.notes:
         lines += ['**What is missing or went wrong:**', '']
         lines += [f'- {note}' for note in content.notes] + ['']
+    lacking = loss_lines(bag.losses)
+    if lacking:
+        lines += ['**What the bag lacks** (its own record, `custom_data`):', '']
+        lines += [f'- {line}' for line in lacking] + ['']
 
     lines += ['## Steps', '',
               "Times in s (the phases as the supervisor timed them), the step's time-optimal "

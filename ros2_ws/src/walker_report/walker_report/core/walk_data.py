@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from walker_bag.core.bag_metadata import read_metadata
+from walker_bag.core.losses import recorded_losses
 from walker_bag.core.bag_reader import BagReader
 from walker_bag.core.errors import BagError, MetadataError
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
@@ -71,6 +72,9 @@ class BagSummary:
         ``custom_data.clock`` of the metadata (``sim_time`` or ``wall``; ``''`` if unknown).
     size_bytes : int
         Size of the bag's files [bytes].
+    losses : dict
+        What the bag says it lacks (:func:`walker_bag.core.losses.recorded_losses`): messages
+        lost on the way to the recorder, spans a recorder started again did not record.
     """
 
     path: Path
@@ -80,6 +84,7 @@ class BagSummary:
     topics: dict[str, tuple[str, int]]
     clock: str
     size_bytes: int
+    losses: dict = dataclasses.field(default_factory=lambda: recorded_losses({}))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -365,9 +370,10 @@ def load_walk(bag_dir: str | Path, namespace: str | None = None,
         if not namespace.startswith('/'):
             raise ReportError(f'the namespace must be absolute (start with /), got {namespace!r}')
         try:
-            clock_kind = read_metadata(path).custom_data.get('clock', '')
+            custom_data = dict(read_metadata(path).custom_data)
         except MetadataError:
-            clock_kind = ''
+            custom_data = {}
+        clock_kind = custom_data.get('clock', '')
         start_ns = reader.start_time_ns if reader.message_count else 0
         end_ns = reader.end_time_ns - 1 if reader.message_count else 0
         summary = BagSummary(
@@ -375,7 +381,8 @@ def load_walk(bag_dir: str | Path, namespace: str | None = None,
             message_count=reader.message_count,
             topics={t: (topic_types[t], counts.get(t, 0)) for t in sorted(topic_types)},
             clock=clock_kind, size_bytes=sum(f.stat().st_size for f in path.iterdir()
-                                             if f.is_file()))
+                                             if f.is_file()),
+            losses=recorded_losses(custom_data))
         names = {rel: _absolute(namespace, rel) for rel in TOPICS if '*' not in rel}
         controller_topics = {
             _absolute(namespace, f'controllers/{joint}/state'): joint
