@@ -82,7 +82,8 @@ class Graph:
 
 @pytest.fixture
 def graph(tmp_path):
-    yield from running_graph(Graph, tmp_path)
+    with running_graph(Graph, tmp_path) as running:
+        yield running
 
 
 def test_a_mode_written_in_the_supervisors_name_is_corrected_at_once(graph):
