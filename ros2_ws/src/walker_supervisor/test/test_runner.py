@@ -132,7 +132,7 @@ def test_a_steps_bound_counts_its_screw_actions_and_its_planned_motions_once_eac
 
     A jam plans a second descent; it and the lift back after the jam are not in the bound.
     """
-    world = World()
+    world = World(dataclasses.replace(SETTINGS, search_radius=0.0))
     world.jam = 1
     ended = world.goal('step', 'n1_2')
     (record,) = world.of(StepRecord)

@@ -17,7 +17,7 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
 __all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'measure_step_targets',
-           'recovery_targets']
+           'recovery_targets', 'probe_targets']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -106,12 +106,15 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
 
     The tip stays vertical (alpha = 0) and keeps its heading in the truss frame: the tip yaw J5
     turns with the base yaw J1 (as the planner's Cartesian motions do), so both turn by the
-    step's sweep.
+    step's sweep. The extraction starts where the moving gripper is, the forward kinematics of
+    the joints now (both grippers attached), not where the parameter file puts its node: a
+    gripper screwed into a node off its nominal place lifts along that node's own axis.
 
     Parameters
     ----------
     from_position, to_position : ndarray, shape (3,)
-        Truss-frame positions [m] of the node the moving gripper leaves and of its target.
+        Truss-frame positions [m] of the node the moving gripper leaves (unused: the joints
+        say where it is) and of its target (the truss map's estimate).
     theta_roles : ndarray, shape (5,)
         Joint angles J1..J5 now [rad].
     approach_height : float
@@ -125,7 +128,7 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     theta = np.asarray(theta_roles, dtype=float)
     sweep = step.sweep
     lift = np.array([0.0, 0.0, approach_height])
-    point_from = frame.to_base(from_position)
+    point_from = kinematics.forward(theta)[:3]
     point_to = frame.to_base(to_position)
     above_from = kinematics.inverse([*(point_from + lift), 0.0, theta[4]], reference=theta)
     reference = theta.copy()
@@ -173,3 +176,28 @@ def recovery_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plann
     at_to = kinematics.inverse([*point_to, 0.0, theta[4]], reference=above_to)
     return StepTargets(frame, step.sweep, theta, above_from, above_to, at_to,
                        point_from + lift, point_to + lift, point_to)
+
+
+def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
+                  offset: np.ndarray) -> StepTargets:
+    """The step's targets moved to a search probe ``offset`` [m] (x, y, truss frame) away.
+
+    The points above the hole and at its mouth move by the offset (turned into the base frame);
+    the joint targets there are the IK solutions nearest the step's own
+    (:mod:`~walker_supervisor.core.hole_search`).
+
+    Raises
+    ------
+    KinematicsError
+        When a moved target is out of reach or outside the joint limits.
+    """
+    c, s = math.cos(targets.frame.heading), math.sin(targets.frame.heading)
+    dx, dy = float(offset[0]), float(offset[1])
+    shift = np.array([c * dx + s * dy, -s * dx + c * dy, 0.0])
+    point_above_to = targets.point_above_to + shift
+    point_to = targets.point_to + shift
+    yaw = float(kinematics.forward(targets.above_to)[4])
+    above_to = kinematics.inverse([*point_above_to, 0.0, yaw], reference=targets.above_to)
+    at_to = kinematics.inverse([*point_to, 0.0, yaw], reference=above_to)
+    return dataclasses.replace(targets, above_to=above_to, at_to=at_to,
+                               point_above_to=point_above_to, point_to=point_to)
