@@ -96,3 +96,20 @@ def test_a_survey_file_round_trips_and_a_bad_one_changes_nothing():
     with pytest.raises(SurveyFileError, match='format'):
         loaded.load({'nodes': {}})
     assert loaded.surveyed_nodes == ['n1_1', 'n2_1']
+
+
+def test_a_survey_file_written_is_read_back_and_a_broken_one_is_named(tmp_path):
+    from walker_supervisor.core.survey_file import read_survey, write_survey
+
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED))
+    path = write_survey(tmp_path / 'truss_survey.yaml', survey)
+    loaded = TrussMap.from_dict(TRUSS, 0.0015, 2e-4, read_survey(path))
+    np.testing.assert_allclose(loaded.position('n2_1'), survey.position('n2_1'))
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('format: [unclosed')
+    with pytest.raises(SurveyFileError, match='broken.yaml'):
+        read_survey(broken)
+    with pytest.raises(SurveyFileError, match='missing.yaml'):
+        read_survey(tmp_path / 'missing.yaml')
