@@ -97,7 +97,7 @@ def run_headless(args) -> int:
 
 
 def _checked_survey(configuration, path) -> dict | None:
-    """The content of the survey file at ``path`` (None: none), checked against the truss."""
+    """Return the survey file at ``path`` (None: none), checked against the truss."""
     if not path:
         return None
     content = read_survey(path)
@@ -109,7 +109,7 @@ def _checked_survey(configuration, path) -> dict | None:
 
 
 def _survey_map(configuration, content: dict):
-    """The truss map of a walk's survey content (to write it as the supervisor keeps it)."""
+    """Return the truss map of a walk's survey content (to write it as the supervisor has it)."""
     settings = configuration.supervisor
     return TrussMap.from_dict(Truss.from_parameters(configuration.walker),
                               settings.node_prior_std, settings.joint_reading_std, content)

@@ -72,7 +72,7 @@ class SearchPattern:
     @classmethod
     def around(cls, reach: float, horizontal_std: float, sigmas: float,
                radius: float) -> 'SearchPattern':
-        """The pattern for an estimate of ``horizontal_std`` [m], no probe beyond ``radius`` [m].
+        """Return the pattern for an estimate of ``horizontal_std`` [m], no probe past ``radius``.
 
         Covers ``sigmas * horizontal_std``, at most ``radius - reach`` (so its outer probes stay
         within ``radius``); a ``radius`` under ``reach`` gives the estimate alone (no search).
@@ -105,7 +105,7 @@ class HoleSearch:
         self.probe = 0  # index of the probe being tried (0: the estimate)
 
     def __len__(self) -> int:
-        """Insertion attempts the search makes at most (the estimate twice)."""
+        """Return the insertion attempts the search makes at most (the estimate twice)."""
         return len(self._sequence)
 
     @property

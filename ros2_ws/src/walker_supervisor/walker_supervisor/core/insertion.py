@@ -149,7 +149,7 @@ def _below_the_approach(run: StepRun) -> bool:
 
 
 def _attempt_limit(run: StepRun) -> int:
-    """Insertion attempts allowed so far: ``max_insertion_attempts``, and one per probe moved to."""
+    """Return the attempts allowed so far: ``max_insertion_attempts``, one more per probe."""
     moved = run.search.probes_moved if run.search is not None else 0
     return run.parameters.max_insertion_attempts + moved
 

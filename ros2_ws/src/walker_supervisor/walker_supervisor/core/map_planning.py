@@ -67,7 +67,7 @@ class MapPlanning:
         self.map.joint_std = np.full(5, settings.joint_reading_std)
 
     def forget_stance(self) -> None:
-        """An operator changed the stance: the last step's frame no longer holds."""
+        """Forget the last step's frame: an operator changed the stance."""
         self._last = None
 
     def targets(self, step: PlannedStep, theta_roles: np.ndarray) -> StepTargets:
@@ -90,7 +90,7 @@ class MapPlanning:
                                  survey.position(step.to_node), theta, self.approach_height)
 
     def search(self, step: PlannedStep) -> HoleSearch | None:
-        """The search for the step's target hole on a jam (None: ``search_radius`` is 0)."""
+        """Return the search for the step's target hole on a jam (None: ``search_radius`` 0)."""
         settings = self.settings
         if settings.search_radius <= 0.0:
             return None

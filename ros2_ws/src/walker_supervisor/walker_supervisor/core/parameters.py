@@ -91,12 +91,12 @@ class SupervisorParameters:
         'm', 0.0, 0.02, read_only=False,
         source='chosen: a truss assembled to about a millimetre, relative to the base node')
     joint_reading_std: float = parameter(
-        "standard deviation of a joint's reading, calibration offset and noise together "
-        "(the truss map's survey)", 'rad', 0.0, 0.01, read_only=False,
+        "standard deviation of a joint's reading, offset and noise together (the map's survey)",
+        'rad', 0.0, 0.01, read_only=False,
         source="chosen: an output encoder's calibration to 0.2 mrad")
     search_radius: float = parameter(
-        "farthest a search probe goes from the map's estimate of a jammed hole (0: no search, "
-        "a jam is retried in place)", 'm', 0.0, 0.02, read_only=False,
+        "farthest a search probe goes from the estimate of a hole (0: jams retried in place)",
+        'm', 0.0, 0.02, read_only=False,
         source='chosen: a hole 3-4 mm off (3 std of a 1.5 mm placement) is found')
     search_sigmas: float = parameter(
         "standard deviations of the node's estimate that a search covers",

@@ -578,7 +578,7 @@ class WalkRunner:
         return self.mapped.targets(step, theta_roles)
 
     def _survey_screw_in(self, outcome: StepOutcome) -> None:
-        """A step screwed in: survey its node from the joints, in its base's role order."""
+        """Survey the node a step screwed into from the joints, in its base's role order."""
         step, targets = self.sequencer.step, self.sequencer.targets
         if not outcome.success or step is None or targets is None \
                 or self.measured.positions is None:

@@ -180,7 +180,7 @@ def recovery_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plann
 
 def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
                   offset: np.ndarray) -> StepTargets:
-    """The step's targets moved to a search probe ``offset`` [m] (x, y, truss frame) away.
+    """Return the step's targets moved to a search probe ``offset`` [m] (x, y, truss frame).
 
     The points above the hole and at its mouth move by the offset (turned into the base frame);
     the joint targets there are the IK solutions nearest the step's own

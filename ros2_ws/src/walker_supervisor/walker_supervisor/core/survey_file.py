@@ -22,7 +22,7 @@ SURVEY_FILE_NAME = 'truss_survey.yaml'
 
 
 def read_survey(path: str | Path) -> dict:
-    """The content of a survey file; raises SurveyFileError naming the file and what is wrong."""
+    """Return a survey file's content; raises SurveyFileError naming the file and the fault."""
     try:
         content = yaml.safe_load(Path(path).read_text())
     except (OSError, yaml.YAMLError) as error:

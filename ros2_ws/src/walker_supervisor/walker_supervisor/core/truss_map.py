@@ -114,7 +114,7 @@ class TrussMap:
 
     # ------------------------------------------------------------------ queries
     def estimate(self, node: str) -> NodeEstimate:
-        """The node's estimate: surveyed, or nominal with the prior (raises UnknownNodeError)."""
+        """Return the node's estimate: surveyed, or nominal with the prior (UnknownNodeError)."""
         if node in self._surveyed:
             return self._surveyed[node]
         return NodeEstimate(self.truss.position(node), np.eye(3) * self.prior_std ** 2, False)
@@ -124,7 +124,7 @@ class TrussMap:
         return self.estimate(node).position.copy()
 
     def surveyed(self, node: str) -> bool:
-        """True if the node's place has been measured (or it anchors the frame)."""
+        """Return True if the node's place has been measured (or it anchors the frame)."""
         return node in self._surveyed
 
     @property
@@ -180,7 +180,7 @@ class TrussMap:
 
     # ------------------------------------------------------------------ the survey file
     def to_dict(self) -> dict:
-        """The survey file's content: plain lists and floats (docs/walking.md)."""
+        """Return the survey file's content: plain lists and floats (docs/walking.md)."""
         return {'format': SURVEY_FORMAT, 'frame': 'truss', 'anchor': self.anchor,
                 'nodes': {n: {'position': [float(v) for v in e.position],
                               'covariance': [[float(v) for v in row] for row in e.covariance]}
@@ -192,7 +192,7 @@ class TrussMap:
         Nothing changes if any entry is wrong.
         """
         if not isinstance(content, dict) or content.get('format') != SURVEY_FORMAT:
-            raise SurveyFileError(f"a survey file must have format: {SURVEY_FORMAT}")
+            raise SurveyFileError(f'a survey file must have format: {SURVEY_FORMAT}')
         nodes = content.get('nodes') or {}
         anchor = content.get('anchor') or ''
         if not isinstance(nodes, dict):
@@ -221,7 +221,7 @@ class TrussMap:
 
     @classmethod
     def from_dict(cls, truss: Truss, prior_std: float, joint_std, content: dict) -> 'TrussMap':
-        """A map with a survey file's content (:meth:`load`)."""
+        """Return a map with a survey file's content (:meth:`load`)."""
         survey = cls(truss, prior_std, joint_std)
         survey.load(content)
         return survey
