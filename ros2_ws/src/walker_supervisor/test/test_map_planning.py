@@ -107,3 +107,26 @@ def test_the_search_follows_the_targets_uncertainty_and_zero_radius_turns_it_off
     import dataclasses
     planning.set_settings(dataclasses.replace(SETTINGS, search_radius=0.0))
     assert planning.search(STEP) is None
+
+
+def test_the_coarse_motion_keeps_its_starts_radius_and_height_and_fine_takes_the_rest():
+    """The node-to-node motion circles the base axis: it ends at the target's bearing."""
+    theta = _stance(0.0, TRUSS.position('n2_1') + OFF)
+    frame = BaseFrame.from_stance(KIN, theta, TRUSS.position('n1_1'), TRUSS.position('n2_1'))
+    targets = plan_step_targets(KIN, frame, STEP, TRUSS.position('n2_1'),
+                                TRUSS.position('n1_2'), theta, HEIGHT)
+    joints, point = targets.coarse_goal
+    start = targets.point_above_from
+    assert np.hypot(*point[:2]) == pytest.approx(np.hypot(*start[:2]), abs=1e-12)
+    assert point[2] == pytest.approx(start[2], abs=1e-12)
+    bearing = np.arctan2(point[1], point[0]) - np.arctan2(*targets.point_above_to[1::-1])
+    assert abs(np.remainder(bearing + np.pi, 2 * np.pi) - np.pi) < 1e-12
+    np.testing.assert_allclose(KIN.forward(joints)[:3], point, atol=1e-9)
+    # within the fine region of the point above the hole: FINE takes it there
+    assert np.linalg.norm(point - targets.point_above_to) < 0.005
+    # on the nominal truss the coarse motion ends on the point above the hole itself
+    nominal = plan_step_targets(KIN, frame, STEP, TRUSS.position('n2_1'),
+                                TRUSS.position('n1_2'), _stance(0.0, TRUSS.position('n2_1')),
+                                HEIGHT)
+    assert nominal.coarse_to is None
+    np.testing.assert_array_equal(nominal.coarse_goal[1], nominal.point_above_to)

@@ -86,6 +86,14 @@ class StepTargets:
         Joint angles with the tip in the new node's hole mouth [rad].
     point_above_from, point_above_to, point_to : ndarray
         The same tip positions [m] in the base frame.
+    coarse_to : ndarray or None
+        Joint angles where the coarse motion ends, when not ``above_to`` [rad]: the node-to-node
+        motion keeps its start's distance from the base yaw axis and its height, so with the
+        moving gripper's node or the target off their nominal places it ends on that circle,
+        at the target's bearing, and FINE takes the tip the rest of the way (None: at
+        ``above_to``).
+    point_coarse_to : ndarray or None
+        The same tip position [m] in the base frame.
     """
 
     frame: BaseFrame
@@ -97,6 +105,15 @@ class StepTargets:
     point_above_from: np.ndarray
     point_above_to: np.ndarray
     point_to: np.ndarray
+    coarse_to: np.ndarray | None = None
+    point_coarse_to: np.ndarray | None = None
+
+    @property
+    def coarse_goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the coarse motion's end: joint angles [rad] and tip point [m]."""
+        if self.coarse_to is None:
+            return self.above_to, self.point_above_to
+        return self.coarse_to, self.point_coarse_to
 
 
 def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: PlannedStep,
@@ -136,8 +153,29 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     reference[4] += sweep
     above_to = kinematics.inverse([*(point_to + lift), 0.0, reference[4]], reference=reference)
     at_to = kinematics.inverse([*point_to, 0.0, reference[4]], reference=above_to)
+    coarse_to, point_coarse_to = _coarse_end(kinematics, point_from + lift, point_to + lift,
+                                             reference)
     return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
-                       point_from + lift, point_to + lift, point_to)
+                       point_from + lift, point_to + lift, point_to, coarse_to, point_coarse_to)
+
+
+#: [m] a coarse motion ends on its target when the start's radius and height are within this
+COARSE_END_TOLERANCE = 1e-6
+
+
+def _coarse_end(kinematics: WalkerKinematics, start: np.ndarray, goal: np.ndarray,
+                reference: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Return where the node-to-node motion from ``start`` towards ``goal`` [m] ends.
+
+    At ``goal``'s bearing about the base yaw axis, at ``start``'s distance from it and height
+    (the motion's own geometry); (None, None) when that is ``goal`` itself.
+    """
+    radius, goal_radius = math.hypot(start[0], start[1]), math.hypot(goal[0], goal[1])
+    if abs(radius - goal_radius) <= COARSE_END_TOLERANCE \
+            and abs(start[2] - goal[2]) <= COARSE_END_TOLERANCE:
+        return None, None
+    point = np.array([goal[0] * radius / goal_radius, goal[1] * radius / goal_radius, start[2]])
+    return kinematics.inverse([*point, 0.0, reference[4]], reference=reference), point
 
 
 def measure_step_targets(kinematics: WalkerKinematics, step: PlannedStep,
