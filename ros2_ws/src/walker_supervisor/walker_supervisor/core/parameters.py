@@ -95,7 +95,7 @@ class SupervisorParameters:
         'rad', 0.0, 0.01, read_only=False,
         source="chosen: an output encoder's calibration to 0.2 mrad")
     search_radius: float = parameter(
-        "farthest a search probe goes from the estimate of a hole (0: jams retried in place)",
+        'farthest a search probe goes from the estimate of a hole (0: jams retried in place)',
         'm', 0.0, 0.02, read_only=False,
         source='chosen: a hole 3-4 mm off (3 std of a 1.5 mm placement) is found')
     search_sigmas: float = parameter(
