@@ -7,8 +7,6 @@ walker knows only the nominal truss; its map, its measured-pose extraction and i
 it there, and the survey file it writes starts a second walk from where the nodes are.
 """
 
-import re
-
 import numpy as np
 import pytest
 

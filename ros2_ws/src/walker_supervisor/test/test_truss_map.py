@@ -113,3 +113,14 @@ def test_a_survey_file_written_is_read_back_and_a_broken_one_is_named(tmp_path):
         read_survey(broken)
     with pytest.raises(SurveyFileError, match='missing.yaml'):
         read_survey(tmp_path / 'missing.yaml')
+
+
+def test_every_node_has_a_frame_at_its_estimate_marked_surveyed_or_nominal():
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED))
+    frames = {name: (position, surveyed) for name, position, surveyed in survey.frames()}
+    assert len(frames) == len(TRUSS.node_names)
+    np.testing.assert_allclose(frames['node_2_1'][0], survey.position('n2_1'))
+    assert frames['node_2_1'][1] and frames['node_1_1'][1] and not frames['node_3_2'][1]
+    np.testing.assert_array_equal(frames['node_3_2'][0], TRUSS.position('n3_2'))

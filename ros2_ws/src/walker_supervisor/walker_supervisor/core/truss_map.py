@@ -37,7 +37,16 @@ from walker_core.kinematics import WalkerKinematics
 from walker_core.truss import Truss
 from walker_supervisor.core.step_geometry import BaseFrame
 
-__all__ = ['NodeEstimate', 'TrussMap', 'SurveyFileError', 'SURVEY_FORMAT', 'survey_covariance']
+__all__ = ['NodeEstimate', 'TrussMap', 'SurveyFileError', 'SURVEY_FORMAT', 'survey_covariance',
+           'node_frame_name', 'TRUSS_FRAME']
+
+#: The frame the map's positions are in (the viz's world frame).
+TRUSS_FRAME = 'truss'
+
+
+def node_frame_name(node: str) -> str:
+    """Return the TF frame of a node: ``node_<column>_<row>`` for ``n<column>_<row>``."""
+    return 'node_' + node[1:]
 
 #: The ``format`` entry of a survey file this module writes and reads.
 SURVEY_FORMAT = 'walker-truss-survey-1'
@@ -177,6 +186,11 @@ class TrussMap:
             self._surveyed[node] = estimate
             self.version += 1
         return estimate
+
+    def frames(self) -> list[tuple[str, np.ndarray, bool]]:
+        """Return every node's frame: its TF name, position [m] in the truss frame, surveyed."""
+        return [(node_frame_name(n), e.position.copy(), e.surveyed)
+                for n, e in ((n, self.estimate(n)) for n in self.truss.node_names)]
 
     # ------------------------------------------------------------------ the survey file
     def to_dict(self) -> dict:
