@@ -89,7 +89,8 @@ class SupervisorParameters:
     node_prior_std: float = parameter(
         "standard deviation of a truss node's place along x, y and z until the joints survey it",
         'm', 0.0, 0.02, read_only=False,
-        source='chosen: a truss assembled to about a millimetre, relative to the base node')
+        source='chosen: nodes placed to about a millimetre, relative to the base node and '
+        "through the first stance's heading")
     joint_reading_std: float = parameter(
         "standard deviation of a joint's reading, offset and noise together (the map's survey)",
         'rad', 0.0, 0.01, read_only=False,
@@ -97,7 +98,7 @@ class SupervisorParameters:
     search_radius: float = parameter(
         'farthest a search probe goes from the estimate of a hole (0: jams retried in place)',
         'm', 0.0, 0.02, read_only=False,
-        source='chosen: a hole 3-4 mm off (3 std of a 1.5 mm placement) is found')
+        source='chosen: 19 probes cover 5 mm, 3 std of an unsurveyed node')
     search_sigmas: float = parameter(
         "standard deviations of the node's estimate that a search covers",
         '', 0.0, 10.0, read_only=False, source='chosen: 3, 99 % of a normal placement error')
