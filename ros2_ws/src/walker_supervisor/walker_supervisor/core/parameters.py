@@ -89,8 +89,7 @@ class SupervisorParameters:
     node_prior_std: float = parameter(
         "standard deviation of a truss node's place along x, y and z until the joints survey it",
         'm', 0.0, 0.02, read_only=False,
-        source='chosen: nodes placed to about a millimetre, relative to the base node and '
-        "through the first stance's heading")
+        source="chosen: nodes placed to 1 mm, relative to the base and the first stance's heading")
     joint_reading_std: float = parameter(
         "standard deviation of a joint's reading, offset and noise together (the map's survey)",
         'rad', 0.0, 0.01, read_only=False,
