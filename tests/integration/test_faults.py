@@ -206,6 +206,16 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
     attempts = graph.parameters('supervisor', 'get_parameters', GetParameters.Request(
         names=['supervisor.max_insertion_attempts'])).values[0].integer_value
     assert attempts >= 2, 'the bounded retry needs at least two attempts to show'
+    # the retry in place, without the search on a jam (the search has its own tests)
+    radius = graph.parameters('supervisor', 'get_parameters', GetParameters.Request(
+        names=['supervisor.search_radius'])).values[0].double_value
+
+    def search_radius(value: float) -> None:
+        request = SetParameters.Request(parameters=[
+            Parameter('supervisor.search_radius', value=value).to_parameter_msg()])
+        assert graph.parameters('supervisor', 'set_parameters', request).results[0].successful
+
+    search_radius(0.0)
     injected = SetParameters.Request(parameters=[
         Parameter('sim.jam_screw_ins', value=attempts).to_parameter_msg()])
     assert graph.parameters('plant', 'set_parameters', injected).results[0].successful
@@ -232,6 +242,7 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
               if g.name == step.moving_gripper]
     assert any(g.state == GripperState.JAMMED and g.node == step.to_node for g in moving)
     graph.resume_and_complete(step)
+    search_radius(radius)
 
 
 def test_a_descent_that_leaves_the_hole_axis_is_stopped_lifted_back_then_held(graph):

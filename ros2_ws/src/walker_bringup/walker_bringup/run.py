@@ -177,6 +177,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                              'supervisor cores in one lock-step loop in this process, no DDS, '
                              'many times faster than real time; the same summary, bag and '
                              'report (walker_headless)')
+    parser.add_argument('--truss-survey', default=None, metavar='FILE',
+                        help="start from a truss survey (a walk's truss_survey.yaml, "
+                             'docs/walking.md); headless only')
     parser.add_argument('--walkers', type=_walker_count, default=1, metavar='N',
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
                              'each from its own start, walking the same route moved with it '
@@ -443,6 +446,10 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(argv: list[str] | None) -> int:
     args = parse_arguments(argv)
+    if args.truss_survey and not args.headless:
+        print('[walker] error: --truss-survey is read by the headless runner only '
+              '(--headless)', flush=True)
+        return 2
     if args.headless:
         from walker_headless.run import run_headless
 

@@ -107,3 +107,18 @@ def test_a_recorded_run_keeps_its_files(small_spec, tmp_path):
     assert flat['sim.imperfections.seed'] == plan_run(small_spec, 3).imperfection_seed
     assert load_nominal(tmp_path / 'run3' / 'model.yaml')[0]['robot.mass.link'] == \
         small_spec.nominal['robot.mass.link']
+
+
+def test_a_search_on_a_jam_shows_its_probes_and_where_the_hole_was_found(small_spec):
+    plan = plan_run(small_spec, 0)
+    summary = {'steps': [
+        {'index': 0, 'success': True, 'attempts': 4, 'duration': 12.0, 'bound': 2.5,
+         'insertion_error': 0.0004, 'message': '', 'search_probes': 3,
+         'hole_offset': 0.0026},
+        {'index': 1, 'success': True, 'attempts': 1, 'duration': 4.0, 'bound': 2.5,
+         'insertion_error': 0.0003, 'message': '', 'search_probes': 0, 'hole_offset': 0.0}],
+        'reached': True, 'message': ''}
+    *steps, run = run_rows('c', plan, summary)
+    assert [s['probes'] for s in steps] == [3, 0]
+    assert [s['hole_offset'] for s in steps] == [0.0026, 0.0]
+    assert run['probes'] == 3 and run['jams'] == 3 and run['outcome'] == 'reached'

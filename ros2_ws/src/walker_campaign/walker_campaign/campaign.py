@@ -47,7 +47,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
         prog='campaign.py', description='Run a Monte Carlo or sweep campaign of walks on Ray '
         '(locally, or on a cluster with --address), resume it, and write its report.')
     parser.add_argument('spec', help='the campaign spec (YAML; docs/campaigns.md), or the name '
-                                     'of a shipped one (default_walk, ka_filter_sweep)')
+                                     'of a shipped one (default_walk, ka_filter_sweep, '
+                                     'truss_as_built)')
     parser.add_argument('--out', default=None,
                         help='output directory (default: runs/campaigns/<name>)')
     parser.add_argument('--address', default=None,

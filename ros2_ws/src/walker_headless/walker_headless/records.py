@@ -39,6 +39,8 @@ class StepReportRecord:
     insertion_error_estimated: float
     residual_vibration: float
     insertion_attempts: int
+    search_probes: int = 0
+    hole_offset: float = float('nan')
 
 
 @dataclasses.dataclass(frozen=True)

@@ -29,7 +29,10 @@ from walker_report.walk_report import report_after_walk
 from walker_teleop.core.progress import ProgressLine, walk_progress
 
 from walker_headless.recording import WalkRecording
+from walker_core.truss import Truss
 from walker_headless.runner import WalkResult, walk
+from walker_supervisor.core.survey_file import SURVEY_FILE_NAME, read_survey, write_survey
+from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
 
 __all__ = ['run_headless', 'loop_record']
 
@@ -43,6 +46,7 @@ def run_headless(args) -> int:
     try:
         configuration = load_configuration(args.params_file,
                                  plant_path=getattr(args, 'plant_params_file', None))
+        survey = _checked_survey(configuration, getattr(args, 'truss_survey', None))
     except (ParameterError, ValueError) as error:
         print(f'[walker] error: {error}', flush=True)
         return 2
@@ -74,8 +78,8 @@ def run_headless(args) -> int:
 
     try:
         result = walk(configuration, args.target, recording, on_feedback,
-                      wall_timeout=args.walk_timeout)
-    except ParameterError as error:
+                      wall_timeout=args.walk_timeout, survey=survey)
+    except (ParameterError, SurveyFileError) as error:
         progress.end()
         print(f'[walker] error: {error}', flush=True)
         return 2
@@ -84,10 +88,31 @@ def run_headless(args) -> int:
             recording.close()
     progress.end()
     code = _summarise(result, out, rate)
+    if result.survey is not None:
+        write_survey(out / SURVEY_FILE_NAME, _survey_map(configuration, result.survey))
     if args.record and args.report:
         if not report_after_walk(bag, out / 'report', configuration.path, args.quiet):
             code = code or 6
     return code
+
+
+def _checked_survey(configuration, path) -> dict | None:
+    """Return the survey file at ``path`` (None: none), checked against the truss."""
+    if not path:
+        return None
+    content = read_survey(path)
+    try:
+        _survey_map(configuration, content)
+    except SurveyFileError as error:
+        raise SurveyFileError(f'the truss survey {path}: {error}') from None
+    return content
+
+
+def _survey_map(configuration, content: dict):
+    """Return the truss map of a walk's survey content (to write it as the supervisor has it)."""
+    settings = configuration.supervisor
+    return TrussMap.from_dict(Truss.from_parameters(configuration.walker),
+                              settings.node_prior_std, settings.joint_reading_std, content)
 
 
 def loop_record(result: WalkResult) -> dict:

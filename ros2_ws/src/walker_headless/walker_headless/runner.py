@@ -70,6 +70,8 @@ class WalkResult:
         of the walk's outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
     timed_out : bool
         The walk was stopped at its wall-time limit (``wall_timeout``), unreached.
+    survey : dict or None
+        The truss map at the end (:meth:`~walker_supervisor.core.truss_map.TrussMap.to_dict`).
     """
 
     target: str
@@ -85,12 +87,13 @@ class WalkResult:
     wall_time: float
     cpu_time: float = 0.0
     timed_out: bool = False
+    survey: dict | None = None
 
 
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
-         wall_timeout: float = math.inf) -> WalkResult:
+         wall_timeout: float = math.inf, survey: dict | None = None) -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
 
     Parameters
@@ -108,6 +111,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         ``say(level, text)`` for what the supervisor would log.
     wall_timeout : float
         Longest wall time [s] the walk may take; it ends unreached after it.
+    survey : dict, optional
+        A truss survey to start from (a survey file's content); raises
+        :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit.
 
     Raises
     ------
@@ -120,6 +126,8 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         if recording is not None:
             recording.robot_description(0, description_urdf(configuration.walker))
         shell = WalkShell(loop, say, progress)
+        if survey is not None:
+            shell.runner.mapped.map.load(survey)
         shell.send_goal('walk_to', target)
         cpu_started = time.process_time()
         diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
@@ -144,6 +152,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         result = _result(target, shell, loop, started, message)
         result.cpu_time = time.process_time() - cpu_started
         result.timed_out = message is not None
+        result.survey = shell.runner.mapped.map.to_dict()
         return result
     finally:
         loop.close()

@@ -348,4 +348,4 @@ def step_report(t_, header, step: Step):
         phase_names=list(PHASES), phase_durations=np.array(durations), duration=duration,
         time_optimal_bound=1.0, bound_ratio=duration, insertion_error=step.insertion_error,
         insertion_error_estimated=step.insertion_error, residual_vibration=step.residual,
-        insertion_attempts=1)
+        insertion_attempts=1, search_probes=0, hole_offset=0.0)

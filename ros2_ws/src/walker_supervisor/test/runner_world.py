@@ -89,6 +89,7 @@ class World:
         self.acceptances_lost = 0  # stream requests whose acceptance is lost on the way back
         self.unanswered = []  # PlanMotion and FollowMotion commands it did not answer
         self.jam = 0  # screw-ins that jam whatever the tip
+        self.holes = {}  # node -> (x, y) [m]: its hole off its nominal place by this much
         self.planned = []  # (purpose, PlanAnswer) of every plan the planner answered
         self.silent = set()  # the sources the runner no longer hears: 'grippers', a joint
         self.log = []  # every command the runner gave
@@ -232,7 +233,9 @@ class World:
                 self.changes.append((self.now + screw_time, gripper, 'free', ''))
                 answer = (True, '')
         else:
-            node, distance = TRUSS.nearest_node(self.tip())
+            node, _ = TRUSS.nearest_node(self.tip())
+            hole = TRUSS.position(node) + np.array([*self.holes.get(node, (0.0, 0.0)), 0.0])
+            distance = float(np.linalg.norm(self.tip()[:2] - hole[:2]))
             tolerance = PARAMS.gripper.insertion_position_tolerance
             if self.jam > 0 or distance > tolerance or abs(self.tip()[2]) > tolerance:
                 self.jam = max(0, self.jam - 1)

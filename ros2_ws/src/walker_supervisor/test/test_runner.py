@@ -132,7 +132,7 @@ def test_a_steps_bound_counts_its_screw_actions_and_its_planned_motions_once_eac
 
     A jam plans a second descent; it and the lift back after the jam are not in the bound.
     """
-    world = World()
+    world = World(dataclasses.replace(SETTINGS, search_radius=0.0))
     world.jam = 1
     ended = world.goal('step', 'n1_2')
     (record,) = world.of(StepRecord)
@@ -435,3 +435,36 @@ def test_a_supervisor_that_stalled_between_steps_says_so_and_faults_nothing():
     assert Phase.SAFE_HOLD not in world.phases
     assert any('the supervisor itself stalled 3.3 s' in n for n in world.notices)
     assert not world.runner.health.faults(world.now, include_trouble=False)
+
+
+# ---------------------------------------------------------------------- the truss as built
+def test_a_hole_off_its_place_is_found_by_the_search_and_surveyed_with_the_base_attached():
+    """A hole 3 mm from the node's nominal place: jams, probes, screws in, maps the node."""
+    world = World()
+    world.holes['n1_2'] = (0.0, 0.003)
+    ended = world.goal('step', 'n1_2')
+    assert ended.status == 'succeeded', ended.message
+    (record,) = world.of(StepRecord)
+    outcome = record.outcome
+    assert outcome.success and outcome.search_probes >= 1
+    assert outcome.insertion_attempts == outcome.search_probes + 1
+    assert 0.0 < outcome.hole_offset <= SETTINGS.search_radius
+    # the map now has the node within the insertion tolerance of its hole
+    estimate = world.runner.mapped.map.estimate('n1_2')
+    hole = world.runner.truss.position('n1_2') + np.array([0.0, 0.003, 0.0])
+    assert estimate.surveyed
+    assert np.linalg.norm(estimate.position[:2] - hole[:2]) \
+        <= PARAMS.gripper.insertion_position_tolerance
+    # the base gripper was never asked to let go
+    assert all(r.gripper == 'b' for r in world.of(GripperRequest) if r.action == 'unscrew')
+    assert any('found by the search' in n.message for n in world.of(Notice))
+
+
+def test_a_hole_beyond_the_search_ends_in_safe_hold_with_the_base_attached():
+    world = World()
+    world.holes['n1_2'] = (0.009, 0.0)
+    ended = world.goal('step', 'n1_2')
+    assert ended.status == 'aborted' and 'search tried all' in ended.message
+    assert world.runner.sequencer.phase == Phase.SAFE_HOLD
+    assert world.grippers['a'][0] == 'attached'
+    assert not world.runner.mapped.map.surveyed('n1_2')

@@ -16,7 +16,12 @@ FLAT = load_parameter_file(default_parameter_file())
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
         SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 1.0, 0.02, 0.3, 0.1, 0.02,
-                             0.03, 0.02, 0.0)
+                             0.03, 0.02, 0.0, 0.0015, 0.0002, 0.0, 3.0)
+
+
+def test_parameters_refuse_a_search_beyond_the_coarse_to_fine_region():
+    with pytest.raises(ParameterError, match='search_radius'):
+        dataclasses.replace(SUPERVISOR, search_radius=SUPERVISOR.coarse_to_fine_region)
 
 
 def test_parameters_refuse_an_axis_tolerance_within_the_descent_region():

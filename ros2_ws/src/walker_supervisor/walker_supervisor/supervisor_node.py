@@ -47,6 +47,7 @@ from walker_supervisor.core.phases import SequencerError
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
 from walker_supervisor.inputs import SupervisorInputs
 from walker_supervisor.links import SimTimeRelease, SupervisorLinks
+from walker_supervisor.map_frames import MapFrames
 from walker_supervisor.owned_goal_server import (
     GoalLedgerFile, OwnedGoalServer, goal_ledger_path)
 from walker_supervisor.messages import (
@@ -120,6 +121,10 @@ class SupervisorNode(Node):
         steady = self.clocks.steady_clock
         self.create_timer(WATCH_PERIOD, self._watch, clock=steady)
         self.create_timer(_DIAGNOSTICS_PERIOD, self._publish_diagnostics, clock=steady)
+        # the truss map for people: node frames on /tf_static, latched again as it changes
+        self._map_frames = MapFrames(self, self.runner.mapped.map)
+        self.create_timer(_DIAGNOSTICS_PERIOD, self._map_frames.publish_if_changed,
+                          clock=steady)
 
     # ------------------------------------------------------------------ parameters
     def request_realtime_scheduling(self) -> bool:

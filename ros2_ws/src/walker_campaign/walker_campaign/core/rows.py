@@ -75,6 +75,8 @@ def _step_row(identity: Mapping[str, Any], step: Mapping[str, Any]) -> dict[str,
            # a step that ended attached screwed in once more than it jammed; one aborted
            # counts its jammed screw-ins as its attempts
            'jams': attempts - 1 if success else attempts,
+           'probes': int(step.get('search_probes') or 0),
+           'hole_offset': _finite(step.get('hole_offset')),
            'message': step.get('message', '') or '',
            'cause': '' if success else cause_of(step.get('message', ''))}
     for phase, seconds in (step.get('phase_durations') or {}).items():
@@ -91,6 +93,7 @@ def _summary_figures(steps: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         'steps': len(steps), 'steps_ok': sum(s['success'] for s in steps),
         'jams': sum(s['jams'] for s in steps),
+        'probes': sum(s['probes'] for s in steps),
         'walk_time': walked if steps else None,
         'bound': bound if steps else None,
         'bound_ratio': walked / bound if bound > 0 else None,

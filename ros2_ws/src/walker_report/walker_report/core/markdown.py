@@ -145,7 +145,10 @@ def write_markdown(path: Path, content, figures: dict[str, Path],
                 f' s, ratio {float(m.bound_ratio):.2f}',
                 f'- insertion error {_mm(float(m.insertion_error))} mm (estimated from the '
                 f'joints: {_mm(float(m.insertion_error_estimated))} mm), '
-                f'{int(m.insertion_attempts)} attempt(s)']
+                f'{int(m.insertion_attempts)} attempt(s)'
+                + (f', {int(m.search_probes)} search probe(s), the hole found '
+                   f'{_mm(float(m.hole_offset))} mm from the estimate'
+                   if int(getattr(m, 'search_probes', 0)) else '')]
         else:
             lines += ['- no step report']
         vibration = content.vibrations.get(span.number)

@@ -36,6 +36,8 @@ class StepRow:
     residual_vibration: float
     attempts: int
     message: str
+    search_probes: int = 0  # probes of a search on a jam
+    hole_offset: float = math.nan  # [m] of the probe that screwed in from the map's estimate
 
     @property
     def bound_ratio(self) -> float:
@@ -56,7 +58,9 @@ def rows_from_reports(reports) -> list[StepRow]:
             insertion_error=float(r.insertion_error),
             insertion_error_estimated=float(r.insertion_error_estimated),
             residual_vibration=float(r.residual_vibration),
-            attempts=int(r.insertion_attempts), message=r.message))
+            attempts=int(r.insertion_attempts), message=r.message,
+            search_probes=int(getattr(r, 'search_probes', 0)),
+            hole_offset=float(getattr(r, 'hole_offset', math.nan))))
     return rows
 
 

@@ -35,7 +35,8 @@ MAX_FINE_LINES = 3
 def coarse_request(run: StepRun) -> TrajectoryRequest:
     """Return the coarse motion: the node-to-node sweep to above the target hole."""
     t = run.targets
-    return run.request('coarse', t.above_from, t.above_to, t.point_above_from, t.point_above_to,
+    joints, point = t.coarse_goal
+    return run.request('coarse', t.above_from, joints, t.point_above_from, point,
                        t.sweep)
 
 

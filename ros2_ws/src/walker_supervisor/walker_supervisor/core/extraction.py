@@ -24,6 +24,7 @@ from walker_core.kinematics import KinematicsError
 from walker_supervisor.core import approach
 from walker_supervisor.core.commands import (
     GripperRequest, Notice, PrepareTrajectory, SetControlMode, TrajectoryRequest)
+from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.phases import Phase, SequencerError, Stage
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
@@ -34,7 +35,8 @@ __all__ = ['start', 'awaiting_plan', 'follow_unscrewing', 'lift_ended', 'coarse_
 
 def start(run: StepRun, step: PlannedStep, targets: StepTargets, now: float,
           grippers: dict[str, str],
-          remeasure: Callable[[np.ndarray], StepTargets] | None) -> list:
+          remeasure: Callable[[np.ndarray], StepTargets] | None,
+          search: HoleSearch | None = None) -> list:
     """Begin a step (see :meth:`StepSequencer.start`); raises SequencerError."""
     if run.busy:
         raise SequencerError(f'a step is already under way (phase {run.phase.name})')
@@ -54,6 +56,7 @@ def start(run: StepRun, step: PlannedStep, targets: StepTargets, now: float,
     run.motions.planned_ahead, run.motions.asked_ahead = set(), set()
     run.tries.insertions = run.tries.fine_lines = 0
     run.tries.insertion_error = math.nan
+    run.search, run.estimate = search, None
     run.outcome = None
     run.reason = ''
     run.remeasure = remeasure if now < run.relaxed_at else None

@@ -11,7 +11,9 @@ which does, for ``settle_time``) the tip is checked again, now across the hole's
 :data:`~walker_supervisor.core.approach.MAX_FINE_LINES` times; more than
 ``descent_axis_tolerance`` off, the gripper is lifted back instead), and only then is the
 gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`` times (each
-lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD. A
+lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD;
+with a search (:mod:`~walker_supervisor.core.hole_search`), each jam moves the targets to the
+next probe instead, and the step holds once the last probe has jammed. A
 step ends when the gripper reports attached, with the controllers commanded to HOLD under the
 new base (which starts their relaxation).
 """
@@ -22,10 +24,12 @@ import math
 
 import numpy as np
 
+from walker_core.kinematics import KinematicsError
 from walker_supervisor.core import approach
 from walker_supervisor.core.commands import (
     CancelTrajectory, GripperRequest, Notice, SetControlMode, TrajectoryRequest)
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
+from walker_supervisor.core.step_geometry import probe_targets
 from walker_supervisor.core.step_run import StepRun
 
 __all__ = ['PREPARED_DESCENT_TOLERANCE', 'MAX_MOUTH_LINES', 'descent_request', 'enter',
@@ -116,7 +120,7 @@ def left_the_axis(run: StepRun, now: float) -> list:
     run.tries.insertions += 1
     reason = (f"the descent left the hole's axis ({offset * 1e3:.1f} mm off, tolerance "
               f'{run.parameters.descent_axis_tolerance * 1e3:.1f} mm)')
-    if run.tries.insertions >= run.parameters.max_insertion_attempts:
+    if run.tries.insertions >= _attempt_limit(run):
         return run.abort(f'{reason}; {run.tries.insertions} insertion attempts', now)
     below = _below_the_approach(run)
     up = run.straight_up(run.targets.point_above_to) if below else None
@@ -144,17 +148,55 @@ def _below_the_approach(run: StepRun) -> bool:
     return height > run.parameters.descent_region
 
 
+def _attempt_limit(run: StepRun) -> int:
+    """Return the attempts allowed so far: ``max_insertion_attempts``, one more per probe."""
+    moved = run.search.probes_moved if run.search is not None else 0
+    return run.parameters.max_insertion_attempts + moved
+
+
 def jammed(run: StepRun, message: str, now: float) -> list:
-    """Take a jammed screw-in: lift straight back up to try again, or stop after the last."""
+    """Take a jammed screw-in: lift straight back up to try again, or stop after the last.
+
+    With a search, the targets move to the next probe first; after the last probe, the step
+    holds (the base gripper attached, the moving one free above the truss).
+    """
     run.tries.insertions += 1
-    if run.tries.insertions >= run.parameters.max_insertion_attempts:
+    notices = []
+    if run.search is not None:
+        probe = _next_probe(run)
+        if isinstance(probe, str):
+            return run.abort(f'insertion jammed {run.tries.insertions} times: {message}; '
+                             f'{probe}', now)
+        notices.append(probe)
+    elif run.tries.insertions >= run.parameters.max_insertion_attempts:
         return run.abort(f'insertion jammed {run.tries.insertions} times: {message}', now)
     run.stage = Stage.RETRY_LIFT
     up = run.straight_up(run.targets.point_above_to)
     if up is None:
         return run.abort(f'insertion jammed: {message}; and no straight lift out of the hole '
                          f'from here', now)
-    return [run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
+    return notices + [run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
+
+
+def _next_probe(run: StepRun) -> Notice | str:
+    """Move the targets to the search's next probe: a notice, or why the search is over."""
+    search = run.search
+    if run.estimate is None:
+        run.estimate = run.targets
+    while True:
+        offset = search.next_offset()
+        if offset is None:
+            pattern = search.pattern
+            return (f'the search tried all {len(pattern)} probes within '
+                    f'{(pattern.covered + pattern.reach) * 1e3:.1f} mm of the estimate, and '
+                    f'the estimate again')
+        try:
+            run.targets = probe_targets(run.kinematics, run.estimate, offset)
+        except KinematicsError:
+            continue  # out of reach: the next probe
+        return Notice(f'insertion jammed: probe {search.probe} of {len(search) - 1}, '
+                      f'{offset[0] * 1e3:+.1f} mm x {offset[1] * 1e3:+.1f} mm y from the '
+                      f'estimate', 'info')
 
 
 def follow_screwing(run: StepRun, now: float, state: str) -> list:
@@ -185,7 +227,11 @@ def _finish(run: StepRun, now: float) -> list:
     run.enter(Phase.IDLE, now, Stage.NONE)
     run.grippers[run.step.moving_gripper] = 'attached'
     run.base_gripper = run.step.moving_gripper
+    search = run.search
     run.outcome = StepOutcome(True, '', dict(run.durations), now - run.step_started,
-                              run.tries.insertion_error, run.tries.insertions + 1)
+                              run.tries.insertion_error, run.tries.insertions + 1,
+                              search.probes_moved if search is not None else 0,
+                              float(np.linalg.norm(search.offset)) if search is not None
+                              else 0.0)
     run.outcome_taken = False
     return [SetControlMode('hold', run.step.moving_gripper)]

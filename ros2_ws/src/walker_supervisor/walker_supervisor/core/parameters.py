@@ -5,7 +5,8 @@ rules that join two or more values are here, in one place:
 
 * within the section (:func:`check_section`, run by the dataclass itself): the insertion
   alignment is tighter than the coarse-to-fine region; the descent region lies between them;
-  the descent's axis tolerance is wider than the descent region;
+  the descent's axis tolerance is wider than the descent region; the search radius lies
+  inside the coarse-to-fine region;
 * against the gripper (:func:`check_with_gripper`): the insertion alignment is tighter than,
   and the descent region no wider than, ``gripper.insertion_position_tolerance`` (the descent
   starts only with the tip inside it);
@@ -89,6 +90,22 @@ class SupervisorParameters:
         's', 0.0, 1.0, read_only=False,
         source="chosen: joint 1's filter holds the sweep back while the gripper rises")
 
+    node_prior_std: float = parameter(
+        "standard deviation of a truss node's place along x, y and z until the joints survey it",
+        'm', 0.0, 0.02, read_only=False,
+        source="chosen: nodes placed to 1 mm, relative to the base and the first stance's heading")
+    joint_reading_std: float = parameter(
+        "standard deviation of a joint's reading, offset and noise together (the map's survey)",
+        'rad', 0.0, 0.01, read_only=False,
+        source="chosen: an output encoder's calibration to 0.2 mrad")
+    search_radius: float = parameter(
+        'farthest a search probe goes from the estimate of a hole (0: jams retried in place)',
+        'm', 0.0, 0.02, read_only=False,
+        source='chosen: 19 probes cover 5 mm, 3 std of an unsurveyed node')
+    search_sigmas: float = parameter(
+        "standard deviations of the node's estimate that a search covers",
+        '', 0.0, 10.0, read_only=False, source='chosen: 3, 99 % of a normal placement error')
+
     def __post_init__(self) -> None:
         check_section(self)
 
@@ -110,6 +127,13 @@ def check_section(settings: SupervisorParameters) -> None:
             f'supervisor.descent_region ({settings.descent_region} m) must be at least '
             f'supervisor.insertion_alignment ({settings.insertion_alignment} m) and smaller '
             f'than supervisor.coarse_to_fine_region ({settings.coarse_to_fine_region} m)')
+
+
+    if not settings.search_radius < settings.coarse_to_fine_region:
+        raise ParameterError(
+            f'supervisor.search_radius ({settings.search_radius} m) must be smaller than '
+            f'supervisor.coarse_to_fine_region ({settings.coarse_to_fine_region} m): a probe '
+            f'stays in the region where FINE brings the tip over the hole')
 
 
 def check_with_gripper(settings: SupervisorParameters, gripper) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import math
 
 __all__ = ['Phase', 'Stage', 'StepOutcome', 'SequencerError']
 
@@ -66,6 +67,11 @@ class StepOutcome:
         (forward kinematics of the measured joints: what the walker knows); before that, from
         the point above the hole when the descent started; NaN if insertion never started.
     insertion_attempts : int
+    search_probes : int
+        Probes of a search on a jam the step moved to (0: it screwed in at the estimate).
+    hole_offset : float
+        [m] horizontal distance from the map's estimate of the probe that screwed in (0 at the
+        estimate; NaN if none did).
     """
 
     success: bool
@@ -74,3 +80,5 @@ class StepOutcome:
     duration: float
     insertion_error: float
     insertion_attempts: int
+    search_probes: int = 0
+    hole_offset: float = math.nan

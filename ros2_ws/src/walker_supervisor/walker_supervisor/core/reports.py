@@ -196,4 +196,5 @@ def report_fields(record: StepRecord) -> dict:
         'insertion_error': float(record.insertion_error),
         'insertion_error_estimated': float(outcome.insertion_error),
         'residual_vibration': float(record.residual_vibration),
-        'insertion_attempts': outcome.insertion_attempts}
+        'insertion_attempts': outcome.insertion_attempts,
+        'search_probes': outcome.search_probes, 'hole_offset': float(outcome.hole_offset)}

@@ -69,6 +69,7 @@ from walker_supervisor.core.goals import (
     GOALS, GoalRefusedError, check_target, goal_route, stance_now)
 from walker_supervisor.core.health import (
     HealthMonitor, Level, SourceStatus, reason_naming_silent_sources)
+from walker_supervisor.core.map_planning import MapPlanning
 from walker_supervisor.core.motion_requests import (
     MotionEnded, MotionPlanned, MotionRequests, MotionStarted, PlannedAhead)
 from walker_supervisor.core.phases import Phase, SequencerError, StepOutcome
@@ -78,7 +79,7 @@ from walker_supervisor.core.reports import (
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.sequencer import StepSequencer
-from walker_supervisor.core.step_geometry import StepTargets, measure_step_targets
+from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.teleop import Situation, busy_reason
 from walker_supervisor.core.walk import Walk
 
@@ -141,6 +142,10 @@ class WalkRunner:
         self.kinematics = WalkerKinematics.from_parameters(params)
         self.truss = Truss.from_parameters(params)
         self.sequencer = StepSequencer(settings, self.kinematics, 'a', params.gripper.screw_time)
+        #: the truss map and the step targets planned on it
+        self.mapped = MapPlanning(self.kinematics, self.truss, settings,
+                                  params.gripper.insertion_position_tolerance,
+                                  params.gripper.approach_height)
         self.measured = Measurements()
         timeout = settings.watchdog_timeout
         self.health = HealthMonitor({PLANT_JOINT_STATES: timeout, PLANT_GRIPPER_STATES: timeout,
@@ -192,6 +197,7 @@ class WalkRunner:
     def set_settings(self, settings: SupervisorParameters) -> None:
         """Take a new ``supervisor.`` section (validated by the caller)."""
         self.sequencer.parameters = settings
+        self.mapped.set_settings(settings)
         self.figures.set_window(settings.mouth_settle_time)
         self.health.set_timeouts(settings.watchdog_timeout,
                                  trouble_grace=settings.watchdog_timeout)
@@ -431,6 +437,7 @@ class WalkRunner:
             A step is under way.
         """
         self.sequencer.forget_step()
+        self.mapped.forget_stance()
         return [ForgetRecordedStep()]
 
     # ------------------------------------------------------------------ time
@@ -545,6 +552,8 @@ class WalkRunner:
         if walk.finished:
             # a walk ends relaxed: a stance measured after it is not bent by its last seat
             if now >= self.sequencer.relaxed_at:
+                if walk.reached and walk.outcomes:  # the last node again, from the relaxed stance
+                    self._survey_screw_in(walk.outcomes[-1])
                 base = self.sequencer.base_gripper
                 self._emit(goal_ended(self._goal, walk, base, self.measured.nodes.get(base, ''),
                                       self.figures))
@@ -558,7 +567,8 @@ class WalkRunner:
             targets = self._measure_targets(step, self.measured.roles(self.sequencer.base_gripper))
             commands = self.sequencer.start(step, targets, now, dict(self.measured.grippers),
                                             lambda theta: self._measure_again(step, theta,
-                                                                              targets))
+                                                                              targets),
+                                            self.mapped.search(step))
         except (KinematicsError, SequencerError) as error:
             walk.outcomes.append(StepOutcome(False, f'step to {step.to_node} refused: {error}',
                                              {}, 0.0, math.nan, 0))
@@ -573,11 +583,26 @@ class WalkRunner:
         self._execute(commands, now)
 
     def _measure_targets(self, step: PlannedStep, theta_roles: np.ndarray) -> StepTargets:
-        """Return the step's targets from the stance ``theta_roles`` [rad] (role order)."""
-        return measure_step_targets(self.kinematics, step, self.truss.position(step.base_node),
-                                    self.truss.position(step.from_node),
-                                    self.truss.position(step.to_node), theta_roles,
-                                    self.params.gripper.approach_height)
+        """Return the step's targets from the stance ``theta_roles`` [rad] (role order).
+
+        The stance is surveyed into the truss map first; the targets are planned on the map
+        (:class:`~walker_supervisor.core.map_planning.MapPlanning`).
+        """
+        return self.mapped.targets(step, theta_roles)
+
+    def _survey_screw_in(self, outcome: StepOutcome) -> None:
+        """Survey the node a step screwed into from the joints, in its base's role order."""
+        step, targets = self.sequencer.step, self.sequencer.targets
+        if not outcome.success or step is None or targets is None \
+                or self.measured.positions is None:
+            return
+        self.mapped.screwed_in(step, targets, self.measured.roles(step.base_gripper))
+        if outcome.search_probes:
+            estimate = self.mapped.map.estimate(step.to_node)
+            self._emit(Notice(f'hole of {step.to_node} found by the search: probe '
+                              f'{outcome.search_probes}, {outcome.hole_offset * 1e3:.1f} mm from '
+                              f'the estimate; surveyed at '
+                              f'{", ".join(f"{v:.4f}" for v in estimate.position)} m', 'info'))
 
     def _measure_again(self, step: PlannedStep, theta_roles: np.ndarray,
                        first: StepTargets) -> StepTargets:
@@ -590,6 +615,7 @@ class WalkRunner:
         return targets
 
     def _record_outcome(self, walk: Walk, outcome: StepOutcome) -> None:
+        self._survey_screw_in(outcome)
         if outcome.success:
             self._emit(ForgetRecordedStep())
         walk.outcomes.append(outcome)
@@ -609,6 +635,7 @@ class WalkRunner:
         if outcome is None:
             return
         step = self.sequencer.step
+        self._survey_screw_in(outcome)
         if outcome.success:
             self._emit(ForgetRecordedStep(),
                        Notice(f'step {step.from_node} -> {step.to_node} completed after resume '

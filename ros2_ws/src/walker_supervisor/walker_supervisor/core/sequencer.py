@@ -29,6 +29,7 @@ import numpy as np
 from walker_core.kinematics import WalkerKinematics
 from walker_supervisor.core import approach, extraction, insertion, recovery
 from walker_supervisor.core.approach import MAX_FINE_LINES
+from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, SequencerError, Stage, StepOutcome
 from walker_supervisor.core.progress import PhaseProgress
@@ -175,7 +176,8 @@ class StepSequencer:
     # ------------------------------------------------------------------ events
     def start(self, step: PlannedStep, targets: StepTargets, now: float,
               grippers: dict[str, str],
-              remeasure: Callable[[np.ndarray], StepTargets] | None = None) -> list:
+              remeasure: Callable[[np.ndarray], StepTargets] | None = None,
+              search: HoleSearch | None = None) -> list:
         """Begin a step: both grippers must be attached, and no step under way.
 
         The controllers hold while the moving gripper unscrews (a relaxation under way runs
@@ -194,13 +196,17 @@ class StepSequencer:
             :class:`~walker_core.kinematics.KinematicsError` keeps ``targets`` (with a
             :class:`~walker_supervisor.core.commands.Notice`). Without it, or with no
             relaxation under way, ``targets`` stand.
+        search : HoleSearch, optional
+            The probes to try, one after each jam, around the target
+            (:mod:`~walker_supervisor.core.hole_search`); without it a jam is retried at the
+            same point up to ``max_insertion_attempts`` times.
 
         Raises
         ------
         SequencerError
             A step is already under way, or a gripper is not attached.
         """
-        return extraction.start(self._run, step, targets, now, grippers, remeasure)
+        return extraction.start(self._run, step, targets, now, grippers, remeasure, search)
 
     def adopt(self, step: PlannedStep, targets: StepTargets, reason: str) -> None:
         """Take over an interrupted step, in SAFE_HOLD, so that :meth:`resume` completes it.

@@ -17,7 +17,7 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
 __all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'measure_step_targets',
-           'recovery_targets']
+           'recovery_targets', 'probe_targets']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,6 +86,14 @@ class StepTargets:
         Joint angles with the tip in the new node's hole mouth [rad].
     point_above_from, point_above_to, point_to : ndarray
         The same tip positions [m] in the base frame.
+    coarse_to : ndarray or None
+        Joint angles where the coarse motion ends, when not ``above_to`` [rad]: the node-to-node
+        motion keeps its start's distance from the base yaw axis and its height, so with the
+        moving gripper's node or the target off their nominal places it ends on that circle,
+        at the target's bearing, and FINE takes the tip the rest of the way (None: at
+        ``above_to``).
+    point_coarse_to : ndarray or None
+        The same tip position [m] in the base frame.
     """
 
     frame: BaseFrame
@@ -97,6 +105,15 @@ class StepTargets:
     point_above_from: np.ndarray
     point_above_to: np.ndarray
     point_to: np.ndarray
+    coarse_to: np.ndarray | None = None
+    point_coarse_to: np.ndarray | None = None
+
+    @property
+    def coarse_goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the coarse motion's end: joint angles [rad] and tip point [m]."""
+        if self.coarse_to is None:
+            return self.above_to, self.point_above_to
+        return self.coarse_to, self.point_coarse_to
 
 
 def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: PlannedStep,
@@ -106,12 +123,15 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
 
     The tip stays vertical (alpha = 0) and keeps its heading in the truss frame: the tip yaw J5
     turns with the base yaw J1 (as the planner's Cartesian motions do), so both turn by the
-    step's sweep.
+    step's sweep. The extraction starts where the moving gripper is, the forward kinematics of
+    the joints now (both grippers attached), not where the parameter file puts its node: a
+    gripper screwed into a node off its nominal place lifts along that node's own axis.
 
     Parameters
     ----------
     from_position, to_position : ndarray, shape (3,)
-        Truss-frame positions [m] of the node the moving gripper leaves and of its target.
+        Truss-frame positions [m] of the node the moving gripper leaves (unused: the joints
+        say where it is) and of its target (the truss map's estimate).
     theta_roles : ndarray, shape (5,)
         Joint angles J1..J5 now [rad].
     approach_height : float
@@ -125,7 +145,7 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     theta = np.asarray(theta_roles, dtype=float)
     sweep = step.sweep
     lift = np.array([0.0, 0.0, approach_height])
-    point_from = frame.to_base(from_position)
+    point_from = kinematics.forward(theta)[:3]
     point_to = frame.to_base(to_position)
     above_from = kinematics.inverse([*(point_from + lift), 0.0, theta[4]], reference=theta)
     reference = theta.copy()
@@ -133,8 +153,29 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     reference[4] += sweep
     above_to = kinematics.inverse([*(point_to + lift), 0.0, reference[4]], reference=reference)
     at_to = kinematics.inverse([*point_to, 0.0, reference[4]], reference=above_to)
+    coarse_to, point_coarse_to = _coarse_end(kinematics, point_from + lift, point_to + lift,
+                                             reference)
     return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
-                       point_from + lift, point_to + lift, point_to)
+                       point_from + lift, point_to + lift, point_to, coarse_to, point_coarse_to)
+
+
+#: [m] a coarse motion ends on its target when the start's radius and height are within this
+COARSE_END_TOLERANCE = 1e-6
+
+
+def _coarse_end(kinematics: WalkerKinematics, start: np.ndarray, goal: np.ndarray,
+                reference: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Return where the node-to-node motion from ``start`` towards ``goal`` [m] ends.
+
+    At ``goal``'s bearing about the base yaw axis, at ``start``'s distance from it and height
+    (the motion's own geometry); (None, None) when that is ``goal`` itself.
+    """
+    radius, goal_radius = math.hypot(start[0], start[1]), math.hypot(goal[0], goal[1])
+    if abs(radius - goal_radius) <= COARSE_END_TOLERANCE \
+            and abs(start[2] - goal[2]) <= COARSE_END_TOLERANCE:
+        return None, None
+    point = np.array([goal[0] * radius / goal_radius, goal[1] * radius / goal_radius, start[2]])
+    return kinematics.inverse([*point, 0.0, reference[4]], reference=reference), point
 
 
 def measure_step_targets(kinematics: WalkerKinematics, step: PlannedStep,
@@ -173,3 +214,28 @@ def recovery_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plann
     at_to = kinematics.inverse([*point_to, 0.0, theta[4]], reference=above_to)
     return StepTargets(frame, step.sweep, theta, above_from, above_to, at_to,
                        point_from + lift, point_to + lift, point_to)
+
+
+def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
+                  offset: np.ndarray) -> StepTargets:
+    """Return the step's targets moved to a search probe ``offset`` [m] (x, y, truss frame).
+
+    The points above the hole and at its mouth move by the offset (turned into the base frame);
+    the joint targets there are the IK solutions nearest the step's own
+    (:mod:`~walker_supervisor.core.hole_search`).
+
+    Raises
+    ------
+    KinematicsError
+        When a moved target is out of reach or outside the joint limits.
+    """
+    c, s = math.cos(targets.frame.heading), math.sin(targets.frame.heading)
+    dx, dy = float(offset[0]), float(offset[1])
+    shift = np.array([c * dx + s * dy, -s * dx + c * dy, 0.0])
+    point_above_to = targets.point_above_to + shift
+    point_to = targets.point_to + shift
+    yaw = float(kinematics.forward(targets.above_to)[4])
+    above_to = kinematics.inverse([*point_above_to, 0.0, yaw], reference=targets.above_to)
+    at_to = kinematics.inverse([*point_to, 0.0, yaw], reference=above_to)
+    return dataclasses.replace(targets, above_to=above_to, at_to=at_to,
+                               point_above_to=point_above_to, point_to=point_to)

@@ -16,6 +16,7 @@ from collections.abc import Callable
 import numpy as np
 
 from walker_core.kinematics import KinematicsError, WalkerKinematics
+from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.commands import CancelTrajectory, SetControlMode, TrajectoryRequest
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
@@ -134,6 +135,10 @@ class StepRun:
         self.motions = Motions()
         self.gripper = GripperWatch(screw_time + parameters.phase_timeout)
         self.tries = Tries()
+        # the search on a jam (None: a jam is retried at the same point); ``estimate`` the
+        # targets at the map's estimate, which the probes are offsets from
+        self.search: HoleSearch | None = None
+        self.estimate: StepTargets | None = None
 
     # ------------------------------------------------------------------ where the tip is
     @property
@@ -232,7 +237,8 @@ class StepRun:
             self.enter(Phase.SAFE_HOLD, now, Stage.NONE)
             self.outcome = StepOutcome(False, reason, dict(self.durations),
                                        now - self.step_started, self.tries.insertion_error,
-                                       self.tries.insertions)
+                                       self.tries.insertions,
+                                       self.search.probes_moved if self.search else 0)
             self.outcome_taken = False
         self.phase, self.reason = Phase.SAFE_HOLD, reason
         motions = self.motions

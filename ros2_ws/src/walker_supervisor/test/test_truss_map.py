@@ -1,0 +1,126 @@
+"""The truss map: nodes surveyed from the joints, their uncertainty, nominal until surveyed."""
+
+import numpy as np
+import pytest
+
+from walker_core.kinematics import WalkerKinematics
+from walker_core.robot_parameters import load_walker_parameters
+from walker_core.truss import Truss
+from walker_supervisor.core.step_geometry import BaseFrame
+from walker_supervisor.core.truss_map import (
+    SURVEY_FORMAT, SurveyFileError, TrussMap, survey_covariance)
+
+PARAMS = load_walker_parameters()
+KIN = WalkerKinematics.from_parameters(PARAMS)
+TRUSS = Truss.from_parameters(PARAMS)
+FRAME = BaseFrame(TRUSS.position('n1_1'), 0.3)
+#: [m] where n2_1 really is: off its nominal place by more than the insertion tolerance
+DISPLACED = TRUSS.position('n2_1') + np.array([0.0025, -0.0018, 0.0007])
+
+
+def _joints_at(point_truss):
+    """Joint angles [rad] (role order, base in n1_1) with the tip at a truss-frame point."""
+    return KIN.inverse([*FRAME.to_base(point_truss), 0.0, 0.0])
+
+
+def test_a_displaced_node_is_surveyed_where_it_is_within_the_reading_noise():
+    std = 2e-5  # [rad] the default campaign's encoder noise
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=std)
+    survey.anchor_at('n1_1')
+    rng = np.random.default_rng(3)
+    theta = _joints_at(DISPLACED) + rng.normal(0.0, std, 5)
+    estimate = survey.survey('n2_1', FRAME, 'n1_1', KIN, theta)
+    assert estimate.surveyed and survey.surveyed('n2_1')
+    error = estimate.position - DISPLACED
+    # the nominal place is 3 mm off; the survey is within 4 standard deviations of the truth
+    assert np.linalg.norm(TRUSS.position('n2_1') - DISPLACED) > 0.003
+    assert error @ np.linalg.solve(estimate.covariance, error) < 4.0 ** 2 * 3
+    assert np.linalg.norm(error) < 1e-4
+    np.testing.assert_allclose(survey.position('n2_1'), estimate.position)
+
+
+def test_the_survey_covariance_is_the_joint_noise_through_the_jacobian():
+    std = np.array([2e-4, 1e-4, 3e-4, 1e-4, 5e-4])
+    theta = _joints_at(DISPLACED)
+    formula = survey_covariance(KIN, theta, FRAME.heading, std)
+    rng = np.random.default_rng(11)
+    samples = np.array([FRAME.to_truss(KIN.forward(theta + rng.normal(0.0, std))[:3])
+                        for _ in range(4000)])
+    monte_carlo = np.cov(samples.T)
+    assert np.linalg.norm(monte_carlo - formula) < 0.08 * np.linalg.norm(formula)
+    # the joint noise moves the tip by a fraction of a millimetre at this reach
+    assert 1e-4 < np.sqrt(np.trace(formula)) < 1e-3
+
+
+def test_a_survey_adds_the_base_nodes_uncertainty():
+    survey = TrussMap(TRUSS, prior_std=0.001, joint_std=2e-4)
+    theta = _joints_at(DISPLACED)
+    from_anchor = TrussMap(TRUSS, prior_std=0.001, joint_std=2e-4)
+    from_anchor.anchor_at('n1_1')
+    anchored = from_anchor.survey('n2_1', FRAME, 'n1_1', KIN, theta).covariance
+    unanchored = survey.survey('n2_1', FRAME, 'n1_1', KIN, theta).covariance
+    np.testing.assert_allclose(unanchored - anchored, np.eye(3) * 0.001 ** 2, atol=1e-15)
+
+
+def test_a_node_never_surveyed_is_nominal_with_the_prior_and_the_anchor_is_exact():
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=2e-4)
+    estimate = survey.estimate('n3_2')
+    assert not estimate.surveyed
+    np.testing.assert_array_equal(estimate.position, TRUSS.position('n3_2'))
+    np.testing.assert_allclose(estimate.covariance, np.eye(3) * 0.0015 ** 2)
+    assert estimate.horizontal_std == pytest.approx(0.0015)
+    survey.anchor_at('n1_1')
+    survey.anchor_at('n2_1')  # the frame is anchored once
+    assert survey.anchor == 'n1_1' and survey.surveyed_nodes == ['n1_1']
+    np.testing.assert_array_equal(survey.estimate('n1_1').covariance, np.zeros((3, 3)))
+    # a survey of the anchor leaves it where it defines the frame
+    survey.survey('n1_1', BaseFrame(TRUSS.position('n2_1'), 0.0), 'n2_1', KIN,
+                  _joints_at(DISPLACED))
+    np.testing.assert_array_equal(survey.position('n1_1'), TRUSS.position('n1_1'))
+
+
+def test_a_survey_file_round_trips_and_a_bad_one_changes_nothing():
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED))
+    content = survey.to_dict()
+    assert content['format'] == SURVEY_FORMAT and content['anchor'] == 'n1_1'
+    loaded = TrussMap.from_dict(TRUSS, 0.0015, 2e-4, content)
+    assert loaded.surveyed_nodes == ['n1_1', 'n2_1']
+    np.testing.assert_allclose(loaded.position('n2_1'), survey.position('n2_1'))
+    np.testing.assert_allclose(loaded.estimate('n2_1').covariance,
+                               survey.estimate('n2_1').covariance)
+    bad = {**content, 'nodes': {**content['nodes'], 'n9_9': content['nodes']['n2_1']}}
+    with pytest.raises(SurveyFileError, match='n9_9'):
+        loaded.load(bad)
+    with pytest.raises(SurveyFileError, match='format'):
+        loaded.load({'nodes': {}})
+    assert loaded.surveyed_nodes == ['n1_1', 'n2_1']
+
+
+def test_a_survey_file_written_is_read_back_and_a_broken_one_is_named(tmp_path):
+    from walker_supervisor.core.survey_file import read_survey, write_survey
+
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED))
+    path = write_survey(tmp_path / 'truss_survey.yaml', survey)
+    loaded = TrussMap.from_dict(TRUSS, 0.0015, 2e-4, read_survey(path))
+    np.testing.assert_allclose(loaded.position('n2_1'), survey.position('n2_1'))
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('format: [unclosed')
+    with pytest.raises(SurveyFileError, match='broken.yaml'):
+        read_survey(broken)
+    with pytest.raises(SurveyFileError, match='missing.yaml'):
+        read_survey(tmp_path / 'missing.yaml')
+
+
+def test_every_node_has_a_frame_at_its_estimate_marked_surveyed_or_nominal():
+    survey = TrussMap(TRUSS, prior_std=0.0015, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED))
+    frames = {name: (position, surveyed) for name, position, surveyed in survey.frames()}
+    assert len(frames) == len(TRUSS.node_names)
+    np.testing.assert_allclose(frames['node_2_1'][0], survey.position('n2_1'))
+    assert frames['node_2_1'][1] and frames['node_1_1'][1] and not frames['node_3_2'][1]
+    np.testing.assert_array_equal(frames['node_3_2'][0], TRUSS.position('n3_2'))

@@ -1,0 +1,241 @@
+"""The truss as built: each node's place as the walker's own joints have measured it.
+
+The parameter file gives every node a nominal place; a truss as built has its nodes off those
+places by millimetres, more than the gripper's insertion tolerance. The walker has no tip
+sensing (paper section 2), but whenever both grippers are screwed in, the forward kinematics of
+eq (1) of the measured joints from the base gripper's node says where the other gripper's node
+is. :class:`TrussMap` keeps, for each node, its estimated position in the *truss frame* with a
+covariance:
+
+* a node never surveyed is at its nominal place with a prior uncertainty (``node_prior_std``
+  along x, y and z);
+* the node the walk starts from (the base of the first stance) anchors the frame: it is taken
+  at its nominal place with no uncertainty, so every other estimate is relative to it;
+* a surveyed node is at the base frame's image of the forward kinematics
+  (:meth:`TrussMap.survey`), with the base node's covariance plus the joint readings' noise
+  propagated through the Jacobian of eq (1): ``C = C_base + R J S J^T R^T``, ``S`` the
+  joint readings' variances (``joint_reading_std``, offset and noise together), ``R`` the base
+  frame's heading.
+
+The base frame's heading is taken again from each stance (both grippers attached) through the
+two nodes' estimates, so it follows the map; its own error is that of the two estimates and is
+not carried as a separate term. A node's height is carried like x and y: the descent goes to the
+estimated mouth.
+
+A map is written to and read from a plain dictionary (:meth:`TrussMap.to_dict`,
+:meth:`TrussMap.from_dict`), the survey file's content (docs/walking.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from walker_core.kinematics import WalkerKinematics
+from walker_core.truss import Truss
+from walker_supervisor.core.step_geometry import BaseFrame
+
+__all__ = ['NodeEstimate', 'TrussMap', 'SurveyFileError', 'SURVEY_FORMAT', 'survey_covariance',
+           'node_frame_name', 'TRUSS_FRAME']
+
+#: The frame the map's positions are in (the viz's world frame).
+TRUSS_FRAME = 'truss'
+
+
+def node_frame_name(node: str) -> str:
+    """Return the TF frame of a node: ``node_<column>_<row>`` for ``n<column>_<row>``."""
+    return 'node_' + node[1:]
+
+#: The ``format`` entry of a survey file this module writes and reads.
+SURVEY_FORMAT = 'walker-truss-survey-1'
+
+
+class SurveyFileError(ValueError):
+    """A survey file's content that cannot be read as a truss map."""
+
+
+@dataclasses.dataclass(frozen=True)
+class NodeEstimate:
+    """One node's estimated place in the truss frame.
+
+    Attributes
+    ----------
+    position : ndarray, shape (3,)
+        Position [m] of the node's hole mouth in the truss frame.
+    covariance : ndarray, shape (3, 3)
+        Its covariance [m^2].
+    surveyed : bool
+        True once the joints have measured it (or it anchors the frame); False: nominal.
+    """
+
+    position: np.ndarray
+    covariance: np.ndarray
+    surveyed: bool
+
+    @property
+    def horizontal_std(self) -> float:
+        """[m] standard deviation along the worst horizontal direction (the search's)."""
+        return float(math.sqrt(max(np.linalg.eigvalsh(self.covariance[:2, :2]).max(), 0.0)))
+
+
+def survey_covariance(kinematics: WalkerKinematics, theta_roles: np.ndarray, heading: float,
+                      joint_std: np.ndarray) -> np.ndarray:
+    """Covariance [m^2] in the truss frame of a tip measured through the joints.
+
+    ``R J diag(joint_std^2) J^T R^T`` with ``J`` the position rows of the Jacobian of eq (1)
+    at ``theta_roles`` [rad] and ``R`` the rotation by ``heading`` [rad] about z; ``joint_std``
+    [rad] per joint, role order.
+    """
+    jac = kinematics.jacobian(theta_roles)[:3]
+    c, s = math.cos(heading), math.sin(heading)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    jac_truss = rotation @ jac
+    return jac_truss @ np.diag(np.asarray(joint_std, dtype=float) ** 2) @ jac_truss.T
+
+
+class TrussMap:
+    """Every node's estimated place, nominal until the joints survey it.
+
+    Parameters
+    ----------
+    truss : Truss
+        The nominal truss (the parameter file).
+    prior_std : float
+        [m] standard deviation of a never surveyed node's place along x, y and z.
+    joint_std : float or sequence of 5 float
+        [rad] standard deviation of a joint's reading (offset and noise together), role order.
+    """
+
+    def __init__(self, truss: Truss, prior_std: float, joint_std) -> None:
+        if not prior_std >= 0.0:
+            raise ValueError(f'prior_std must be >= 0 m, got {prior_std}')
+        std = np.broadcast_to(np.asarray(joint_std, dtype=float), (5,)).copy()
+        if not np.all(std >= 0.0):
+            raise ValueError(f'joint_std must be >= 0 rad, got {joint_std}')
+        self.truss = truss
+        self.prior_std = float(prior_std)
+        self.joint_std = std
+        self._surveyed: dict[str, NodeEstimate] = {}
+        self.anchor: str = ''
+        self.version = 0  # grows with every change: a publisher re-latches on it
+
+    # ------------------------------------------------------------------ queries
+    def estimate(self, node: str) -> NodeEstimate:
+        """Return the node's estimate: surveyed, or nominal with the prior (UnknownNodeError)."""
+        if node in self._surveyed:
+            return self._surveyed[node]
+        return NodeEstimate(self.truss.position(node), np.eye(3) * self.prior_std ** 2, False)
+
+    def position(self, node: str) -> np.ndarray:
+        """[m] the node's estimated position in the truss frame."""
+        return self.estimate(node).position.copy()
+
+    def surveyed(self, node: str) -> bool:
+        """Return True if the node's place has been measured (or it anchors the frame)."""
+        return node in self._surveyed
+
+    @property
+    def surveyed_nodes(self) -> list[str]:
+        """The surveyed nodes, in the truss's order."""
+        return [n for n in self.truss.node_names if n in self._surveyed]
+
+    # ------------------------------------------------------------------ updates
+    def anchor_at(self, node: str) -> None:
+        """Anchor the truss frame at ``node`` (its nominal place, no uncertainty) if unanchored.
+
+        A map that has an anchor already (a survey loaded, an earlier walk) keeps it.
+        """
+        if self.anchor:
+            return
+        self.truss.index(node)
+        self.anchor = node
+        self._surveyed[node] = NodeEstimate(self.truss.position(node), np.zeros((3, 3)), True)
+        self.version += 1
+
+    def survey(self, node: str, frame: BaseFrame, base_node: str,
+               kinematics: WalkerKinematics, theta_roles: np.ndarray) -> NodeEstimate:
+        """Survey ``node`` from the joints, both grippers attached.
+
+        Parameters
+        ----------
+        node : str
+            The node the other gripper is screwed into.
+        frame : BaseFrame
+            The base gripper's frame in the truss frame (at ``base_node``).
+        base_node : str
+            The base gripper's node.
+        theta_roles : ndarray, shape (5,)
+            Measured joint angles J1..J5 [rad], role order of the base gripper.
+
+        Returns
+        -------
+        NodeEstimate
+            The new estimate (also kept).
+        """
+        if node == base_node:
+            raise ValueError(f'cannot survey the base node {node} from itself')
+        self.truss.index(node)
+        theta = np.asarray(theta_roles, dtype=float)
+        position = frame.to_truss(kinematics.forward(theta)[:3])
+        covariance = self.estimate(base_node).covariance + survey_covariance(
+            kinematics, theta, frame.heading, self.joint_std)
+        estimate = NodeEstimate(position, covariance, True)
+        if node != self.anchor:
+            self._surveyed[node] = estimate
+            self.version += 1
+        return estimate
+
+    def frames(self) -> list[tuple[str, np.ndarray, bool]]:
+        """Return every node's frame: its TF name, position [m] in the truss frame, surveyed."""
+        return [(node_frame_name(n), e.position.copy(), e.surveyed)
+                for n, e in ((n, self.estimate(n)) for n in self.truss.node_names)]
+
+    # ------------------------------------------------------------------ the survey file
+    def to_dict(self) -> dict:
+        """Return the survey file's content: plain lists and floats (docs/walking.md)."""
+        return {'format': SURVEY_FORMAT, 'frame': 'truss', 'anchor': self.anchor,
+                'nodes': {n: {'position': [float(v) for v in e.position],
+                              'covariance': [[float(v) for v in row] for row in e.covariance]}
+                          for n, e in ((n, self._surveyed[n]) for n in self.surveyed_nodes)}}
+
+    def load(self, content: dict) -> None:
+        """Take the surveyed nodes of a survey file's content; raises SurveyFileError.
+
+        Nothing changes if any entry is wrong.
+        """
+        if not isinstance(content, dict) or content.get('format') != SURVEY_FORMAT:
+            raise SurveyFileError(f'a survey file must have format: {SURVEY_FORMAT}')
+        nodes = content.get('nodes') or {}
+        anchor = content.get('anchor') or ''
+        if not isinstance(nodes, dict):
+            raise SurveyFileError('the survey file\'s "nodes" must map node names to entries')
+        taken = {}
+        for node, entry in nodes.items():
+            try:
+                self.truss.index(node)
+                position = np.asarray(entry['position'], dtype=float)
+                covariance = np.asarray(entry['covariance'], dtype=float)
+            except (KeyError, TypeError, ValueError) as error:
+                raise SurveyFileError(f'survey entry {node!r}: {error}') from None
+            if position.shape != (3,) or covariance.shape != (3, 3) \
+                    or not np.all(np.isfinite(position)) or not np.all(np.isfinite(covariance)):
+                raise SurveyFileError(f'survey entry {node!r}: position must be 3 finite '
+                                      f'values [m] and covariance 3x3 [m^2]')
+            if np.linalg.eigvalsh((covariance + covariance.T) / 2).min() < -1e-12:
+                raise SurveyFileError(f'survey entry {node!r}: covariance is not positive '
+                                      f'semi-definite')
+            taken[node] = NodeEstimate(position, covariance, True)
+        if anchor and anchor not in taken:
+            raise SurveyFileError(f'the anchor {anchor!r} has no survey entry')
+        self._surveyed = taken
+        self.anchor = anchor
+        self.version += 1
+
+    @classmethod
+    def from_dict(cls, truss: Truss, prior_std: float, joint_std, content: dict) -> 'TrussMap':
+        """Return a map with a survey file's content (:meth:`load`)."""
+        survey = cls(truss, prior_std, joint_std)
+        survey.load(content)
+        return survey
