@@ -107,10 +107,15 @@ class NodeGeometry:
 
 @dataclasses.dataclass(frozen=True)
 class ContactForce:
-    """A force [N] on the gripper at a point [m], both in the truss frame."""
+    """A force [N] on the gripper at a point [m], both in the truss frame.
+
+    ``depth`` [m] is how far the point has sunk into the node: the spring's energy is
+    ``CONTACT_STIFFNESS * depth**2 / 2``.
+    """
 
     force: tuple[float, float, float]
     point: tuple[float, float, float]
+    depth: float
 
 
 def _nearest_on_profile(profile, radius: float, height: float) -> tuple[float, float, float]:
@@ -145,7 +150,7 @@ def _point_contact(geometry: NodeGeometry, node, point, velocity, face_only: boo
     magnitude = CONTACT_STIFFNESS * depth - CONTACT_DAMPING * approach
     if magnitude <= 0.0:
         return None
-    return ContactForce(tuple(magnitude * n for n in normal), tuple(point))
+    return ContactForce(tuple(magnitude * n for n in normal), tuple(point), depth)
 
 
 def screw_tip(position, z_axis) -> tuple[float, float, float]:

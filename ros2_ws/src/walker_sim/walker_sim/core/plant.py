@@ -230,6 +230,7 @@ class WalkerPlant:
         self._mouths = {name: tuple(float(v) for v in self.node_position(name))
                         for name in self.truss.node_names}
         self._contacts: list[ContactForce] = []
+        self._contact_enabled = True
         try:
             self._build()
             self.reset()
@@ -497,6 +498,8 @@ class WalkerPlant:
 
     def _free_gripper(self) -> str | None:
         """The gripper that can touch a node (free or jammed, not the base), or None."""
+        if not self._contact_enabled:
+            return None
         tip = other_gripper(self._active.root)
         mode = self._grippers.status(tip).mode
         return tip if mode in (GripperMode.FREE, GripperMode.JAMMED) else None
@@ -806,6 +809,11 @@ class WalkerPlant:
         enabled = np.broadcast_to(np.asarray(enabled, dtype=bool), (5,))
         self._friction_enabled = enabled.copy()
         self._update_override()
+
+    def enable_contact(self, enabled: bool) -> None:
+        """Switch the nodes' contact on or off (off: a rig holding the free gripper clear)."""
+        self._contact_enabled = bool(enabled)
+        self._contacts = []
 
     def _update_override(self) -> None:
         override = tuple(_HOLD_TORQUE if held else (None if enabled else 0.0)
