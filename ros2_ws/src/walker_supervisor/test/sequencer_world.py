@@ -29,7 +29,8 @@ SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignmen
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,
                                   mouth_settle_time=0.1, descent_region=0.002,
                                   descent_axis_tolerance=0.005, descent_arrival_time=0.02,
-                                  sweep_lead=0.0)
+                                  sweep_lead=0.0,
+                                  insertion_overtravel=0.0)  # no face: see runner_world
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 

@@ -84,6 +84,12 @@ class SupervisorParameters:
         "how long before the lift ends the coarse motion's setpoints begin (0: after it)",
         's', 0.0, 1.0, read_only=False,
         source="chosen: joint 1's filter holds the sweep back while the gripper rises")
+    # last, with its value also here: sections built field by field keep working without it
+    insertion_overtravel: float = dataclasses.field(default=0.003, metadata=parameter(
+        "how far past the hole's nominal mouth a descent is commanded, to meet a lower node's "
+        'face', 'm', 0.0, 0.02, read_only=False,
+        source='chosen: a node 3 mm low is still reached (3 sigma of a 1 mm placement error)'
+        ).metadata)
 
     def __post_init__(self) -> None:
         check_section(self)
