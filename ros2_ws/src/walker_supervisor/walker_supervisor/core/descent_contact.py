@@ -48,11 +48,14 @@ class DescentContact:
     ----------
     height : float
         [m] Tip height at contact (NaN: no contact felt yet).
+    judged : bool
+        The descent has ended and been judged.
     """
 
     mouth: float
     end: float
     height: float = math.nan
+    judged: bool = False
     _last: tuple[float, float] | None = None
     _still_since: float | None = None
 

@@ -43,6 +43,10 @@ __all__ = ['PREPARED_DESCENT_TOLERANCE', 'MAX_MOUTH_LINES', 'descent_goal', 'des
 PREPARED_DESCENT_TOLERANCE = 0.02
 #: Fine lines at the mouth tried before the gripper is screwed in anyway (as above the hole).
 MAX_MOUTH_LINES = 3
+#: [m] A line at the mouth after the descent felt the face ends this far below where it was
+#: felt: it keeps the gripper on the face (and drops it into the chamfer when it gets there)
+#: without pressing it so hard that the joints push it sideways.
+MOUTH_PRESS = 3e-4
 
 
 def descent_goal(run: StepRun) -> tuple[np.ndarray, np.ndarray]:
@@ -149,9 +153,9 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
 def _judge_contact(run: StepRun) -> list:
     """At rest after the descent: say whether it met the face (once per descent)."""
     contact = run.tries.contact
-    if contact is None or run.parameters.insertion_overtravel <= 0.0:
+    if contact is None or run.parameters.insertion_overtravel <= 0.0 or contact.judged:
         return []
-    run.tries.contact = None
+    contact.judged = True
     if contact.felt:
         return []  # said when it was felt
     if contact.at_rest(float(run.tip()[2])):
@@ -164,12 +168,21 @@ def _judge_contact(run: StepRun) -> list:
 def _align(run: StepRun) -> list:
     """Run a fine line at the mouth, from where the tip settled onto the hole's axis.
 
-    It ends where the descent was going (:func:`descent_goal`), so that a gripper resting on
-    the face beside the hole keeps on it and drops into the chamfer when it gets there.
+    At the height where the descent felt the face, :data:`MOUTH_PRESS` lower (at the nominal
+    mouth if it felt none).
     """
     run.tries.mouth_lines += 1
     run.stage = Stage.ALIGNING
-    joints, point = descent_goal(run)
+    t = run.targets
+    contact = run.tries.contact
+    joints, point = t.at_to, t.point_to
+    if contact is not None and contact.felt:
+        point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
+        try:
+            joints = np.asarray(run.kinematics.inverse([*point, 0.0, t.at_to[4]],
+                                                       reference=t.at_to), dtype=float)
+        except KinematicsError:
+            joints, point = t.at_to, t.point_to
     return [run.trajectory('fine', run.theta, joints, run.tip(), point)]
 
 
