@@ -16,7 +16,7 @@ from walker_supervisor.core.route import possible_steps
 from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
 
 MOUTH = 0.0
-OVERTRAVEL = 0.003
+OVERTRAVEL = 0.002
 TICK = 0.02
 
 

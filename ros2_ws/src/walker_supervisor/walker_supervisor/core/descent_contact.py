@@ -30,7 +30,7 @@ CONTACT_SPEED = 0.002
 CONTACT_DWELL = 0.04
 #: [m] A tip at rest this far above the descent's end was stopped by the face: the joints
 #: track a free descent to a tenth of a millimetre.
-SHORT_OF_THE_END = 5e-4
+SHORT_OF_THE_END = 3e-4
 
 
 @dataclasses.dataclass
