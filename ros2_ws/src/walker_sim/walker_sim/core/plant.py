@@ -64,6 +64,11 @@ _HOLD_TORQUE = 1.0e6
 #: where the time step, not the solver, is the larger error.
 SOLVER_ITERATIONS = 30
 SOLVER_RESIDUAL = 1e-7
+#: [m/s] Faster than the gripper ever moves (1.5 rad/s of joint speed at the arm's full 1.5 m
+#: reach is 2.3 m/s): a gripper this far above a face is not looked at again for that long.
+MAX_GRIPPER_SPEED = 3.0
+# [m] Above its node's face by more than this, a gripper touches nothing
+_CONTACT_REACH = 0.01
 # Step durations whose number of physics steps a plant remembers (one, the control period,
 # in every caller; a few in tests)
 _REMEMBERED_DURATIONS = 8
@@ -231,6 +236,7 @@ class WalkerPlant:
                         for name in self.truss.node_names}
         self._contacts: list[ContactForce] = []
         self._contact_enabled = True
+        self._contact_skip = 0  # physics steps the free gripper cannot reach a face in
         try:
             self._build()
             self.reset()
@@ -324,6 +330,7 @@ class WalkerPlant:
             self._detach(gripper)
         self._pull.clear()
         self._contacts = []
+        self._contact_skip = 0
         self._active = rooted = self._bodies[start.base_gripper]
         root_pose = Pose.from_matrix(base_pose)
         pybullet.resetBasePositionAndOrientation(rooted.body, root_pose.position.tolist(),
@@ -391,6 +398,7 @@ class WalkerPlant:
             self._detach(gripper)
         self._pull.clear()
         self._contacts = []
+        self._contact_skip = 0
         self._active = rooted = self._bodies[snapshot.root]
         pybullet.resetBasePositionAndOrientation(rooted.body, list(snapshot.root_position),
                                                  list(snapshot.root_orientation),
@@ -513,16 +521,25 @@ class WalkerPlant:
         return node, self._mouths[node]
 
     def _touch(self, gripper: str) -> None:
-        """Apply the node's contact forces on a free gripper for the coming physics step."""
+        """Apply the node's contact forces on a free gripper for the coming physics step.
+
+        A gripper far above every face is looked at again only when it could have reached
+        one at :data:`MAX_GRIPPER_SPEED`: nothing touches it meanwhile, whenever it is looked
+        at, so the physics is the same.
+        """
+        if self._contact_skip > 0:
+            self._contact_skip -= 1
+            return
         rooted = self._active
         link = rooted.gripper_links[gripper]
         centre, _, _, _, position, orientation, velocity, spin = pybullet.getLinkState(
             rooted.body, link, computeLinkVelocity=True, computeForwardKinematics=True,
             physicsClientId=rooted.client)
         _, mouth = self._nearest_mouth(position[0], position[1])
-        if position[2] - mouth[2] > 0.01:  # far above the face (the common case): no contact
-            if self._contacts:
-                self._contacts = []
+        clearance = position[2] - mouth[2] - _CONTACT_REACH
+        if clearance > 0.0:  # far above the face (the common case): no contact
+            self._contacts = []
+            self._contact_skip = int(clearance / (MAX_GRIPPER_SPEED * self.physics_step))
             return
         x, y, z, w = orientation
         z_axis = (2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y))
@@ -758,6 +775,7 @@ class WalkerPlant:
         """Carry the walker over to the body rooted at ``root`` (its weld becomes the base)."""
         self._detach(root)
         target = self._bodies[root]
+        self._contact_skip = 0
         carry_state(self._active, target)
         self._active = target
         self._motor_levels = None
@@ -814,6 +832,7 @@ class WalkerPlant:
         """Switch the nodes' contact on or off (off: a rig holding the free gripper clear)."""
         self._contact_enabled = bool(enabled)
         self._contacts = []
+        self._contact_skip = 0
 
     def _update_override(self) -> None:
         override = tuple(_HOLD_TORQUE if held else (None if enabled else 0.0)
