@@ -289,7 +289,7 @@ def main() -> int:
                         help='wall-clock seconds of the real-time jitter measurement')
     parser.add_argument('--output', type=Path, default=RESULTS)
     parser.add_argument('--contact-only', action='store_true',
-                        help="measure the contact only and update that part of the JSON")
+                        help='measure the contact only and update that part of the JSON')
     args = parser.parse_args()
     from importlib.metadata import version
 

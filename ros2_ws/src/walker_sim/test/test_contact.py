@@ -21,7 +21,7 @@ def geometry(params):
 
 
 def forces_at(geometry, offset, height, velocity=STILL):
-    position = tuple(n + d for n, d in zip(NODE, (*offset, height)))
+    position = tuple(n + d for n, d in zip(NODE, (*offset, height), strict=True))
     return contact_forces(geometry, NODE, position, UP, velocity, STILL, position)
 
 
@@ -145,7 +145,7 @@ def test_the_face_is_where_the_node_really_is(make_plant, sim, monkeypatch, heig
 
 
 def total_energy(plant):
-    """The robot's energy and the energy stored in the contact springs [J]."""
+    """Return the robot's energy and the energy stored in the contact springs [J]."""
     return plant.energy() + sum(0.5 * CONTACT_STIFFNESS * c.depth ** 2 for c in plant.contacts)
 
 

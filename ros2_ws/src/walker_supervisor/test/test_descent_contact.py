@@ -29,7 +29,7 @@ def descend(contact, heights):
 
 
 def stopped_at(face, speed=0.02, ticks=120, start=0.03):
-    """A tip going down at ``speed`` [m/s] until a face at height ``face`` stops it."""
+    """Return the heights of a tip going down at ``speed`` [m/s] until a face stops it."""
     return [max(face, start - speed * TICK * k) for k in range(ticks)]
 
 

@@ -81,7 +81,7 @@ class NodeGeometry:
 
     @classmethod
     def from_parameters(cls, params) -> 'NodeGeometry':
-        """The node of the shared ``gripper.*`` and ``truss.*`` parameters."""
+        """Return the node of the shared ``gripper.*`` and ``truss.*`` parameters."""
         chamfer = params.gripper.insertion_position_tolerance
         return cls(chamfer, BORE_RADIUS_FRACTION * chamfer, params.truss.hole_depth)
 
@@ -91,7 +91,7 @@ class NodeGeometry:
         return self.chamfer_radius - self.bore_radius
 
     def profile(self) -> tuple[tuple[float, float], ...]:
-        """The node's surface in (radius, height above the mouth) [m], from the face's rim in.
+        """Return the node's surface, (radius, height above the mouth) [m], from the rim in.
 
         The material is below and outside it: face, chamfer, bore wall.
         """
@@ -121,7 +121,7 @@ class ContactForce:
 def _nearest_on_profile(profile, radius: float, height: float) -> tuple[float, float, float]:
     """Distance [m] to the nearest point of the profile, and the unit direction to it."""
     best = (math.inf, 0.0, 1.0)
-    for (r0, z0), (r1, z1) in zip(profile[:-1], profile[1:]):
+    for (r0, z0), (r1, z1) in zip(profile[:-1], profile[1:], strict=True):
         dr, dz = r1 - r0, z1 - z0
         t = min(max(((radius - r0) * dr + (height - z0) * dz) / (dr * dr + dz * dz), 0.0), 1.0)
         nr, nz = r0 + t * dr - radius, z0 + t * dz - height
@@ -146,7 +146,7 @@ def _point_contact(geometry: NodeGeometry, node, point, velocity, face_only: boo
         depth, n_radial, n_z = _nearest_on_profile(geometry.profile(), radius, height)
     ux, uy = (x / radius, y / radius) if radius > 0.0 else (0.0, 0.0)
     normal = (n_radial * ux, n_radial * uy, n_z)
-    approach = sum(v * n for v, n in zip(velocity, normal))
+    approach = sum(v * n for v, n in zip(velocity, normal, strict=True))
     magnitude = CONTACT_STIFFNESS * depth - CONTACT_DAMPING * approach
     if magnitude <= 0.0:
         return None
@@ -154,13 +154,13 @@ def _point_contact(geometry: NodeGeometry, node, point, velocity, face_only: boo
 
 
 def screw_tip(position, z_axis) -> tuple[float, float, float]:
-    """The screw's tip [m]: :data:`SCREW_LENGTH` below the contact point along the axis."""
-    return tuple(p - SCREW_LENGTH * a for p, a in zip(position, z_axis))
+    """Return the screw's tip [m]: :data:`SCREW_LENGTH` below the contact point along the axis."""
+    return tuple(p - SCREW_LENGTH * a for p, a in zip(position, z_axis, strict=True))
 
 
 def contact_forces(geometry: NodeGeometry, node, position, z_axis, velocity, spin,
                    centre) -> list[ContactForce]:
-    """The node's forces on a free gripper (none when nothing touches).
+    """Return the node's forces on a free gripper (none when nothing touches).
 
     Parameters
     ----------
@@ -179,7 +179,7 @@ def contact_forces(geometry: NodeGeometry, node, position, z_axis, velocity, spi
         return []  # the screw's tip is above the face: nothing can touch
     forces = []
     for point, face_only in ((tuple(position), True), (screw_tip(position, z_axis), False)):
-        arm = [p - c for p, c in zip(point, centre)]
+        arm = [p - c for p, c in zip(point, centre, strict=True)]
         point_velocity = (velocity[0] + spin[1] * arm[2] - spin[2] * arm[1],
                           velocity[1] + spin[2] * arm[0] - spin[0] * arm[2],
                           velocity[2] + spin[0] * arm[1] - spin[1] * arm[0])

@@ -505,7 +505,7 @@ class WalkerPlant:
         return self.state()
 
     def _free_gripper(self) -> str | None:
-        """The gripper that can touch a node (free or jammed, not the base), or None."""
+        """Return the gripper that can touch a node (free or jammed, not the base), or None."""
         if not self._contact_enabled:
             return None
         tip = other_gripper(self._active.root)
@@ -513,7 +513,7 @@ class WalkerPlant:
         return tip if mode in (GripperMode.FREE, GripperMode.JAMMED) else None
 
     def _nearest_mouth(self, x: float, y: float) -> tuple[str, tuple[float, float, float]]:
-        """The node nearest a point of the truss plane and where its mouth really is [m]."""
+        """Return the node nearest a point of the truss plane and where its mouth really is [m]."""
         truss = self.truss
         column = min(max(round((x - truss.origin[0]) / truss.spacing), 0), truss.columns - 1)
         row = min(max(round((y - truss.origin[1]) / truss.spacing), 0), truss.rows - 1)
