@@ -90,3 +90,17 @@ def test_no_overtravel_descends_to_the_nominal_mouth_as_before():
     request = insertion.descent_request(run)
     np.testing.assert_array_equal(request.goal, run.targets.at_to)
     np.testing.assert_array_equal(request.goal_point, run.targets.point_to)
+
+
+def test_a_streaming_descent_stopped_by_the_face_says_where_it_felt_it_once():
+    run = run_at_insertion(OVERTRAVEL)
+    insertion.enter(run, 0.0)
+    mouth = run.targets.point_to
+    said = []
+    for tick, height in enumerate(stopped_at(-0.001, start=0.01, ticks=60)):
+        point = np.array([mouth[0], mouth[1], mouth[2] + height])
+        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
+                                         reference=run.targets.at_to))
+        said += insertion.feel_the_face(run, tick * TICK)
+    (notice,) = said
+    assert notice.message == "the descent met the node's face 1.00 mm below the nominal mouth"

@@ -101,17 +101,16 @@ def enter(run: StepRun, now: float) -> list:
 def feel_the_face(run: StepRun, now: float) -> list:
     """Watch a streaming descent for the node's face (:mod:`.descent_contact`).
 
-    Contact is where the gripper will be screwed in: the descent stops there (its stream
-    cancelled: the controllers hold its last setpoints, a little past the face, which keep the
-    gripper on it), and once the joints are still the tip is judged at the mouth.
+    Contact is where the gripper will be screwed in: the descent's last setpoints (at most
+    ``insertion_overtravel`` past the nominal mouth) keep it pressed on the face until the
+    descent ends, and once the joints are still the tip is judged at the mouth. Only said
+    here: the descent goes on to its end.
     """
     contact = run.tries.contact
     if contact is None or not contact.update(now, float(run.tip()[2])):
         return []
     contact.judged = True
-    run.motions.running = False
-    return [CancelTrajectory(), Notice(_felt(contact), 'info')] \
-        + run.wait_again(now, Stage.SETTLING)
+    return [Notice(_felt(contact), 'info')]
 
 
 def _felt(contact: DescentContact) -> str:
