@@ -10,11 +10,14 @@ environment like the other scripts, runs in well under a minute, prints a table 
    at a time, gripper a attached and gripper b swinging under torques that beat friction,
    as in a step. Reports the real-time factor and the cost of a control step and of a physics
    step (median and 99th percentile), and the same at rest.
-2. Accuracy of the shipped physics settings: each of joints 1-3, friction on, is driven by half
+2. Contact with a node: the free gripper held pressed on a node's face beside the hole, and
+   free above its node, each with the node's contact on and switched off; the cost of a
+   control step and the real-time factor.
+3. Accuracy of the shipped physics settings: each of joints 1-3, friction on, is driven by half
    its torque limit for 0.3 s and left free for 0.7 s; its speed and the tip's path are
    compared with those of a converged reference (4 kHz physics, 300 solver iterations). Reports
    the largest speed difference relative to the peak speed, and the largest tip difference.
-3. Real-time mode over DDS: the plant node runs in its own process (isolated ROS domain, loopback
+4. Real-time mode over DDS: the plant node runs in its own process (isolated ROS domain, loopback
    discovery) and a subscriber here records the period between JointState messages: by their
    stamps (the plant's timer) and by their arrival (what a controller sees).
 
@@ -75,6 +78,7 @@ def physics_benchmark(seconds: float) -> dict:
     with WalkerPlant(params, sim) as plant:
         start = StartConfiguration('a', sim.start.base_node, sim.start.other_node, False, 0.0)
         limits = plant.drive.torque_limit
+        plant.enable_contact(False)  # free swinging, as before the contact: see contact_benchmark
         pybullet.stepSimulation = timed_step  # the plant calls it through the module
         for case in ('moving', 'at_rest'):
             plant.reset(start)
@@ -104,6 +108,55 @@ def physics_benchmark(seconds: float) -> dict:
     return results
 
 
+def contact_benchmark(seconds: float) -> dict:
+    """Step the plant core with its free gripper on a node's face, contact on and off.
+
+    Cases: ``pressed``, the gripper held pressed on the face 4 mm off the hole by a joint PD
+    (the node's forces are computed and applied every physics step); ``above``, the gripper
+    free 30 mm above its node, the approach height (the plant only looks where the gripper is,
+    as seldom as its distance from the face allows).
+    Each with the contact on and switched off (``WalkerPlant.enable_contact``); the PD's
+    torques are computed outside the timed ``step()``.
+    """
+    import numpy as np
+
+    from walker_core.robot_parameters import load_walker_parameters
+    from walker_sim.core.config import StartConfiguration, load_sim_parameters
+    from walker_sim.core.contact import SCREW_LENGTH
+    from walker_sim.core.plant import WalkerPlant
+
+    params, sim = load_walker_parameters(), load_sim_parameters()
+    period = 1.0 / params.timing.control_rate
+    steps = round(seconds / period)
+    results = {'simulated_s': steps * period}
+    with WalkerPlant(params, sim) as plant:
+        start = StartConfiguration('a', sim.start.base_node, sim.start.other_node, False, 0.03)
+        base = plant.node_position(sim.start.base_node)
+        node = plant.node_position(sim.start.other_node)
+        for case, point in (('pressed', [0.004, 0.0, SCREW_LENGTH - 0.001]),
+                            ('above', [0.0, 0.0, 0.03])):
+            goal = np.array(plant.kinematics.inverse([*(node - base + point), 0.0, 0.0]))
+            for contact in (True, False):
+                plant.enable_contact(contact)
+                plant.enable_friction(False)  # the joints go where the PD and the face say
+                state = plant.reset(start)
+                costs = np.empty(steps)
+                touching = 0
+                for k in range(steps):
+                    torque = 300.0 * (goal - plant.true_joint_positions()) - 20.0 * state.velocity
+                    tick = time.perf_counter()
+                    state = plant.step(torque, period)
+                    costs[k] = time.perf_counter() - tick
+                    touching += bool(plant.contacts) or (
+                        not contact and state.poses['b'].position[2] - node[2] < SCREW_LENGTH)
+                results[f'{case}_contact_{"on" if contact else "off"}'] = {
+                    'real_time_factor': steps * period / float(costs.sum()),
+                    'control_step_us': {k: v * 1e6 for k, v in percentiles(costs).items()},
+                    'periods_touching': int(touching)}
+        plant.enable_contact(True)
+    return results
+
+
 # Converged reference for the accuracy check: physics rate [Hz], solver iterations, residual.
 _REFERENCE_PHYSICS = (4000.0, 300, 1e-12)
 
@@ -119,6 +172,7 @@ def _pulse_response(params, sim, joint: int, iterations: int, residual: float,
     period = 1.0 / params.timing.control_rate
     with WalkerPlant(params, sim) as plant:
         plant.set_solver(iterations, residual)
+        plant.enable_contact(False)  # free motion: the gripper starts at its node's mouth
         plant.reset(StartConfiguration('a', sim.start.base_node, sim.start.other_node, False,
                                        0.0))
         torque = np.zeros(5)
@@ -234,17 +288,30 @@ def main() -> int:
     parser.add_argument('--jitter-seconds', type=float, default=10.0,
                         help='wall-clock seconds of the real-time jitter measurement')
     parser.add_argument('--output', type=Path, default=RESULTS)
+    parser.add_argument('--contact-only', action='store_true',
+                        help='measure the contact only and update that part of the JSON')
     args = parser.parse_args()
     from importlib.metadata import version
 
     machine = {'cpus': os.cpu_count(), 'load_average_1_5_15': list(os.getloadavg()),
                'python': platform.python_version(), 'pybullet': version('pybullet'),
                'date': time.strftime('%Y-%m-%d %H:%M:%S %Z')}
+    if args.contact_only:
+        contact = contact_benchmark(args.seconds)
+        machine['load_average_after'] = list(os.getloadavg())
+        contact['machine'] = machine
+        document = json.loads(args.output.read_text()) if args.output.exists() else {}
+        document['contact'] = contact
+        args.output.write_text(json.dumps(document, indent=2) + '\n')
+        _print_contact(contact)
+        return 0
     physics = physics_benchmark(args.seconds)
+    contact = contact_benchmark(args.seconds)
     accuracy = accuracy_benchmark()
     jitter = jitter_benchmark(args.jitter_seconds)
     machine['load_average_after'] = list(os.getloadavg())
-    document = {'machine': machine, 'physics': physics, 'accuracy': accuracy,
+    document = {'machine': machine, 'physics': physics, 'contact': contact,
+                'accuracy': accuracy,
                 'real_time_jitter': jitter}
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps(document, indent=2) + '\n')
@@ -264,6 +331,7 @@ def main() -> int:
               f'{step["p50"]:>10.0f} / {step["p99"]:<5.0f} us '
               f'{engine["p50"]:>5.0f} / {engine["p99"]:<5.0f} us '
               f'{row["engine_only_real_time_factor"]:>7.1f}')
+    _print_contact(contact)
     reference = accuracy['reference']
     print(f'accuracy: {accuracy["physics_rate_hz"]:g} Hz, {accuracy["solver_iterations"]} '
           f'iterations against {reference["physics_rate_hz"]:g} Hz, '
@@ -280,6 +348,17 @@ def main() -> int:
               f'  max {row["max"]:.3f} ms')
     print(f'wrote {args.output.relative_to(REPO_ROOT)}')
     return 0
+
+
+def _print_contact(contact: dict) -> None:
+    print(f'contact with a node, sim time ({contact["simulated_s"]:g} s simulated each):')
+    for name, row in contact.items():
+        if not isinstance(row, dict) or 'control_step_us' not in row:
+            continue
+        control = row['control_step_us']
+        print(f'  {name:<20} RTF {row["real_time_factor"]:>5.1f}  control step p50/p99 '
+              f'{control["p50"]:>4.0f} / {control["p99"]:<4.0f} us  '
+              f'({row["periods_touching"]} periods below the face)')
 
 
 if __name__ == '__main__':

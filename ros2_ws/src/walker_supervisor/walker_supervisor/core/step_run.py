@@ -18,6 +18,7 @@ import numpy as np
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.commands import CancelTrajectory, SetControlMode, TrajectoryRequest
+from walker_supervisor.core.descent_contact import DescentContact
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.route import PlannedStep
@@ -96,6 +97,8 @@ class Tries:
     #: [m] the tip's distance from its target when insertion started (then from the axis at
     #: the screw-in); NaN before
     insertion_error: float = math.nan
+    #: the descent under way feeling for the node's face (None: none, or judged)
+    contact: DescentContact | None = None
 
 
 class StepRun:

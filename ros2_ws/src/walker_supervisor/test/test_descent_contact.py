@@ -1,0 +1,106 @@
+"""Feeling the node's face from the joints: contact at the end of a descent to past the mouth."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from walker_supervisor.core import insertion
+from walker_supervisor.core.descent_contact import (
+    CONTACT_DWELL, CONTACT_SPEED, SHORT_OF_THE_END, DescentContact)
+from walker_supervisor.core.step_run import StepRun
+
+from sequencer_world import KIN, SUPERVISOR, TRUSS, START
+from walker_supervisor.core.route import possible_steps
+from walker_supervisor.core.step_geometry import BaseFrame, plan_step_targets
+
+MOUTH = 0.0
+OVERTRAVEL = 0.002
+TICK = 0.02
+
+
+def descend(contact, heights):
+    """Feed tip heights one decision tick apart; return the tick at which contact was felt."""
+    for tick, height in enumerate(heights):
+        if contact.update(tick * TICK, height):
+            return tick
+    return None
+
+
+def stopped_at(face, speed=0.02, ticks=120, start=0.03):
+    """Return the heights of a tip going down at ``speed`` [m/s] until a face stops it."""
+    return [max(face, start - speed * TICK * k) for k in range(ticks)]
+
+
+@pytest.mark.parametrize('face', [-0.0015, 0.0, 0.0015])
+def test_a_tip_stopped_by_the_face_is_felt_where_the_face_is(face):
+    contact = DescentContact(MOUTH, MOUTH - OVERTRAVEL)
+    tick = descend(contact, stopped_at(face))
+    assert tick is not None and contact.felt
+    assert contact.face_offset == pytest.approx(face - MOUTH)
+    # felt once it has been still for the dwell, not before
+    arrived = next(k for k, h in enumerate(stopped_at(face)) if h == face)
+    assert (tick - arrived) * TICK >= CONTACT_DWELL
+
+
+def test_a_tip_still_above_the_highest_face_is_no_contact():
+    contact = DescentContact(MOUTH, MOUTH - OVERTRAVEL)
+    assert descend(contact, [0.01] * 20) is None and not contact.felt
+
+
+def test_a_tip_still_going_down_is_no_contact():
+    contact = DescentContact(MOUTH, MOUTH - OVERTRAVEL)
+    slow = 2.0 * CONTACT_SPEED
+    assert descend(contact, [0.002 - slow * TICK * k for k in range(20)]) is None
+
+
+def test_a_descent_judged_at_rest_short_of_its_end_met_the_face():
+    stopped = DescentContact(MOUTH, MOUTH - OVERTRAVEL)
+    assert stopped.at_rest(MOUTH - 0.001) and stopped.face_offset == pytest.approx(-0.001)
+    free = DescentContact(MOUTH, MOUTH - OVERTRAVEL)
+    assert not free.at_rest(MOUTH - OVERTRAVEL + 0.5 * SHORT_OF_THE_END)
+    assert math.isnan(free.face_offset)
+
+
+def run_at_insertion(overtravel):
+    settings = dataclasses.replace(SUPERVISOR, insertion_overtravel=overtravel)
+    run = StepRun(settings, KIN, 'a', 0.5)
+    step = possible_steps(TRUSS, START)[0]
+    theta = np.array(KIN.inverse([0.0, TRUSS.spacing, 0.0, 0.0, 0.0]))
+    frame = BaseFrame.from_stance(KIN, theta, TRUSS.position(step.base_node),
+                                  TRUSS.position(step.from_node))
+    run.step = step
+    run.targets = plan_step_targets(KIN, frame, step, TRUSS.position(step.from_node),
+                                    TRUSS.position(step.to_node), theta, 0.03)
+    return run
+
+
+def test_the_descent_is_commanded_the_overtravel_past_the_mouth_on_the_hole_axis():
+    run = run_at_insertion(OVERTRAVEL)
+    request = insertion.descent_request(run)
+    mouth = run.targets.point_to
+    np.testing.assert_allclose(request.goal_point, mouth - [0.0, 0.0, OVERTRAVEL], atol=1e-12)
+    np.testing.assert_allclose(KIN.forward(request.goal)[:3], request.goal_point, atol=1e-9)
+    assert request.goal[4] == pytest.approx(run.targets.at_to[4])  # the same tip yaw
+
+
+def test_no_overtravel_descends_to_the_nominal_mouth_as_before():
+    run = run_at_insertion(0.0)
+    request = insertion.descent_request(run)
+    np.testing.assert_array_equal(request.goal, run.targets.at_to)
+    np.testing.assert_array_equal(request.goal_point, run.targets.point_to)
+
+
+def test_a_streaming_descent_stopped_by_the_face_says_where_it_felt_it_once():
+    run = run_at_insertion(OVERTRAVEL)
+    insertion.enter(run, 0.0)
+    mouth = run.targets.point_to
+    said = []
+    for tick, height in enumerate(stopped_at(-0.001, start=0.01, ticks=60)):
+        point = np.array([mouth[0], mouth[1], mouth[2] + height])
+        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
+                                         reference=run.targets.at_to))
+        said += insertion.feel_the_face(run, tick * TICK)
+    (notice,) = said
+    assert notice.message == "the descent met the node's face 1.00 mm below the nominal mouth"
