@@ -194,11 +194,11 @@ class ShapingSettings:
     frequency: tuple[float, ...] = parameter(
         'flexible-mode frequency each role\'s shaper cancels (0: that role unshaped)',
         'rad/s', 0.0, 1000.0, read_only=False,
-        source='identified: the mode driven joint 1 excites (control_analysis modes)')
+        source='paper: none; chosen: 18 rad/s, the joint-1 mode (robot.flexibility.joint1_mode)')
     damping: float = parameter(
         'damping ratio of the shaped modes (SI: the bound holds from 0 to it)',
         '', 0.0, 0.5, read_only=False,
-        source='robot.flexibility.damping_ratio')
+        source="chosen: the structure's 5 % (robot.flexibility.damping_ratio)")
     tolerance: float = parameter(
         'residual vibration EI and SI allow, per unit of the unshaped residual',
         '', 0.001, 0.5, read_only=False,
