@@ -715,3 +715,41 @@ def test_the_same_hold_again_leaves_a_relaxation_running():
 def test_bad_relaxation_settings_are_refused(field, value, words):
     with pytest.raises(ParameterError, match=words):
         replace_in_section(SETTINGS, {field: value})
+
+
+def test_the_input_shaper_shapes_joint_1s_setpoints_as_its_impulses_say():
+    """control.shaping on J1: the setpoint the loop follows is the step convolved with ZVD."""
+    from walker_control.core.input_shaping import DiscreteShaper, zvd
+    shaped_settings = replace_in_section(SETTINGS, {
+        'control.shaping.kind': 'zvd', 'control.shaping.frequency': [18.0, 0, 0, 0, 0]})
+    joint = PHYSICAL_JOINT_NAMES[0]
+    controller = JointController(shaped_settings, joint, 'a')  # role J1
+    plant = RigidJoint(joint, position=0.0)
+    controller.command(Mode.COARSE)
+    expected = DiscreteShaper(zvd(18.0, 0.05), T)
+    expected.reset_to(0.0)
+    samples = len(expected.taps) + 10
+    _, outputs = run(controller, plant, samples, Setpoint(0.01))
+    shaped = [out.shaped_reference.position for out in outputs]
+    assert shaped == pytest.approx(expected.filter([0.01] * samples), abs=1e-12)
+    assert shaped[0] < 0.01 / 2  # the first impulse only: no jump to the setpoint
+    assert shaped[-1] == pytest.approx(0.01, abs=1e-15)  # the step reached exactly
+    assert outputs[-1].reference.position == 0.01  # the setpoint as received
+
+
+def test_an_unshaped_file_leaves_the_setpoint_alone():
+    controller = JointController(SETTINGS, PHYSICAL_JOINT_NAMES[0], 'a')
+    plant = RigidJoint(PHYSICAL_JOINT_NAMES[0], position=0.0)
+    controller.command(Mode.COARSE)
+    _, outputs = run(controller, plant, 5, Setpoint(0.01))
+    assert all(out.shaped_reference.position == 0.01 for out in outputs)
+
+
+@pytest.mark.parametrize('changes,message', [
+    ({'control.shaping.kind': 'zv', 'control.shaping.frequency': [5000.0, 0, 0, 0, 0]},
+     'control.shaping.frequency'),
+    ({'control.shaping.kind': 'bogus'}, 'control.shaping.kind')])
+def test_a_shaper_that_cannot_be_designed_is_refused_when_the_settings_are_built(changes,
+                                                                                   message):
+    with pytest.raises((ParameterError, ValueError), match=message):
+        replace_in_section(SETTINGS, changes)

@@ -34,6 +34,7 @@ from collections.abc import Mapping
 from walker_core.parameter_file import ParameterFile
 from walker_core.parameter_schema import ParameterError, parameter, section_from_flat
 from walker_core.robot_parameters import Drive, RobotParameters, TimingParameters
+from walker_control.core.input_shaping import ShaperDesignError, ShaperKind, design_shaper
 from walker_control.core.lowpass import FILTER_KINDS, FilterDesignError, design_lowpass_sos
 from walker_control.core.modes import GAIN_MODES, Mode
 from walker_control.core.relaxation import RelaxationDither
@@ -42,7 +43,7 @@ from walker_control.core.stability import (
 
 __all__ = [
     'ROLES', 'UnstableControllerError', 'ModeGains', 'CoarseGains', 'FilterSettings',
-    'FrictionCompensationSettings', 'RelaxationSettings', 'StabilitySettings',
+    'FrictionCompensationSettings', 'RelaxationSettings', 'StabilitySettings', 'ShapingSettings',
     'ControlParameters', 'ControllerSettings', 'check_controller_settings',
     'load_controller_settings', 'relaxation_frequency_factor',
 ]
@@ -183,6 +184,43 @@ class RelaxationSettings:
 
 
 @dataclasses.dataclass(frozen=True)
+class ShapingSettings:
+    """The input shaper on the setpoints of each role, outside the loop (input_shaping)."""
+
+    kind: str = parameter(
+        'input shaper family of the shaped roles (none: the paper\'s structure, no shaper)',
+        choices=tuple(kind.value for kind in ShaperKind), read_only=False,
+        source='paper: none; chosen: see docs/controllers.md, command shaping')
+    frequency: tuple[float, ...] = parameter(
+        'flexible-mode frequency each role\'s shaper cancels (0: that role unshaped)',
+        'rad/s', 0.0, 1000.0, read_only=False,
+        source='paper: none; chosen: 18 rad/s, the joint-1 mode (robot.flexibility.joint1_mode)')
+    damping: float = parameter(
+        'damping ratio of the shaped modes (SI: the bound holds from 0 to it)',
+        '', 0.0, 0.5, read_only=False,
+        source="chosen: the structure's 5 % (robot.flexibility.damping_ratio)")
+    tolerance: float = parameter(
+        'residual vibration EI and SI allow, per unit of the unshaped residual',
+        '', 0.001, 0.5, read_only=False,
+        source='chosen: 5 %, the usual EI tolerance')
+    insensitivity: float = parameter(
+        'SI: the relative half-width of the frequency range it holds the tolerance over',
+        '', 0.01, 0.9, read_only=False,
+        source="chosen: the campaigns' +-15 % mode dispersion")
+
+    def __post_init__(self) -> None:
+        _require_five(self, 'frequency')
+
+    def design(self, role: int, sample_time: float):
+        """The role's :class:`~walker_control.core.input_shaping.Shaper`, or None unshaped."""
+        frequency = self.frequency[role - 1]
+        if self.kind == ShaperKind.NONE.value or frequency <= 0.0:
+            return None
+        return design_shaper(ShaperKind(self.kind), frequency, self.damping, self.tolerance,
+                             self.insensitivity, sample_time)
+
+
+@dataclasses.dataclass(frozen=True)
 class StabilitySettings:
     """What the stability check demands of every loop."""
 
@@ -212,6 +250,7 @@ class ControlParameters:
     friction_compensation: FrictionCompensationSettings
     relaxation: RelaxationSettings
     stability: StabilitySettings
+    shaping: ShapingSettings
     in_position_tolerance: tuple[float, ...] = parameter(
         'fine-motion position tolerance of roles J1..J5: the joint has arrived within it',
         'rad', 1e-6, 1.0, read_only=False,
@@ -280,6 +319,11 @@ class ControllerSettings:
             except FilterDesignError as error:
                 raise ParameterError(f'control.filter.setpoint_corner of role J{role}: '
                                      f'{error}') from None
+        for role in ROLES:  # designed once here (cached): refused here, not in the loop
+            try:
+                self.control.shaping.design(role, self.sample_time)
+            except ShaperDesignError as error:
+                raise ParameterError(f'control.shaping of role J{role}: {error}') from None
         relaxation = self.control.relaxation
         highest = relaxation.frequency * relaxation_frequency_factor(ROLES[-1])
         if relaxation.duration > 0.0 and highest > self.timing.control_rate / 4:

@@ -3,8 +3,8 @@
 Structure (one sample, ``I = I_ii(q)`` the rigid-model inertia of the joint's role at the
 current configuration, eqs (9)-(13))::
 
-    theta_r, omega_r, a_r                 the setpoint; through the role's setpoint filter G
-                                          first, outside the loop, if it has one
+    theta_r, omega_r, a_r                 the setpoint; through the role's input shaper and
+                                          setpoint filter G first, outside the loop, if on
     e   = F theta_r - theta,  de = F omega_r - omega   (reference shaped by the filter F)
     v   = I a_r + effort_r + f(omega_r)       feed-forward (rigid model, Coulomb friction)
         + I wc^2 e + integral + 2 zc wc I de  PID (integral only with Ti > 0)
@@ -25,6 +25,8 @@ setpoints through a filter of their own first (``control.filter.setpoint_order``
 ``setpoint_corner``, none as shipped), outside its loop: joint 4 (the moving wrist) through
 joints 2 and 3's command filter keeps step with them, and a Cartesian line stays straighter
 (leading them by their filters' 56-58 ms, it swings a descent 2.4 mm off the hole's axis).
+An input shaper (``control.shaping``, :mod:`~walker_control.core.input_shaping`) can shape a
+role's setpoints before that, outside the loop too, against a flexible mode.
 The Coulomb friction the setpoint's velocity will meet is part of the feed-forward
 (``control.friction_compensation.feedforward_speed``,
 :func:`~walker_control.core.friction_compensation.friction_feedforward`). The friction
@@ -67,7 +69,7 @@ from walker_control.core.inputs import Setpoint
 from walker_control.core.lowpass import LowPassFilter
 from walker_control.core.modes import Mode
 from walker_control.core.pid import Pid, PidGains
-from walker_control.core.reference_shaping import RestartingShaper
+from walker_control.core.reference_shaping import InputShapedSetpoint, RestartingShaper
 from walker_control.core.stability import LoopDesign
 
 __all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
@@ -159,6 +161,7 @@ class _RoleDesign:
     compensator: FrictionCompensator
     shaping: tuple | None   # the reference shaper's design, None without shaping
     setpoint_filter: tuple | None  # the setpoint filter's design, None without one
+    input_shaper: tuple | None  # (Shaper, sample_time) of control.shaping, None without one
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -197,6 +200,7 @@ class JointController:
         self._filter.reset_to(0.0)
         self._shaper = RestartingShaper()  # reference shaping (control.filter.reference)
         self._setpoint_filter = RestartingShaper()  # control.filter.setpoint_*
+        self._input_shaper = RestartingShaper(InputShapedSetpoint)  # control.shaping
         self._key: tuple[int, Mode] | None = None
         self._design: object = None
         self._hold_position = 0.0
@@ -370,10 +374,13 @@ class JointController:
         restart = not self._keeps_tracking(transition)
         if setpoint is not None and mode.tracks_setpoints:
             received = setpoint
+            shaped = self._input_shaper.update(cached.input_shaper, restart, measurement.position,
+                                               measurement.velocity, setpoint, periods)
             commanded = self._filter_setpoint(cached.setpoint_filter, restart, measurement,
-                                              setpoint, periods)
+                                              shaped, periods)
         else:
             self._setpoint_filter.stop()
+            self._input_shaper.stop()
             received = commanded = Setpoint(position=self._hold_position)
         reference = self._shape(cached.shaping, restart, measurement, commanded, periods)
 
@@ -526,10 +533,13 @@ class JointController:
             setpoint_filter = ((setpoint_order, control.filter.setpoint_corner[role - 1],
                                 settings.sample_time, control.filter.kind)
                                if setpoint_order > 0 else None)
+            input_shaper = control.shaping.design(role, settings.sample_time)
             cached = _RoleDesign(loop=loop, kp=loop.kp, ki=loop.ki, kd=loop.kd,
                                  torque_limit=drive.torque_limit, coulomb=drive.friction_torque,
                                  friction=friction, compensator=FrictionCompensator(*friction),
-                                 shaping=shaping, setpoint_filter=setpoint_filter)
+                                 shaping=shaping, setpoint_filter=setpoint_filter,
+                                 input_shaper=(None if input_shaper is None
+                                               else (input_shaper, settings.sample_time)))
             self._role_designs[(role, mode)] = cached
         return cached
 
@@ -592,6 +602,7 @@ class JointController:
         self._filter.reset_to(0.0)
         self._shaper.stop()
         self._setpoint_filter.stop()
+        self._input_shaper.stop()
         self._pid.reset(0.0)
         self._transfer = self._friction_transfer = 0.0
         self._last_command = self._last_friction = 0.0

@@ -20,14 +20,23 @@ acceleration is what acceleration feedback compares the measured one with: with
 ``-Ka I (a - F a_r)`` instead of ``-Ka I a`` the rigid joint follows ``F theta_r`` exactly also
 in coarse mode (``I theta'' = F [I a_r - Ka I (theta'' - F a_r)]`` holds for
 ``theta'' = F a_r``), and the loop, hence the stability check, is the same.
+
+An input shaper (:mod:`~walker_control.core.input_shaping`, ``control.shaping``) shapes the
+setpoint the same way, before everything else (:class:`InputShapedSetpoint`): position,
+velocity, acceleration and effort through the same impulses, so they stay each other's
+derivatives and the feed-forward asks for the shaped motion. It is outside the loop too: the
+stability check is that of the loop it feeds.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from walker_control.core.input_shaping import DiscreteShaper, Shaper
 from walker_control.core.inputs import Setpoint
 from walker_control.core.lowpass import LowPassFilter
 
-__all__ = ['ReferenceShaper', 'RestartingShaper']
+__all__ = ['ReferenceShaper', 'InputShapedSetpoint', 'RestartingShaper']
 
 
 class ReferenceShaper:
@@ -62,6 +71,34 @@ class ReferenceShaper:
                         effort=setpoint.effort)
 
 
+class InputShapedSetpoint:
+    """Position, velocity, acceleration and effort of a setpoint through an input shaper.
+
+    Parameters
+    ----------
+    shaper : Shaper
+        The impulses (:mod:`~walker_control.core.input_shaping`).
+    sample_time : float
+        Control period [s]; impulses off its grid are split between neighbouring samples.
+    """
+
+    def __init__(self, shaper: Shaper, sample_time: float) -> None:
+        self._signals = tuple(DiscreteShaper(shaper, sample_time) for _ in range(4))
+
+    def reset_to(self, position: float, velocity: float = 0.0) -> None:
+        """Start in the steady state of a joint at ``position`` [rad], ``velocity`` [rad/s]."""
+        for signal, value in zip(self._signals, (position, velocity, 0.0, 0.0), strict=True):
+            signal.reset_to(value)
+
+    def update(self, setpoint: Setpoint, samples: int = 1) -> Setpoint:
+        """Shape ``samples`` samples of the (held) setpoint."""
+        position, velocity, acceleration, effort = self._signals
+        return Setpoint(position=position.update(setpoint.position, samples),
+                        velocity=velocity.update(setpoint.velocity, samples),
+                        acceleration=acceleration.update(setpoint.acceleration, samples),
+                        effort=effort.update(setpoint.effort, samples))
+
+
 class RestartingShaper:
     """A :class:`ReferenceShaper` of a design that may change, started at the joint's state.
 
@@ -71,8 +108,10 @@ class RestartingShaper:
     at the measured position and velocity, as it does when the design changes.
     """
 
-    def __init__(self) -> None:
-        self._shaper: ReferenceShaper | None = None
+    def __init__(self, factory: Callable[..., ReferenceShaper | InputShapedSetpoint]
+                 = ReferenceShaper) -> None:
+        self._factory = factory
+        self._shaper: ReferenceShaper | InputShapedSetpoint | None = None
         self._design: tuple | None = None
 
     @property
@@ -91,7 +130,8 @@ class RestartingShaper:
         Parameters
         ----------
         design : tuple or None
-            ``(order, corner, sample_time, kind)`` of the filter (:class:`ReferenceShaper`).
+            The arguments of the factory: ``(order, corner, sample_time, kind)`` of the filter
+            (:class:`ReferenceShaper`), ``(shaper, sample_time)`` of an input shaper.
         restart : bool
             Start again at ``position`` [rad] and ``velocity`` [rad/s] even if the design is
             the same.
@@ -100,7 +140,7 @@ class RestartingShaper:
             self._shaper = None
             return setpoint
         if self._shaper is None or design != self._design or restart:
-            self._shaper = ReferenceShaper(*design)
+            self._shaper = self._factory(*design)
             self._shaper.reset_to(position, velocity)
             self._design = design
         return self._shaper.update(setpoint, samples)
