@@ -289,12 +289,25 @@ class TrajectoryFollower:
         self._plans.append((start, segmented))
         return start
 
-    def hold(self, positions: Sequence[float], now: float) -> None:
-        """Replace every trajectory, from ``now`` [s], by ``positions`` [rad] held at rest."""
+    def hold(self, positions: Sequence[float], now: float, keep_queued: bool = False) -> None:
+        """Hold ``positions`` [rad] at rest from ``now`` [s], in place of the trajectories.
+
+        With ``keep_queued``, the trajectories that start after ``now`` are kept (they were
+        sent ahead, for the time to come); otherwise every one is dropped (a cancel).
+
+        Raises
+        ------
+        TrajectoryError
+            ``positions`` are not one finite value per joint; nothing changes.
+        """
         trajectory = JointTrajectory.from_points(
             self.joints, self.joints, [0.0], [list(positions)], start=0.0)
+        if not math.isfinite(now):
+            raise TrajectoryError(f'hold time must be finite, got {now!r}')
+        queued = [plan for plan in self._plans if plan[0] > now] if keep_queued else []
         self._plans.clear()
         self.set_trajectory(trajectory, now)
+        self._plans.extend(queued)
 
     def sample(self, t: float) -> TrajectorySample | None:
         """Return the reference at clock time ``t`` [s]; None before any trajectory applies.
