@@ -185,16 +185,25 @@ def test_an_operators_setpoint_takes_over_from_the_trajectory(channel):
     assert answer(channel, 1).reference.position == pytest.approx(STANCE[1] - 0.05)
 
 
-def test_back_to_tracking_after_a_hold_starts_where_the_joint_is(channel):
+def test_back_to_tracking_after_an_ended_trajectory_starts_where_the_joint_is(channel):
     channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
     answer(channel, 0)
     take_ramp(channel, start=T)
-    answer(channel, 1)
+    answer(channel, 12)  # ended: its last point held
     channel.command_mode(Mode.HOLD, 'a', 0.0, 0.0)
-    answer(channel, 2, position=STANCE[1] + 0.004)
+    answer(channel, 13, position=STANCE[1] + 0.004)
     channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
-    output = answer(channel, 3, position=STANCE[1] + 0.004)
+    output = answer(channel, 14, position=STANCE[1] + 0.004)
     assert output.reference.position == pytest.approx(STANCE[1] + 0.004)
+
+
+def test_back_to_tracking_during_a_trajectory_goes_on_with_it(channel):
+    channel.command_mode(Mode.HOLD, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)  # sent while holding, as a stream may start
+    answer(channel, 2)
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    assert answer(channel, 3).reference.position == pytest.approx(STANCE[1] + 0.002)
 
 
 def test_a_base_change_drops_the_trajectory(channel):

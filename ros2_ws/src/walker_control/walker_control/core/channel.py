@@ -142,9 +142,12 @@ class ControllerChannel:
                 self._setpoints.drop_until(self.last_stamp)
                 if not before[0].tracks_setpoints and controller.mode.tracks_setpoints \
                         and self.trajectory.holding_trajectory \
-                        and self._last_position is not None:
-                    # back to tracking: from where the joint is, not where the trajectory
-                    # left off before the hold; those sent ahead for the time to come stay
+                        and self._last_position is not None \
+                        and self.trajectory.ended(self.last_stamp):
+                    # back to tracking after a trajectory ended: from where the joint is,
+                    # not where the trajectory left off (as the planner's hold after a
+                    # stream); one still under way goes on, as a stream would, and those
+                    # sent ahead for the time to come stay
                     self.trajectory.hold((self._last_position,), self.last_stamp,
                                          keep_queued=True)
             self._pacing.reset()

@@ -249,6 +249,11 @@ class TrajectoryFollower:
         """Clock time [s] of the last point of the newest trajectory held; None without one."""
         return self._plans[-1][1].end if self._plans else None
 
+    def ended(self, t: float) -> bool:
+        """Say whether the reference at clock time ``t`` [s] is a held last point (or none)."""
+        sample = self._sample(t, prune=False)
+        return sample is None or sample.ended
+
     def clear(self) -> None:
         """Forget every trajectory (a mode or base change: the joint holds where it is)."""
         self._plans.clear()
