@@ -90,7 +90,7 @@ class WalkResult:
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
-         wall_timeout: float = math.inf) -> WalkResult:
+         wall_timeout: float = math.inf, whole_trajectories: bool = False) -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
 
     Parameters
@@ -108,6 +108,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         ``say(level, text)`` for what the supervisor would log.
     wall_timeout : float
         Longest wall time [s] the walk may take; it ends unreached after it.
+    whole_trajectories : bool
+        The controllers hold whole trajectories instead of following a setpoint stream
+        (:class:`~walker_headless.loop.RobotLoop`).
 
     Raises
     ------
@@ -115,7 +118,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         If the plant refuses its settings.
     """
     started = time.monotonic()
-    loop = RobotLoop(configuration, recording)
+    loop = RobotLoop(configuration, recording, whole_trajectories)
     try:
         if recording is not None:
             recording.robot_description(0, description_urdf(configuration.walker))
