@@ -118,3 +118,99 @@ def test_controller_states_are_due_at_the_state_rate(channel):
     due = [k for k in range(1, 4 * every + 1) if channel.state_due(k * T)]
     assert due == list(range(1, 4 * every + 1, every))
     assert channel.state_due(0.5 * T)  # the stamps went back (a plant reset)
+
+
+# ------------------------------------------------------------------ whole trajectories
+def take_ramp(channel, start, first=STANCE[1], last=STANCE[1] + 0.01, duration=10 * T):
+    """Give ``channel`` a linear move of JOINT from ``first`` to ``last`` starting at ``start``."""
+    return channel.take_trajectory((JOINT,), (0.0, duration), ((first,), (last,)), start=start)
+
+
+def test_a_trajectory_is_sampled_at_every_state_and_its_end_held(channel):
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    assert take_ramp(channel, start=T)
+    references = [answer(channel, k).reference for k in range(1, 30)]
+    assert references[5].position == pytest.approx(STANCE[1] + 0.005)
+    assert references[5].velocity == pytest.approx(0.01 / (10 * T))
+    assert all(r.position == pytest.approx(STANCE[1] + 0.01) and r.velocity == 0.0
+               for r in references[10:])
+
+
+def test_a_held_trajectory_is_never_waited_for_nor_stale(channel):
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)
+    for k in range(1, 5):
+        assert not channel.owes_setpoint(k * T)
+        answer(channel, k)
+    # long after any setpoint timeout, on both clocks: the trajectory is still the reference
+    late = 100.0 * SETTINGS.control.setpoint_timeout
+    assert not channel.check_inputs(late, late).any
+    output = channel.answer(late, measurement())
+    assert output.mode == Mode.COARSE
+    assert output.reference.position == pytest.approx(STANCE[1] + 0.01)
+
+
+def test_a_new_trajectory_replaces_the_held_one_from_its_start(channel):
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T, last=STANCE[1] + 0.1, duration=100 * T)
+    answer(channel, 1)
+    # sent at 2 T to start at 5 T, a hold at its first point
+    assert channel.take_trajectory((JOINT,), (0.0,), ((STANCE[1] - 0.2,),), start=5 * T)
+    assert answer(channel, 4).reference.position == pytest.approx(STANCE[1] + 0.1 * 3 / 100)
+    assert answer(channel, 5).reference.position == pytest.approx(STANCE[1] - 0.2)
+
+
+@pytest.mark.parametrize('positions, words', [
+    (((0.9,), (math.nan,)), 'finite'), (((0.9,), (10.0,)), 'joint limits'), ((), 'no points')])
+def test_a_refused_trajectory_changes_nothing(channel, positions, words):
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)
+    times = (0.0, 1.0)[:len(positions)]
+    assert channel.take_trajectory((JOINT,), times, positions, start=T) is False
+    output = answer(channel, 5)  # 4 T into the ramp
+    assert output.mode == Mode.COARSE
+    assert output.reference.position == pytest.approx(STANCE[1] + 0.004)
+    assert channel.log.said('error', words)
+
+
+def test_an_operators_setpoint_takes_over_from_the_trajectory(channel):
+    channel.command_mode(Mode.FINE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)
+    assert channel.take_setpoint('', Setpoint(STANCE[1] - 0.05), 0.0, 0.0)
+    assert answer(channel, 1).reference.position == pytest.approx(STANCE[1] - 0.05)
+
+
+def test_back_to_tracking_after_an_ended_trajectory_starts_where_the_joint_is(channel):
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)
+    answer(channel, 12)  # ended: its last point held
+    channel.command_mode(Mode.HOLD, 'a', 0.0, 0.0)
+    answer(channel, 13, position=STANCE[1] + 0.004)
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    output = answer(channel, 14, position=STANCE[1] + 0.004)
+    assert output.reference.position == pytest.approx(STANCE[1] + 0.004)
+
+
+def test_back_to_tracking_during_a_trajectory_goes_on_with_it(channel):
+    channel.command_mode(Mode.HOLD, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)  # sent while holding, as a stream may start
+    answer(channel, 2)
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    assert answer(channel, 3).reference.position == pytest.approx(STANCE[1] + 0.002)
+
+
+def test_a_base_change_drops_the_trajectory(channel):
+    channel.command_mode(Mode.COARSE, 'a', 0.0, 0.0)
+    answer(channel, 0)
+    take_ramp(channel, start=T)
+    channel.command_mode(Mode.HOLD, 'a', 0.0, 0.0)
+    channel.command_mode(Mode.HOLD, 'b', 0.0, 0.0)
+    channel.command_mode(Mode.FINE, 'b', 0.0, 0.0)
+    assert not channel.trajectory.holding_trajectory

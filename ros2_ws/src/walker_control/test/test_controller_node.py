@@ -530,3 +530,81 @@ def test_the_controller_process_asks_for_its_real_time_priority(ros_env, priorit
             assert 'SCHED_FIFO priority 50 on' in controller.output
         else:
             assert policies == {(os.SCHED_OTHER, 0)}, (policies, controller.output)
+
+
+def trajectory_message(start_ns, times, yaw_positions):
+    """Return a whole-arm trajectory moving a_yaw_joint from ``start_ns``, the others still."""
+    from builtin_interfaces.msg import Duration
+    from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+    from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+
+    msg = JointTrajectory(joint_names=list(PHYSICAL_JOINT_NAMES))
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(start_ns, 1_000_000_000)
+    for t, position in zip(times, yaw_positions, strict=True):
+        seconds, nanoseconds = divmod(int(round(t * 1e9)), 1_000_000_000)
+        msg.points.append(JointTrajectoryPoint(
+            positions=[position, *STANCE[1:]],
+            time_from_start=Duration(sec=seconds, nanosec=nanoseconds)))
+    return msg
+
+
+def test_a_whole_trajectory_is_held_replaced_from_its_start_and_never_waited_for(ros_env,
+                                                                                  plant):
+    """joint_trajectory_controller's contract on the real node, lock-stepped in sim time.
+
+    A trajectory sent late (its start already past) is sampled at its own time, as if it had
+    come in time; a second one replaces it from its own start time, not from its arrival;
+    with no message at all for longer than the setpoint timeout the joint keeps tracking,
+    and no state waits for anything.
+    """
+    from rclpy.duration import Duration
+    from trajectory_msgs.msg import JointTrajectory
+    from walker_control.joint_controller_node import COMMAND_QOS
+    from walker_msgs.msg import ControlMode
+
+    publisher = plant.node.create_publisher(JointTrajectory, 'controllers/joint_trajectory',
+                                            COMMAND_QOS)
+
+    def send(msg):
+        publisher.publish(msg)
+        # acknowledged: in the controller's reader before the next state, which its
+        # executor serves after the trajectory (creation order)
+        assert publisher.wait_for_all_acked(Duration(seconds=WAIT))
+
+    with start_controller(ros_env, '-p', 'use_sim_time:=true', timeouts=STRICT) as controller:
+        plant.step()
+        assert plant.spin_until(lambda: publisher.get_subscription_count() > 0)
+        plant.command(ControlMode.COARSE, 'a')
+        plant.step_until(lambda s: s.mode == ControlMode.COARSE)
+        duration = 0.4  # [s] a_yaw_joint from 0 to 0.1 rad
+        first = plant.stamp_ns - 20 * PERIOD_NS  # sent 20 periods late
+
+        def ramp(stamp_ns):
+            return 0.1 * min(1.0, max(0.0, (stamp_ns - first) * 1e-9 / duration))
+        send(trajectory_message(first, (0.0, duration), (0.0, 0.1)))
+        for _ in range(10):
+            plant.step()
+            state = plant.state_for(plant.stamp_ns)
+            assert state.position_setpoint == pytest.approx(ramp(plant.stamp_ns), abs=1e-9)
+        # replaced from 30 periods on: from where the first one is then to -0.05 rad in 25
+        second = plant.stamp_ns + 30 * PERIOD_NS
+        send(trajectory_message(second, (25 * PERIOD_NS * 1e-9,), (-0.05,)))
+        for _ in range(29):
+            plant.step()
+            assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(
+                ramp(plant.stamp_ns), abs=1e-9)
+        plant.step()
+        assert plant.stamp_ns == second
+        assert plant.state_for(second).position_setpoint == pytest.approx(ramp(second), abs=1e-9)
+        for _ in range(25):
+            plant.step()
+        assert plant.state_for(plant.stamp_ns).position_setpoint == pytest.approx(-0.05)
+        # silent for longer than the setpoint timeout: still tracking, nothing stale, and a
+        # state is answered at once (nothing is owed to it)
+        time.sleep(1.5)
+        assert publish_late_state(plant), 'a state waited although a trajectory is held'
+        assert plant.spin_until(lambda: plant.state_for(plant.stamp_ns) is not None)
+        state = plant.state_for(plant.stamp_ns)
+        assert state.mode == ControlMode.COARSE and not state.stale
+        assert state.position_setpoint == pytest.approx(-0.05)
+        assert controller.process.poll() is None, controller.output

@@ -10,6 +10,8 @@ Topics (relative to the namespace; QoS as in docs/architecture.md):
 
 * subscribes ``joint_states`` (sensor_msgs/JointState; best effort, keep last 1),
   ``joint_accelerations`` (walker_msgs/JointAccelerations; best effort, keep last 1),
+  ``controllers/joint_trajectory`` (trajectory_msgs/JointTrajectory, whole trajectories for
+  any of the joints, held and sampled at every state; reliable, keep last 10),
   ``controllers/<joint>/setpoint`` (walker_msgs/JointCommand; reliable, keep last 10),
   ``control_mode`` (walker_msgs/ControlMode; reliable, transient local, depth 10);
 * publishes, for every joint state, ``effort_commands`` (sensor_msgs/JointState with this
@@ -33,6 +35,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
 from walker_msgs.msg import ControlMode, JointAccelerations
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES, role_of_joint
@@ -97,6 +100,8 @@ class ControllerNode(Node):
         # and the acceleration that arrived with a state are taken before the state itself.
         self.create_subscription(ControlMode, 'control_mode', self._on_control_mode,
                                  MODE_SUBSCRIPTION_QOS)
+        self.create_subscription(JointTrajectory, 'controllers/joint_trajectory',
+                                 self._on_trajectory, COMMAND_QOS)
         self._channels = [JointChannel(self, joint, self._settings, self._steady_now,
                                        self._sim_clock_now, f'{joint}: ' if several else '',
                                        after_setpoint=self._answer_waiting_state)
@@ -258,6 +263,23 @@ class ControllerNode(Node):
             return
         for channel in self._channels:
             channel.on_control_mode(msg)
+        self._answer_waiting_state()
+
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        """Give a whole trajectory to each joint of the node it names (others ignore it)."""
+        names = list(msg.joint_names)
+        channels = [channel for channel in self._channels if channel.joint in names]
+        if not channels:
+            return
+        points = msg.points
+        times = [seconds(point.time_from_start) for point in points]
+        positions = [list(point.positions) for point in points]
+        velocities = [list(point.velocities) for point in points]
+        accelerations = [list(point.accelerations) for point in points]
+        start = seconds(msg.header.stamp)
+        for channel in channels:
+            channel.core.take_trajectory(names, times, positions, velocities, accelerations,
+                                         start)
         self._answer_waiting_state()
 
     def _on_accelerations(self, msg: JointAccelerations) -> None:

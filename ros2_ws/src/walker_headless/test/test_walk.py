@@ -186,3 +186,17 @@ def test_a_walk_stopped_at_its_wall_time_limit_says_it_timed_out(configuration):
     assert not result.reached and result.timed_out
     assert 'did not end within 0 s of wall time' in result.message
     assert 0 < result.periods < 1000  # stopped at the first check, long before the step ends
+
+
+def test_whole_trajectories_held_by_the_controllers_walk_as_the_setpoint_stream(configuration,
+                                                                                 walks):
+    """joint_trajectory_controller's way (sent once, sampled in the loop): the same step."""
+    streamed = walks[0][0]
+    whole = walk(configuration, TARGET, whole_trajectories=True)
+    assert whole.reached and whole.path == streamed.path
+    assert whole.periods == streamed.periods
+    assert [p.phase for p in whole.phases] == [p.phase for p in streamed.phases]
+    for mine, theirs in zip(whole.reports, streamed.reports, strict=True):
+        assert mine.phase_durations == pytest.approx(theirs.phase_durations, abs=1e-9)
+        assert mine.insertion_attempts == theirs.insertion_attempts
+        assert mine.insertion_error == pytest.approx(theirs.insertion_error, abs=1e-5)

@@ -65,6 +65,10 @@ class RobotLoop:
         The walker's configuration (:func:`~walker_config.core.configuration.load_configuration`).
     recording : WalkRecording, optional
         Where the loop's messages go (none recorded without it).
+    whole_trajectories : bool
+        The planner's streamer sends each trajectory once, whole, and the controllers hold
+        and sample it (``TrajectoryStreamer``'s ``send_trajectory``), instead of one setpoint
+        per period; False (the graph's planner streams) by default.
 
     Raises
     ------
@@ -72,7 +76,8 @@ class RobotLoop:
         If the plant refuses its settings.
     """
 
-    def __init__(self, configuration: WalkerConfiguration, recording=None) -> None:
+    def __init__(self, configuration: WalkerConfiguration, recording=None,
+                 whole_trajectories: bool = False) -> None:
         self.configuration = configuration
         self.plant = WalkerPlant(*configuration.plant)
         self.period = configuration.controllers.sample_time
@@ -80,8 +85,9 @@ class RobotLoop:
         self.channels = [ControllerChannel(configuration.controllers, joint)
                          for joint in PHYSICAL_JOINT_NAMES]
         stream = configuration.planner.stream
-        self.streamer = TrajectoryStreamer(self.period_ns, stream.lookahead,
-                                           stream.start_tolerance, self._take_setpoints)
+        self.streamer = TrajectoryStreamer(
+            self.period_ns, stream.lookahead, stream.start_tolerance, self._take_setpoints,
+            self._take_trajectory if whole_trajectories else None)
         self.commands = EffortCommands(configuration.sim.command_timeout)
         self.recording = recording
         #: the viz node's TF and markers, drawn into the bag (None without one)
@@ -201,6 +207,15 @@ class RobotLoop:
         if self.recording is not None:
             self.recording.control_mode(self.stamp, int(value), base_gripper)
             self.viz.base(self.stamp, base_gripper)
+
+    def _take_trajectory(self, start: int, trajectory) -> None:
+        """Give each controller a whole trajectory from ``start`` [ns] (physical order)."""
+        velocities = () if trajectory.velocities is None else trajectory.velocities
+        accelerations = () if trajectory.accelerations is None else trajectory.accelerations
+        for channel in self.channels:
+            channel.take_trajectory(PHYSICAL_JOINT_NAMES, trajectory.times,
+                                    trajectory.positions, velocities, accelerations,
+                                    stamp_seconds(start))
 
     def _take_setpoints(self, stamp: int, positions, velocities, accelerations) -> None:
         seconds = stamp_seconds(stamp)

@@ -93,7 +93,8 @@ class WalkResult:
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
-         wall_timeout: float = math.inf, survey: dict | None = None) -> WalkResult:
+         wall_timeout: float = math.inf, survey: dict | None = None,
+         whole_trajectories: bool = False) -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
 
     Parameters
@@ -114,6 +115,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
     survey : dict, optional
         A truss survey to start from (a survey file's content); raises
         :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit.
+    whole_trajectories : bool
+        The controllers hold whole trajectories instead of following a setpoint stream
+        (:class:`~walker_headless.loop.RobotLoop`).
 
     Raises
     ------
@@ -121,7 +125,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         If the plant refuses its settings.
     """
     started = time.monotonic()
-    loop = RobotLoop(configuration, recording)
+    loop = RobotLoop(configuration, recording, whole_trajectories)
     try:
         if recording is not None:
             recording.robot_description(0, description_urdf(configuration.walker))

@@ -159,3 +159,45 @@ def test_feedback_is_due_every_so_many_setpoints(streamer):
     desired = active.stream.trajectory.sample(3 * PERIOD * 1e-9).position
     assert streamer.tracking_error(active.stream) == pytest.approx(abs(desired[0] - START[0]))
     assert streamer.tracking_error(active.stream) > 0.0
+
+
+def test_whole_trajectories_are_sent_once_and_end_as_the_stream_would(sent):
+    """Sent to controllers that hold trajectories: once, at its origin; nothing per period."""
+    whole = []
+    streamer = TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, sent,
+                                  lambda start, trajectory: whole.append((start, trajectory)))
+    twin = TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, Sent())
+    for each in (streamer, twin):
+        each.on_state(10 * PERIOD, START)
+    trajectory = ramp()
+    active, streamed = streamer.start(trajectory), twin.start(ramp())
+    assert [(start, t is trajectory) for start, t in whole] == [(11 * PERIOD, True)]
+    stamp = 10 * PERIOD
+    while twin.active is not None:  # the same states to both, until the stream ends
+        stamp += PERIOD
+        for each in (streamer, twin):
+            each.on_state(stamp, START)
+        assert (streamer.active is None) == (twin.active is None)
+    assert active.ended and streamed.ended and active.ticks == streamed.ticks
+    for _ in range(5):  # no hold streamed after it: the controllers hold the last point
+        stamp += PERIOD
+        streamer.on_state(stamp, START)
+    assert sent == [] and len(whole) == 1
+
+
+def test_a_cancelled_whole_trajectory_is_replaced_by_a_hold_where_its_setpoints_end(sent):
+    whole = []
+    streamer = TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, sent,
+                                  lambda start, trajectory: whole.append((start, trajectory)))
+    twin_sent = Sent()
+    twin = TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, twin_sent)
+    for each in (streamer, twin):
+        each.on_state(0, START)
+        each.start(ramp(duration=0.2))
+        each.on_state(PERIOD, START)
+        each.end_now(each.active, 'cancelled')
+    start, hold = whole[-1]
+    held_stamp, held_position, held_velocity, _ = twin_sent[-1]
+    assert start == held_stamp
+    assert len(hold.times) == 1 and hold.positions[0] == pytest.approx(held_position)
+    assert np.all(hold.velocities == 0.0) and held_velocity == pytest.approx([0.0] * 5)

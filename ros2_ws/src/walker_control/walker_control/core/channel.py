@@ -13,6 +13,13 @@ between them:
 * a setpoint (:meth:`ControllerChannel.take_setpoint`): refused (and the joint held) when it
   names another joint or fails :func:`~walker_control.core.inputs.validate_setpoint`; an
   unstamped one applies from the next state;
+* a whole trajectory (:meth:`ControllerChannel.take_trajectory`), held and sampled at every
+  state as joint_trajectory_controller does
+  (:class:`~walker_control.core.trajectory_follower.TrajectoryFollower`): refused, changing
+  nothing, when malformed or beyond the joint's limits; whichever of the two sources came last
+  is followed (a trajectory ends a setpoint stream, a setpoint the held trajectory), and a
+  trajectory held is never waited for nor timed out: it is the reference until its end, then
+  its last point;
 * a state (:meth:`ControllerChannel.answer`): the newest setpoint not later than its stamp,
   held when it is too old, carried forward along its own motion when the next is late; a
   measurement the controller cannot use latches a hold and repeats the last effort;
@@ -38,6 +45,8 @@ from walker_control.core.joint_controller import (
     ControlOutput, JointController, Measurement, MeasurementError, MissingAccelerationError,
     RoleChangeError)
 from walker_control.core.modes import Mode
+from walker_control.core.trajectory_follower import (
+    JointTrajectory, TrajectoryError, TrajectoryFollower)
 
 __all__ = ['ControllerChannel', 'CLOCK_SLACK_PERIODS', 'Log']
 
@@ -74,6 +83,9 @@ class ControllerChannel:
         self.controller = JointController(settings, joint, 'a')
         self._setpoints = SetpointBuffer()
         self._pacing = StreamPacing()
+        #: the whole trajectory held (the reference while it holds one)
+        self.trajectory = TrajectoryFollower((joint,))
+        self._last_position: float | None = None  # [rad] of the last state answered
         control = settings.control
         self.watchdog = InputWatchdog(control.state_timeout, control.setpoint_timeout,
                                       CLOCK_SLACK_PERIODS * settings.sample_time)
@@ -125,12 +137,23 @@ class ControllerChannel:
         if (controller.mode, controller.base_gripper) != before:
             if controller.base_gripper != before[1] or self.last_stamp is None:
                 self._setpoints.clear()
+                self.trajectory.clear()
             else:
                 self._setpoints.drop_until(self.last_stamp)
+                if not before[0].tracks_setpoints and controller.mode.tracks_setpoints \
+                        and self.trajectory.holding_trajectory \
+                        and self._last_position is not None \
+                        and self.trajectory.ended(self.last_stamp):
+                    # back to tracking after a trajectory ended: from where the joint is,
+                    # not where the trajectory left off (as the planner's hold after a
+                    # stream); one still under way goes on, as a stream would, and those
+                    # sent ahead for the time to come stay
+                    self.trajectory.hold((self._last_position,), self.last_stamp,
+                                         keep_queued=True)
             self._pacing.reset()
             self._log('info', f'mode {controller.mode.name}, base gripper '
                       f'{controller.base_gripper}, role J{controller.role}', 0.0)
-        self.watchdog.expect_setpoints(mode.tracks_setpoints)
+        self._expect_setpoints()
         self.stale = self.watchdog.check(steady_now, clock_now)
 
     def take_setpoint(self, joint_name: str, setpoint: Setpoint, stamp: float,
@@ -153,9 +176,47 @@ class ControllerChannel:
             return False
         if stamp == 0.0:
             stamp = self.last_stamp or 0.0
+        if self.trajectory.holding_trajectory:  # the newest source is followed
+            self.trajectory.clear()
+            self._expect_setpoints()
         self._setpoints.add(stamp, setpoint)
         self.setpoint_lagging = False
         self.watchdog.setpoint_received(steady_now)
+        return True
+
+    def take_trajectory(self, joint_names, times, positions, velocities=(), accelerations=(),
+                        start: float = 0.0) -> bool:
+        """Take a whole trajectory (``trajectory_msgs/JointTrajectory``'s fields) to follow.
+
+        ``joint_names`` must name this joint (a trajectory for several joints gives it its
+        column); ``times`` [s] from ``start`` [s, the states' clock; 0: from the next state];
+        ``positions``, ``velocities``, ``accelerations`` per point [rad, rad/s, rad/s^2]
+        (velocities and accelerations may be empty). It replaces the trajectory held from its
+        start time (:class:`~walker_control.core.trajectory_follower.TrajectoryFollower`) and
+        any setpoint stream. Returns False when it is refused: malformed, not finite (the
+        follower's checks), or a point beyond the joint's limits; nothing then changes (the
+        joint goes on following what it held) and the reason is logged.
+        """
+        now = self.last_stamp or 0.0
+        try:
+            trajectory = JointTrajectory.from_points(
+                (self.joint,), joint_names, times, positions, velocities, accelerations,
+                start)
+            drive = self._settings.drive(self.controller.role)
+            speeds = trajectory.velocities if trajectory.velocities is not None \
+                else [(0.0,)] * len(trajectory.times)
+            for point, speed in zip(trajectory.positions, speeds, strict=True):
+                validate_setpoint(Setpoint(float(point[0]), float(speed[0])), drive,
+                                  self.joint)
+            measured = None if self._last_position is None else (self._last_position,)
+            self.trajectory.set_trajectory(trajectory, now, measured)
+        except (TrajectoryError, SetpointError) as error:
+            self._log('error', f'trajectory refused: {error}; nothing changed', 0.0)
+            return False
+        self._setpoints.clear()
+        self._pacing.reset()
+        self.setpoint_lagging = False
+        self._expect_setpoints()
         return True
 
     # --------------------------------------------------------------------------- update
@@ -190,6 +251,7 @@ class ControllerChannel:
             return None
         self.last_stamp = stamp
         self.last_effort = output.effort
+        self._last_position = measurement.position
         return output
 
     def state_due(self, stamp: float) -> bool:
@@ -234,9 +296,27 @@ class ControllerChannel:
             return nominal
         return stamp - self.last_stamp
 
+    def _expect_setpoints(self) -> None:
+        """Watch the setpoint stream only while tracking one, not while a trajectory is held."""
+        self.watchdog.expect_setpoints(self.controller.mode.tracks_setpoints
+                                       and not self.trajectory.holding_trajectory)
+
     def _select_setpoint(self, stamp: float) -> Setpoint | None:
-        selected = self._setpoints.select(stamp) if self.controller.mode.tracks_setpoints \
-            else None
+        tracking = self.controller.mode.tracks_setpoints
+        if tracking and self.trajectory.holding_trajectory:
+            self._pacing.used(stamp, None)  # a trajectory held is never waited for
+            sample = self.trajectory.sample(stamp)
+            if sample is None:  # it starts later: hold where the joint is until then
+                return None
+            drive = self._settings.drive(self.controller.role)
+            # interpolation between points within the limits stays within them, but for
+            # a quintic's overshoot: clamped, as the joint's own limits would
+            position = min(max(float(sample.positions[0]), drive.position_min),
+                           drive.position_max)
+            velocity = min(max(float(sample.velocities[0]), -drive.velocity_limit),
+                           drive.velocity_limit)
+            return Setpoint(position, velocity, float(sample.accelerations[0]))
+        selected = self._setpoints.select(stamp) if tracking else None
         self._pacing.used(stamp, None if selected is None else selected[0])
         if selected is None:
             return None

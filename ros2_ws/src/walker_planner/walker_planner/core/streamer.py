@@ -14,6 +14,15 @@ Setpoints leave through ``send(stamp, positions, velocities, accelerations)``: `
 clock time [ns] the setpoint applies, the others sequences of five floats in physical joint
 order [rad, rad/s, rad/s^2]. Clock times are integer nanoseconds (the states' stamps). Not
 thread-safe: a caller with several threads holds its own lock around every call.
+
+With ``send_trajectory(start, trajectory)`` given, the streamer sends whole trajectories
+instead, as to controllers that hold them (joint_trajectory_controller's contract,
+``walker_control.core.trajectory_follower``): a stream's trajectory once, when it starts, with
+``start`` the clock time [ns] of its time 0; at a cancel or a stop a one-point trajectory at
+rest, from the stamp its hold setpoint would have had, where its setpoints would have ended;
+nothing per period, and no hold after a stream (the controllers hold the last point, and
+start from where the joints are when they track again after it). Its timing, its end and its
+feedback are the stream's, to the period.
 """
 
 from __future__ import annotations
@@ -28,10 +37,12 @@ from walker_planner.core.errors import PlanningError
 from walker_planner.core.streaming import (
     SampledTrajectory, Setpoint, SetpointStream, check_start, stamps_due)
 
-__all__ = ['ActiveStream', 'TrajectoryStreamer', 'Send']
+__all__ = ['ActiveStream', 'TrajectoryStreamer', 'Send', 'SendTrajectory']
 
 #: ``send(stamp, positions, velocities, accelerations)`` (see the module docstring).
 Send = Callable[[int, Sequence[float], Sequence[float], Sequence[float]], None]
+#: ``send_trajectory(start, trajectory)``: start [ns], the trajectory in physical order.
+SendTrajectory = Callable[[int, SampledTrajectory], None]
 
 _ZEROS = (0.0, 0.0, 0.0, 0.0, 0.0)
 
@@ -93,14 +104,17 @@ class TrajectoryStreamer:
         ``planner.stream.start_tolerance`` [rad].
     send : callable
         Where setpoints go (see the module docstring).
+    send_trajectory : callable, optional
+        Where whole trajectories go instead of setpoints (see the module docstring).
     """
 
-    def __init__(self, period: int, lookahead: int, start_tolerance: float, send: Send
-                 ) -> None:
+    def __init__(self, period: int, lookahead: int, start_tolerance: float, send: Send,
+                 send_trajectory: SendTrajectory | None = None) -> None:
         self.period = int(period)
         self.lookahead = lookahead
         self.start_tolerance = start_tolerance
         self._send = send
+        self._send_trajectory = send_trajectory
         self.active: ActiveStream | None = None
         #: (stamp [ns], positions [rad] in physical order) of the newest joint state
         self.measured: tuple[int, np.ndarray] | None = None
@@ -126,7 +140,7 @@ class TrajectoryStreamer:
             self._heard.set()
         active = self.active
         if active is None:
-            if self._holding is not None and self._tracking:
+            if self._holding is not None and self._tracking and self._send_trajectory is None:
                 self._send_hold(self._holding, stamp)
             return
         if active.cancelled:
@@ -179,6 +193,8 @@ class TrajectoryStreamer:
                                 'stop_trajectory)')
         now = self.measured[0]
         self.active = ActiveStream(SetpointStream(trajectory, now, self.period), owner)
+        if self._send_trajectory is not None:
+            self._send_trajectory(self.active.stream.origin, trajectory)
         self._send_due(self.active, now)
         return self.active
 
@@ -240,8 +256,9 @@ class TrajectoryStreamer:
             self._send_setpoint(active, setpoint)
 
     def _send_setpoint(self, active: ActiveStream, setpoint: Setpoint) -> None:
-        self._send(setpoint.stamp, setpoint.position.tolist(), setpoint.velocity.tolist(),
-                   setpoint.acceleration.tolist())
+        if self._send_trajectory is None:
+            self._send(setpoint.stamp, setpoint.position.tolist(),
+                       setpoint.velocity.tolist(), setpoint.acceleration.tolist())
         active.last = setpoint
         active.ticks += 1
 
@@ -249,6 +266,10 @@ class TrajectoryStreamer:
         """End the stream; the controllers keep getting its last position while they track."""
         if hold is not None:
             self._send_setpoint(active, hold)
+            if self._send_trajectory is not None:
+                zeros = np.zeros((1, 5))
+                self._send_trajectory(hold.stamp, SampledTrajectory(
+                    np.zeros(1), hold.position[None, :].copy(), zeros, zeros.copy()))
         self._holding = None if active.last is None else np.array(active.last.position)
         self._hold_sent = None if active.last is None else active.last.stamp
         self.active = None
