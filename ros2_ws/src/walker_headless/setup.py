@@ -18,7 +18,4 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='The headless runner: the walker in one lock-step loop, without ROS.',
     license='Apache-2.0',
-    entry_points={'console_scripts': [
-        'headless_walk = walker_headless.run:main',
-    ]},
 )
