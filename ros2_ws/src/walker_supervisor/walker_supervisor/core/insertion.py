@@ -8,7 +8,7 @@ descent moves the joints, which stop in their friction again, so once they have 
 ``mouth_settle_time`` (the vertical descent hardly moves joint 1; after a line at the mouth,
 which does, for ``settle_time``) the tip is checked again, now across the hole's axis: more than
 ``insertion_alignment`` off it, a fine line at the mouth takes it there (up to
-:data:`~walker_supervisor.core.approach.MAX_FINE_LINES` times; more than
+:data:`~walker_supervisor.core.transitions.MAX_FINE_LINES` times; more than
 ``descent_axis_tolerance`` off, the gripper is lifted back instead), and only then is the
 gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`` times (each
 lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD. A
@@ -22,47 +22,16 @@ import math
 
 import numpy as np
 
-from walker_supervisor.core import approach
+from walker_supervisor.core import transitions
 from walker_supervisor.core.commands import (
-    CancelTrajectory, GripperRequest, Notice, SetControlMode, TrajectoryRequest)
+    CancelTrajectory, GripperRequest, Notice, SetControlMode)
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.step_run import StepRun
 
-__all__ = ['PREPARED_DESCENT_TOLERANCE', 'MAX_MOUTH_LINES', 'descent_request', 'enter',
-           'at_mouth', 'left_the_axis', 'jammed', 'follow_screwing']
+__all__ = ['MAX_MOUTH_LINES', 'at_mouth', 'left_the_axis', 'jammed', 'follow_screwing']
 
-#: [rad] The descent planned ahead (on entering FINE) starts at the configuration above the
-#: hole; joints farther than this from it (any joint) descend from where they are instead.
-PREPARED_DESCENT_TOLERANCE = 0.02
 #: Fine lines at the mouth tried before the gripper is screwed in anyway (as above the hole).
 MAX_MOUTH_LINES = 3
-
-
-def descent_request(run: StepRun) -> TrajectoryRequest:
-    """Return the descent: straight down the hole's axis from the point above it to its mouth.
-
-    It starts at the configuration above the hole, where the coarse motion and every fine line
-    leave the setpoints, so it can be planned on entering FINE and streamed the moment FINE
-    ends; for joints farther than :data:`PREPARED_DESCENT_TOLERANCE` from it the same line is
-    planned on their IK branch and tip yaw instead (:func:`enter`).
-    """
-    t = run.targets
-    return run.request('insertion', t.above_to, t.at_to, t.point_above_to, t.point_to)
-
-
-def enter(run: StepRun, now: float) -> list:
-    """Enter INSERTION: the descent streams."""
-    run.tries.insertion_error = run.tip_error()
-    run.tries.mouth_lines = 0
-    run.enter(Phase.INSERTION, now, Stage.DESCENDING)
-    request = descent_request(run)
-    if float(np.max(np.abs(run.theta - request.start))) > PREPARED_DESCENT_TOLERANCE:
-        # not where the step's own motions leave the arm (a resumed step's way back turns the
-        # wrist its own way): the same line down the axis, planned from the measured joints'
-        # IK branch and tip yaw (the planner checks its first setpoint against them)
-        t = run.targets
-        request = run.request('insertion', run.theta, t.at_to, t.point_above_to, t.point_to)
-    return [run.issue(request)]
 
 
 def settle_wait(run: StepRun) -> float:
@@ -129,7 +98,7 @@ def left_the_axis(run: StepRun, now: float) -> list:
         # a fine line from where the tip is brings it over the hole
         run.tries.fine_lines = 0
         return stop + [Notice(f'{reason} before it went down: brought over the hole again')] \
-            + approach.enter_fine(run, now, correction=True)
+            + transitions.enter_fine(run, now, correction=True)
     run.stage = Stage.RETRY_LIFT
     return stop + [Notice(f'{reason}: lifted back to come over the hole again'),
                    run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
