@@ -18,4 +18,7 @@ setup(
     maintainer_email='maintainers@walker-robot.org',
     description='The headless runner: the walker in one lock-step loop, without ROS.',
     license='Apache-2.0',
+    entry_points={'console_scripts': [
+        'figure6 = walker_headless.figure6:main',
+    ]},
 )

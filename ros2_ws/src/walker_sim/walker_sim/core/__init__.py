@@ -10,7 +10,7 @@ Modules: :mod:`~walker_sim.core.plant` (the plant behind ``reset()``, ``step(tor
 :mod:`~walker_sim.core.bullet` (pybullet helpers).
 
 :func:`make_plant` builds a plant from a parameter file, for tools and experiments that run
-other packages' cores on it (``control_analysis figure6``).
+other packages' cores on it (``ros2 run walker_headless figure6``).
 """
 
 from __future__ import annotations
