@@ -33,6 +33,7 @@ from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
 from walker_planner.core.parameters import PlannerParameters
 from walker_sim.core.config import SimParameters
 from walker_sim.core.config import check_against_walker as check_sim_against_walker
+from walker_sim.core.config import plant_sections
 from walker_supervisor.core.parameters import (
     SupervisorParameters, check_with_control, check_with_gripper, check_with_planner)
 from walker_supervisor.core.teleop import TeleopParameters
@@ -110,20 +111,6 @@ def check_cross_section_rules(configuration: WalkerConfiguration) -> None:
     check_with_gripper(supervisor, configuration.walker.gripper)
     check_with_planner(supervisor, configuration.planner.stream.start_tolerance)
     check_with_control(supervisor, configuration.controllers.control.relaxation.duration)
-
-
-def plant_sections(file: ParameterFile) -> tuple[WalkerParameters, SimParameters]:
-    """Return the plant's sections of a parameter file: the robot and ``sim.*``, checked.
-
-    Raises
-    ------
-    ParameterError
-        Naming the parameter: a value of either section, or the rule between them (start
-        nodes off the truss, a physics rate that is not a multiple of the control rate).
-    """
-    walker, sim = file.section(WalkerParameters), file.section(SimParameters, 'sim.')
-    check_sim_against_walker(sim, walker)
-    return walker, sim
 
 
 def configuration_of(file: ParameterFile,
