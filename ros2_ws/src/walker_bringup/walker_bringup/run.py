@@ -51,7 +51,7 @@ from walker_bringup.transport import (
     DEFAULT_TRANSPORT, PROFILES_VARIABLE, STATIC_PEERS_VARIABLE, TRANSPORTS, default_transport,
     graph_environment)
 from walker_report.walk_report import report_after_walk
-from walker_teleop.core.progress import walk_progress
+from walker_core.progress import walk_progress
 
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 
@@ -694,7 +694,7 @@ def write_report(bag: Path, report_dir: Path, params_file: Path, quiet: bool) ->
 def walk_feedback_text(feedback, elapsed: float) -> str:
     """One progress line from a ``WalkTo`` feedback, ``elapsed`` [s] after the goal was sent.
 
-    The line ``walkerctl walk-to`` shows (:func:`walker_teleop.core.progress.walk_progress`).
+    The line ``walkerctl walk-to`` shows (:func:`walker_core.progress.walk_progress`).
     """
     return walk_progress(feedback.step_index, feedback.step_count, feedback.phase,
                          feedback.from_node, feedback.to_node, feedback.tip_position_error,

@@ -26,7 +26,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.parameter_schema import ParameterError
 from walker_report.core.steps import format_table, rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
-from walker_teleop.core.progress import ProgressLine, walk_progress
+from walker_core.progress import ProgressLine, walk_progress
 
 from walker_headless.recording import WalkRecording
 from walker_headless.runner import WalkResult, walk
