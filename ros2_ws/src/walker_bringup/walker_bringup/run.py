@@ -51,7 +51,7 @@ from walker_bringup.transport import (
     DEFAULT_TRANSPORT, PROFILES_VARIABLE, STATIC_PEERS_VARIABLE, TRANSPORTS, default_transport,
     graph_environment)
 from walker_report.walk_report import report_after_walk
-from walker_core.progress import walk_progress
+from walker_core.progress import ProgressLine, walk_progress
 
 __all__ = ['main', 'parse_arguments', 'walk_feedback_text', 'write_report']
 
@@ -250,50 +250,6 @@ def _walker_count(text: str) -> int:
     return count
 
 
-class _Progress:
-    """One status line, rewritten in place on a terminal.
-
-    Without a terminal (a log file, CI) a line is printed only when ``key`` changes (a new step
-    or phase) or every ``LOG_PERIOD`` seconds, so a long walk does not flood the log.
-    """
-
-    LOG_PERIOD = 5.0  # [s]
-
-    def __init__(self, quiet: bool) -> None:
-        self.quiet = quiet
-        self.tty = sys.stdout.isatty()
-        self.last = ''
-        self._key = None
-        self._printed = -float('inf')
-
-    def update(self, text: str, key=None) -> None:
-        if self.quiet or text == self.last:
-            return
-        if self.tty:
-            self.last = text
-            print(f'\r\033[K{text}', end='', flush=True)
-            return
-        now = time.monotonic()
-        if key != self._key or now - self._printed >= self.LOG_PERIOD:
-            self._key, self._printed, self.last = key, now, text
-            print(text, flush=True)
-
-    def say(self, text: str) -> None:
-        """Print a line of progress (not with ``--quiet``)."""
-        self._print(text, always=False)
-
-    def error(self, text: str) -> None:
-        """Print a line that says what went wrong: also with ``--quiet``."""
-        self._print(text, always=True)
-
-    def _print(self, text: str, always: bool) -> None:
-        if self.tty and self.last:
-            print()
-        self.last = ''
-        if always or not self.quiet:
-            print(text, flush=True)
-
-
 @dataclasses.dataclass
 class _Walker:
     """One walker's graph in a run: its nodes, its processes, its client, its outcome."""
@@ -433,7 +389,7 @@ def _run(argv: list[str] | None) -> int:
     from walker_core.parameter_schema import ParameterError
     from walker_core.truss import Truss
 
-    progress = _Progress(args.quiet)
+    progress = ProgressLine(args.quiet, stream=sys.stdout)
     # Everything the command line names is checked before anything is started or written:
     # every section and every rule between them, the target.
     try:
@@ -701,7 +657,7 @@ def walk_feedback_text(feedback, elapsed: float) -> str:
                          elapsed)
 
 
-def _walk(walker: _Walker, target: str, args, progress: _Progress, should_stop, out: Path,
+def _walk(walker: _Walker, target: str, args, progress: ProgressLine, should_stop, out: Path,
           label: str = '', summary_name: str = 'summary.json') -> int:
     client = walker.client
     started = time.monotonic()
@@ -741,7 +697,7 @@ def _walk(walker: _Walker, target: str, args, progress: _Progress, should_stop, 
 _OUTPUT = threading.Lock()
 
 
-def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop,
+def _walk_several(walkers: list[_Walker], args, progress: ProgressLine, should_stop,
                   out: Path) -> int:
     """Walk every walker to its target at once, one thread each; the first error stops all."""
     errors: list[BaseException] = []
@@ -765,7 +721,7 @@ def _walk_several(walkers: list[_Walker], args, progress: _Progress, should_stop
     return max(w.code for w in walkers)
 
 
-def _report_interruption(clients, deaths, signum, progress: _Progress) -> int:
+def _report_interruption(clients, deaths, signum, progress: ProgressLine) -> int:
     for process in deaths:
         progress.error(f'[walker] error: node {process.spec.full_name} died '
                        f'(exit code {process.popen.returncode}); the end of its log:\n'
