@@ -90,7 +90,7 @@ class WalkResult:
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
-         wall_timeout: float = math.inf) -> WalkResult:
+         wall_timeout: float = math.inf, goal: str = 'walk_to') -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
 
     Parameters
@@ -108,6 +108,8 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         ``say(level, text)`` for what the supervisor would log.
     wall_timeout : float
         Longest wall time [s] the walk may take; it ends unreached after it.
+    goal : str
+        ``'walk_to'`` (any node) or ``'step'`` (one step to a neighbouring node).
 
     Raises
     ------
@@ -120,7 +122,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         if recording is not None:
             recording.robot_description(0, description_urdf(configuration.walker))
         shell = WalkShell(loop, say, progress)
-        shell.send_goal('walk_to', target)
+        shell.send_goal(goal, target)
         cpu_started = time.process_time()
         diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
         next_diagnostics = 0
