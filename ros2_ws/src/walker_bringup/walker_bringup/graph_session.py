@@ -158,8 +158,9 @@ class GraphBackend:
         def on_signal(signum, _frame):
             self.signalled = signum
 
-        self._previous_handlers = {s: signal.signal(s, on_signal)
-                                   for s in (signal.SIGINT, signal.SIGTERM)}
+        if threading.current_thread() is threading.main_thread():  # (a worker's thread: none)
+            self._previous_handlers = {s: signal.signal(s, on_signal)
+                                       for s in (signal.SIGINT, signal.SIGTERM)}
         for walker in walkers:
             walker.respawner = RespawningGroup(
                 walker.group, options.respawn, progress.error,
