@@ -34,7 +34,7 @@ from walker_bringup.graph import walker_targets
 from walker_bringup.graph_client import (
     GoalRejectedError, GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.graph_walkers import (
-    GraphWalker, bag_paths, describe_walkers, launch, namespaces_in_use, recover_bags)
+    GraphWalker, Wrap, bag_paths, describe_walkers, launch, namespaces_in_use, recover_bags)
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.session_options import SessionError, SessionOptions, WalkSummary
 from walker_bringup.transport import (
@@ -54,8 +54,9 @@ class GraphBackend:
     runner = 'graph'
 
     def __init__(self, configuration, options: SessionOptions, out: Path,
-                 progress: ProgressLine) -> None:
+                 progress: ProgressLine, wrap: Wrap | None = None) -> None:
         self.configuration = configuration
+        self.wrap = wrap
         self.options = options
         self.out = out
         self.progress = progress
@@ -169,7 +170,7 @@ class GraphBackend:
                 and w.client.report_process(node, level, message))
         try:
             for walker in walkers:
-                launch(walker, options, self.configuration.path)
+                launch(walker, options, self.configuration.path, self.wrap)
             started = time.monotonic()
             for walker in walkers:
                 walker.client = GraphClient(walker.namespace, context)
@@ -270,7 +271,8 @@ class GraphBackend:
             left = []
             for walker in walkers:
                 prefix = f'{walker.label}/' if len(walkers) > 1 else ''
-                codes.update({prefix + n: c for n, c in walker.group.stop_all().items()})
+                codes.update({prefix + n: c for n, c in
+                              walker.group.stop_all(self.options.stop_timeout).items()})
                 left += [prefix + p.spec.name for p in walker.group.processes if p.alive]
             if left:
                 progress.error(f'[walker] error: still running after shutdown: '

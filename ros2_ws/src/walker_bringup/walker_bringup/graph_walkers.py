@@ -10,20 +10,23 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 from walker_bringup.composed_process import composed_command
 from walker_bringup.composition import LOOP_NODES
 from walker_bringup.graph import (
-    FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, walker_graph)
+    FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, start_stances, walker_graph)
 from walker_bringup.graph_client import GraphClient
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.session_options import SessionOptions
 
 __all__ = ['GraphWalker', 'describe_walkers', 'plant_file', 'bag_paths', 'graph_parameters',
-           'launch', 'recover_bags', 'namespaces_in_use', 'PLANT_STATE_FILE']
+           'launch', 'recover_bags', 'namespaces_in_use', 'PLANT_STATE_FILE', 'Wrap']
 
+#: What a process's command is replaced with: ``wrap(spec, command or None) -> command or None``.
+Wrap = Callable[[NodeSpec, list[str] | None], list[str] | None]
 #: The plant's state snapshot in the output directory (a plant started again restores it).
 PLANT_STATE_FILE = 'plant_state.json'
 
@@ -43,7 +46,7 @@ class GraphWalker:
     client: GraphClient | None = None
     code: int = 1
     respawner: RespawningGroup | None = None
-    stance: StartStance | None = None  # where it starts on the truss (several walkers)
+    stance: StartStance | None = None  # where it starts on the truss
 
     def processes(self) -> dict[str, dict]:
         """Deaths and restarts of each node that died (the walk summary's ``processes``)."""
@@ -72,7 +75,9 @@ def describe_walkers(options: SessionOptions, configuration, out: Path,
                              foxglove_port=options.foxglove_port,
                              plant_state_file=out / PLANT_STATE_FILE,
                              plant_params_file=plant_file(options))
-        return [GraphWalker(options.namespace, None, nodes, ProcessGroup(out / 'logs', env))]
+        stance = start_stances(configuration, 1)[0]  # the parameter file's own start
+        return [GraphWalker(options.namespace, None, nodes, ProcessGroup(out / 'logs', env),
+                            stance=stance)]
     graphs = several_walkers(configuration, options.walkers, options.sim_time, options.record, out,
                              graph_parameters(options),
                              grouped_controllers=options.grouped_controllers, state_dir=out)
@@ -117,14 +122,21 @@ def graph_parameters(options: SessionOptions) -> tuple[tuple[str, str], ...]:
         overrides += (('timing.realtime_priority', str(options.realtime)),)
     if options.composed_loop and options.sim_time:
         overrides += (('sim.wait_for_decisions', 'true'),)
-    return overrides
+    return overrides + tuple(options.overrides)
 
 
-def launch(walker: GraphWalker, options: SessionOptions, params_file: Path) -> None:
-    """Start a walker's graph: one process per node, the loop composed, or one process."""
+def launch(walker: GraphWalker, options: SessionOptions, params_file: Path,
+           wrap: Wrap | None = None) -> None:
+    """Start a walker's graph: one process per node, the loop composed, or one process.
+
+    ``wrap(spec, command)``, if given, returns the command each process is started with
+    instead (``command`` ``None``: the node's installed executable), e.g. through a probe
+    that times the loop from the inside.
+    """
+    wrap = wrap or (lambda _spec, command: command)
     if not (options.composed or options.composed_loop):
         for spec in walker.nodes:
-            walker.group.start(spec)
+            walker.group.start(spec, wrap(spec, None))
         return
     plant = next(n for n in walker.nodes if n.executable == 'plant_node')
     bags = bag_paths([walker])
@@ -136,12 +148,12 @@ def launch(walker: GraphWalker, options: SessionOptions, params_file: Path) -> N
                                grouped_controllers=options.grouped_controllers, only=loop,
                                plant_params_file=plant_file(options),
                                plant_state_file=dict(plant.parameters).get('state_file'))
-    walker.group.start(NodeSpec('walker_bringup', 'composed_graph',
-                                'graph' if loop is None else 'loop', walker.namespace,
-                                str(params_file)), command)
+    composed = NodeSpec('walker_bringup', 'composed_graph', 'graph' if loop is None else 'loop',
+                        walker.namespace, str(params_file))
+    walker.group.start(composed, wrap(composed, command))
     for spec in walker.nodes:  # beside the composed process: the bridge serves any graph
         if (spec.name not in loop) if loop is not None else spec.name == FOXGLOVE_NODE:
-            walker.group.start(spec)
+            walker.group.start(spec, wrap(spec, None))
 
 
 

@@ -56,10 +56,13 @@ class WalkSession:
         The arrangement and everything else run_all.py's options say.
     progress : ProgressLine, optional
         Where progress and errors are said (default: standard output, quiet as the options).
+    wrap : callable, optional
+        The graph's: ``wrap(spec, command)`` returns the command a process starts with instead
+        (:func:`walker_bringup.graph_walkers.launch`; a benchmark's loop probe).
     """
 
     def __init__(self, configuration, options: SessionOptions | None = None,
-                 progress: ProgressLine | None = None) -> None:
+                 progress: ProgressLine | None = None, wrap=None) -> None:
         self.configuration = configuration
         options = options or SessionOptions()
         self.options = options
@@ -72,7 +75,7 @@ class WalkSession:
         else:
             from walker_bringup.graph_session import GraphBackend
 
-            self.backend = GraphBackend(configuration, options, self.out, self.progress)
+            self.backend = GraphBackend(configuration, options, self.out, self.progress, wrap)
         self.started = False
         self._ran = False  # a walk was sent or the graph served: the bag holds one
         self._interrupted = False  # stopped by a signal: no report

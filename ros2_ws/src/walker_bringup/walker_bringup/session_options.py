@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import math
 from pathlib import Path
 from typing import Any
 
@@ -87,6 +86,10 @@ class SessionOptions:
         The recorder's split: bytes per file, seconds per file, files kept (0: never).
     walkers : int
         Walkers side by side (``/walker``, ``/walker_2``, ...).
+    overrides : tuple of (str, str)
+        Parameter values over the file's for every node of the graph (``-p NAME:=VALUE``).
+    stop_timeout : float
+        Wall-clock seconds each process is given to end on its interrupt at the shutdown.
     """
 
     arrangement: Arrangement = Arrangement.PROCESSES
@@ -105,6 +108,8 @@ class SessionOptions:
     foxglove_port: int | None = None
     bag_split: tuple[int, float, int] = NO_SPLIT
     walkers: int = 1
+    overrides: tuple[tuple[str, str], ...] = ()
+    stop_timeout: float = 10.0
 
     def __post_init__(self) -> None:
         """Refuse options that contradict each other (:class:`SessionError`, code 2)."""
@@ -120,8 +125,7 @@ class SessionOptions:
             raise SessionError(f'walkers must be at least 1, got {self.walkers}')
         if self.plant_params_file is not None and self.walkers > 1:
             raise SessionError('a plant parameter file is for one walker: leave walkers out')
-        if not (math.isfinite(self.walk_timeout) or self.walk_timeout == math.inf) \
-                or self.walk_timeout <= 0:
+        if not self.walk_timeout > 0:  # nan too
             raise SessionError(f'walk_timeout must be > 0 s, got {self.walk_timeout}')
 
     @property
