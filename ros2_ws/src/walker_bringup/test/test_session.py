@@ -78,3 +78,36 @@ def test_the_example_of_the_architecture_page_runs_as_printed(tmp_path, monkeypa
     printed = capsys.readouterr().out
     assert 'True 1 ' in printed and 'n2_1 -> n1_2' in printed
     assert (tmp_path / 'runs' / 'notebook' / 'summary.json').is_file()
+
+
+class _Group:
+    """Records what a launch starts, and with which command."""
+
+    def __init__(self):
+        self.started = []
+
+    def start(self, spec, command=None):
+        self.started.append((spec.name, command))
+
+
+@pytest.mark.parametrize('arrangement, wrapped', [
+    (Arrangement.PROCESSES, 'plant'), (Arrangement.COMPOSED_LOOP, 'loop'),
+    (Arrangement.COMPOSED, 'graph')])
+def test_a_wrapper_replaces_the_command_of_the_processes_it_names(tmp_path, arrangement,
+                                                                   wrapped):
+    from walker_bringup.graph_walkers import describe_walkers, launch
+
+    configuration = load_configuration()
+    options = SessionOptions(arrangement=arrangement, sim_time=True, out=tmp_path,
+                             overrides=(('timing.control_rate', '250.0'),))
+    walker = describe_walkers(options, configuration, tmp_path,
+                              {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'})[0]
+    walker.group = _Group()
+    launch(walker, options, configuration.path,
+           lambda spec, command: ['probe', spec.name] if spec.name == wrapped else command)
+    assert (wrapped, ['probe', wrapped]) in walker.group.started
+    assert all(command is None or command == ['probe', wrapped] or name == 'loop'
+               for name, command in walker.group.started if name != wrapped)
+    # the overrides reach every node, after run_all.py's own
+    plant = next(n for n in walker.nodes if n.executable == 'plant_node')
+    assert ('timing.control_rate', '250.0') in plant.parameters
