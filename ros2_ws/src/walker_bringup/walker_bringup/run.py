@@ -106,5 +106,6 @@ def _run(args: argparse.Namespace) -> int:
             say.error(f'[walker] error: {error}')
         code = error.code
     finally:
-        code = code or session.stop()
+        stopped = session.stop()  # always: nothing is left running, whatever happened
+        code = code or stopped
     return code
