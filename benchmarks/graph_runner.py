@@ -1,10 +1,10 @@
 """Walker graphs brought up for a benchmark: one or several walkers, processes or composed.
 
-:class:`GraphRun` starts what ``run_all.py`` starts (the same :mod:`walker_bringup` graph
-descriptions and process supervision), in a ROS domain of its own with discovery on loopback,
-with each plant run through :mod:`loop_probe` so that the loop is timed inside the plant, and
-waits until every graph is ready. :class:`Walking` keeps every walker walking back and forth
-while a window is measured.
+:class:`GraphRun` starts a walk session's graph (:mod:`walker_bringup.session`: what
+``run_all.py`` starts, under the same supervision, no node started again), in a ROS domain of
+its own with discovery on loopback, with each plant run through :mod:`loop_probe` so that the
+loop is timed inside the plant, and waits until every graph is ready. :class:`Walking` keeps
+every walker walking back and forth while a window is measured.
 """
 
 from __future__ import annotations
@@ -24,6 +24,20 @@ STOP_TIMEOUT = 20.0  # [s] for the processes to end on their interrupt (the plan
 #                       its probe file); dozens of them on two loaded cores take seconds
 
 __all__ = ['GraphRun', 'Walking', 'back_and_forth_targets', 'walk_resuming']
+
+@contextlib.contextmanager
+def _environment(**values: str):
+    """Set environment variables for the run (the session's processes and client read them)."""
+    before = {name: os.environ.get(name) for name in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 #: Safe holds a walk is resumed from before it counts as failed.
 MAX_RESUMES = 3
@@ -70,13 +84,10 @@ class GraphRun:
         self.composed = composed
         self.sim_time = sim_time
         self.parameters = tuple(parameters)
-        if loop and sim_time:  # as run_all.py --composed-loop: the plant waits for decisions
-            self.parameters += (('sim.wait_for_decisions', 'true'),)
-        if not sim_time:  # the real-time figures are the loop's under SCHED_FIFO, as run_all.py
-            # --realtime runs it (the shipped parameter file asks for no priority)
-            from walker_bringup.run import REALTIME_PRIORITY
-
-            self.parameters += (('timing.realtime_priority', str(REALTIME_PRIORITY)),)
+        # in real time, the loop's figures are under SCHED_FIFO, as run_all.py --realtime runs
+        # it (the shipped parameter file asks for no priority); with the loop composed in sim
+        # time the plant waits for decisions: the session sets both, as run_all.py does
+        self.session = None
         self.record = record
         self.graphs = []          # (namespace, start, nodes)
         self.groups = []          # one ProcessGroup per walker
@@ -96,90 +107,57 @@ class GraphRun:
 
     def _start(self) -> None:
         sys.path.insert(0, str(REPO / 'tests'))
-        from ros_test_support import isolated_domain, ros_environment
-        from walker_bringup.composed_process import composed_command
-        from walker_bringup.composition import LOOP_NODES
-        from walker_bringup.graph import NodeSpec, several_walkers
-        from walker_bringup.graph_client import GraphClient, init_context
-        from walker_bringup.processes import ProcessGroup
+        from ros_test_support import isolated_domain
+        from walker_bringup.core.respawn import RespawnPolicy
+        from walker_bringup.run_arguments import REALTIME_PRIORITY
+        from walker_bringup.session import Arrangement, SessionOptions, WalkSession
         from walker_config.core.configuration import load_configuration
+        from walker_core.progress import ProgressLine
 
         self.scratch.mkdir(parents=True, exist_ok=True)
         domain = self._stack.enter_context(isolated_domain())
-        configuration = load_configuration()
-        params_file = configuration.path
-        self.graphs = several_walkers(configuration, self.count, self.sim_time, self.record,
-                                      self.scratch, self.parameters, self.grouped)
-        for namespace, start, nodes in self.graphs:
-            label = namespace.strip('/')
-            env = ros_environment(domain)
-            # A ROS home of the run's own: the supervisor keeps the step under way in it, and a
-            # window that ends in the middle of a step must not hand that step to the next
-            # graph started in the same domain (it would take a step up from another stance).
-            env['ROS_HOME'] = str(self.scratch / 'ros_home')
-            env['WALKER_LOOP_EVENTS'] = str(self.scratch / f'events_{label}.npz')
-            group = ProcessGroup(self.scratch / 'logs' / label, env)
-            self.groups.append(group)
-            plant = next(n for n in nodes if n.executable == 'plant_node')
-            if self.composed:
-                recorder = next((n for n in nodes if n.executable == 'recorder_node'), None)
-                bag = None
-                if recorder is not None:
-                    values = dict(recorder.parameters)
-                    bag = Path(values['recorder.directory']) / values['recorder.bag_name']
-                command = composed_command(
-                    params_file, namespace, self.sim_time, recorder is not None, bag,
-                    start if namespace != '/walker' else None,
-                    dict(plant.remaps).get('/clock'), self.parameters,
-                    grouped_controllers=self.grouped)
-                group.start(NodeSpec('walker_bringup', 'composed_graph', 'graph', namespace,
-                                     str(params_file)), self._probed(command))
-                continue
-            if self.loop:
-                command = composed_command(
-                    params_file, namespace, self.sim_time, False, None,
-                    start if namespace != '/walker' else None,
-                    dict(plant.remaps).get('/clock'), self.parameters,
-                    grouped_controllers=True, only=LOOP_NODES)
-                group.start(NodeSpec('walker_bringup', 'composed_graph', 'loop', namespace,
-                                     str(params_file)), self._probed(command))
-                for spec in nodes:
-                    if spec.name not in LOOP_NODES:
-                        group.start(spec)
-                continue
-            for spec in nodes:
-                command = ([sys.executable, str(PROBE), 'plant', *spec.ros_arguments()]
-                           if spec is plant and self.probe else None)
-                group.start(spec, command)
-        self.context = init_context(domain)
-        deadline = time.monotonic() + STARTUP_TIMEOUT
-        for namespace, _, nodes in self.graphs:
-            client = GraphClient(namespace, self.context)
-            self.clients.append(client)
-            client.wait_until_ready([n.full_name for n in nodes],
-                                    max(1.0, deadline - time.monotonic()),
-                                    should_stop=self.died)
+        # A ROS home of the run's own: the supervisor keeps the step under way in it, and a
+        # window that ends in the middle of a step must not hand that step to the next graph
+        # started in the same domain (it would take a step up from another stance).
+        self._stack.enter_context(_environment(
+            ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+            ROS_HOME=str(self.scratch / 'ros_home'), PYTHONUNBUFFERED='1'))
+        arrangement = Arrangement.COMPOSED if self.composed else Arrangement.COMPOSED_LOOP \
+            if self.loop else Arrangement.GROUPED if self.grouped else Arrangement.PROCESSES
+        options = SessionOptions(
+            arrangement=arrangement, sim_time=self.sim_time, record=self.record, report=False,
+            out=self.scratch, walkers=self.count, respawn=RespawnPolicy(limit=0),
+            startup_timeout=STARTUP_TIMEOUT, quiet=True, overrides=self.parameters,
+            realtime=0 if self.sim_time else REALTIME_PRIORITY, stop_timeout=STOP_TIMEOUT)
+        self.session = WalkSession(load_configuration(), options,
+                                   ProgressLine(True, stream=sys.stderr), wrap=self._probed)
+        self.session.start()
+        walkers = self.session.backend.walkers
+        self.graphs = [(w.namespace, w.stance, w.nodes) for w in walkers]
+        self.groups = [w.group for w in walkers]
+        self.clients = [w.client for w in walkers]
+        self.context = self.session.backend.context
 
-    def _probed(self, command: list[str]) -> list[str]:
-        """Return a composed graph's command, through :mod:`loop_probe` when the run probes."""
-        return [sys.executable, str(PROBE), 'composed', *command[1:]] if self.probe else command
+    def _probed(self, spec, command: list[str] | None) -> list[str] | None:
+        """Return a process's command, the plant's through :mod:`loop_probe` when probed.
+
+        The probe writes its records to ``events_<walker>.npz`` in the scratch directory.
+        """
+        if not self.probe or spec.executable not in ('plant_node', 'composed_graph'):
+            return command
+        label = spec.namespace.strip('/')
+        events = f'WALKER_LOOP_EVENTS={self.scratch / f"events_{label}.npz"}'
+        if spec.executable == 'plant_node':
+            return ['env', events, sys.executable, str(PROBE), 'plant', *spec.ros_arguments()]
+        return ['env', events, sys.executable, str(PROBE), 'composed', *command[1:]]
 
     def died(self) -> bool:
         """Say whether a process of the run has exited (reported on stderr once)."""
-        dead = [p for g in self.groups for p in g.poll_deaths()]
-        for process in dead:
-            print(f'[benchmark] {process.spec.full_name} exited with code '
-                  f'{process.popen.returncode}:\n{process.log_tail()}', file=sys.stderr)
-        return bool(dead)
+        return self.session is not None and self.session.backend.should_stop()
 
     def __exit__(self, *exc_info) -> None:
-        for client in self.clients:
-            with contextlib.suppress(Exception):
-                client.close()
-        if self.context is not None:
-            self.context.try_shutdown()
-        for group in self.groups:
-            group.stop_all(STOP_TIMEOUT)
+        if self.session is not None:
+            self.session.stop()
         for namespace, _, _ in self.graphs:
             path = self.scratch / f'events_{namespace.strip("/")}.npz'
             if path.exists():

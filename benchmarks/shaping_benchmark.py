@@ -111,7 +111,7 @@ def summary(walks: list[dict]) -> dict:
 
 
 def table(results: dict) -> str:
-    """The Markdown table of ``results`` (as written to the JSON)."""
+    """Return the Markdown table of ``results`` (as written to the JSON)."""
     lines = ['| configuration | plant modes | steps (failed) | time / bound median, p90 '
              '| tip error median, p95 [mm], under 0.5 mm | residual vibration median, max '
              '[mm] | jams |',
@@ -140,6 +140,7 @@ def write_docs(results: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Walk each configuration, print the table, write the JSON; return the exit code."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--target', default='n4_3')
     parser.add_argument('--nominal', action='store_true', help='the nominal plant alone')

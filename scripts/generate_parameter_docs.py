@@ -24,25 +24,6 @@ import walker_env
 
 OUTPUT = Path(walker_env.REPO_ROOT) / 'docs' / 'parameters.md'
 
-#: (group, prefix, module, section class, the nodes that declare it), in the file's order.
-SECTIONS = (
-    ('robot', '', 'walker_core.robot_parameters', 'RobotParameters', 'every node'),
-    ('truss', '', 'walker_core.robot_parameters', 'TrussParameters', 'every node'),
-    ('gripper', '', 'walker_core.robot_parameters', 'GripperParameters', 'every node'),
-    ('timing', '', 'walker_core.robot_parameters', 'TimingParameters', 'every node'),
-    ('recorder', 'recorder.', 'walker_bag.core.recorder_parameters', 'RecorderParameters',
-     'the recorder'),
-    ('supervisor', 'supervisor.', 'walker_supervisor.core.parameters', 'SupervisorParameters',
-     'the supervisor (`settle_time` from `walker_core.settling`, which the report reads too)'),
-    ('teleop', 'teleop.', 'walker_supervisor.core.teleop', 'TeleopParameters',
-     'the supervisor'),
-    ('planner', 'planner.', 'walker_planner.core.parameters', 'PlannerParameters',
-     'the planner'),
-    ('control', 'control.', 'walker_control.core.config', 'ControlParameters',
-     'the joint controllers'),
-    ('sim', 'sim.', 'walker_sim.core.config', 'SimParameters', 'the plant'),
-    ('viz', 'viz.', 'walker_viz.core.parameters', 'VizParameters', 'the viz node'),
-)
 
 _TYPE_NAMES = {float: 'float', int: 'int', bool: 'bool', str: 'string'}
 
@@ -67,10 +48,10 @@ Groups: {groups}.
 
 
 def _load_sections():
-    import importlib
+    """Return (group, prefix, leaf class, readers) of every group: walker_config's one table."""
+    from walker_config.core.sections import SECTIONS
 
-    return [(group, prefix, getattr(importlib.import_module(module), name), nodes)
-            for group, prefix, module, name, nodes in SECTIONS]
+    return [(row.group, row.prefix, row.leaves, row.readers) for row in SECTIONS]
 
 
 def _type_name(spec) -> str:

@@ -14,7 +14,8 @@ import dataclasses
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ['RosImport', 'ros_free_violations', 'is_ros_module', 'workspace_modules']
+__all__ = ['RosImport', 'ros_free_violations', 'is_ros_module', 'workspace_modules',
+           'module_imports']
 
 #: ROS packages whose every module must be ROS-free (besides every ``core`` of every package).
 ROS_FREE_PACKAGES = ('walker_core',)
@@ -81,7 +82,7 @@ def _must_be_ros_free(module: str) -> bool:
     return parts[0] in ROS_FREE_PACKAGES or 'core' in parts[1:]
 
 
-def _imports(module: str, path: Path) -> Iterator[tuple[str, int]]:
+def module_imports(module: str, path: Path) -> Iterator[tuple[str, int]]:
     """Yield every module ``module`` imports, anywhere in its file, with the line."""
     tree = ast.parse(path.read_text(), filename=str(path))
     package = module.split('.') if path.name == '__init__.py' else module.split('.')[:-1]
@@ -120,7 +121,7 @@ def ros_free_violations(source: Path) -> list[RosImport]:
     parent packages), so a core that imports a node module is caught as well.
     """
     modules = workspace_modules(source)
-    direct: dict[str, list[tuple[str, int]]] = {m: list(_imports(m, p)) for m, p in
+    direct: dict[str, list[tuple[str, int]]] = {m: list(module_imports(m, p)) for m, p in
                                                 modules.items()}
     found: dict[tuple[str, str, int], RosImport] = {}
     for start in sorted(m for m in modules if _must_be_ros_free(m)):

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from plant_loop import ClosedLoop
-from walker_control import analysis
+from walker_control.analysis import figure6 as experiment
+from walker_headless.figure6 import plant_factory
 from walker_control.core.config import load_controller_settings
 from walker_control.core.lowpass import LowPassFilter
 from walker_control.core.modes import Mode
@@ -73,14 +74,14 @@ def figure6():
     height = PARAMS.gripper.approach_height
     ka = SETTINGS.control.coarse.acceleration_feedback[0]
     assert ka > 0.0
-    return {k: analysis.figure6_experiment(
+    return {k: experiment.figure6_experiment(
         lambda: make_plant(other_attached=False, other_height=height), SETTINGS, k)
         for k in sorted({0.0, 0.25, ka, 0.5})}
 
 
 def test_figure6_joint_1_reaches_its_target_with_and_without_ka(figure6):
     for run in figure6.values():
-        target = run.joint1[0] + analysis.FIGURE6_DISTANCE
+        target = run.joint1[0] + experiment.FIGURE6_DISTANCE
         assert abs(run.joint1[-1] - target) < SETTINGS.control.in_position_tolerance[0]
 
 
@@ -112,10 +113,7 @@ def test_figure6_ka_settles_joint_1_with_less_residual_tip_vibration(figure6):
 
 
 def test_the_figure6_command_runs_on_the_pybullet_plant_with_the_tip_free():
-    import argparse
-
-    factory, what = analysis._plant_factory(argparse.Namespace(model='plant', params_file=None),
-                                            SETTINGS)
+    factory, what = plant_factory('plant', None, SETTINGS)
     assert what == 'pybullet plant'
     plant = factory()
     try:

@@ -21,6 +21,6 @@ setup(
     entry_points={'console_scripts': [
         'joint_controller_node = walker_control.joint_controller_node:main',
         'joint_controllers_node = walker_control.joint_controllers_node:main',
-        'control_analysis = walker_control.analysis:main',
+        'control_analysis = walker_control.analysis.command:main',
     ]},
 )

@@ -19,6 +19,6 @@ setup(
     description='The headless runner: the walker in one lock-step loop, without ROS.',
     license='Apache-2.0',
     entry_points={'console_scripts': [
-        'headless_walk = walker_headless.run:main',
+        'figure6 = walker_headless.figure6:main',
     ]},
 )

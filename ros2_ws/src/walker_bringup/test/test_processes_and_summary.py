@@ -245,7 +245,7 @@ def test_the_walk_report_is_made_unless_skipped():
 
 
 def test_a_report_that_cannot_be_made_is_said_and_leaves_nothing(tmp_path, capsys):
-    from walker_bringup.run import write_report
+    from walker_report.walk_report import report_after_walk as write_report
 
     cut = tmp_path / 'bag'
     cut.mkdir()
@@ -278,7 +278,12 @@ def test_an_output_directory_holding_a_bag_is_refused_before_anything_starts(
 def test_walk_progress_names_the_step_under_way_and_counts_the_steps_done_between_them():
     from walker_msgs.action import WalkTo
 
-    from walker_bringup.run import walk_feedback_text
+    from walker_core.progress import walk_progress
+
+    def walk_feedback_text(feedback, elapsed):
+        return walk_progress(feedback.step_index, feedback.step_count, feedback.phase,
+                             feedback.from_node, feedback.to_node,
+                             feedback.tip_position_error, elapsed)
 
     during = WalkTo.Feedback(step_index=4, step_count=5, phase=3, from_node='n3_2',
                              to_node='n4_3', tip_position_error=0.0059)
@@ -304,14 +309,15 @@ def test_a_target_that_is_no_node_is_refused_before_anything_starts(tmp_path, ca
 
 
 def test_serve_records_in_files_of_bounded_size_and_age_and_keeps_the_newest():
-    from walker_bringup.run import SERVE_SPLIT, _graph_parameters, parse_arguments
+    from walker_bringup.graph_walkers import graph_parameters
+    from walker_bringup.run import SERVE_SPLIT, parse_arguments, session_options
 
     walk = parse_arguments([])
     assert (walk.max_bag_size, walk.max_bag_duration, walk.max_bag_files) == (0, 0.0, 0)
     serve = parse_arguments(['--serve'])
     assert (serve.max_bag_size, serve.max_bag_duration, serve.max_bag_files) == SERVE_SPLIT
     chosen = parse_arguments(['--serve', '--max-bag-files', '0', '--max-bag-duration', '60'])
-    assert dict(_graph_parameters(chosen)) == {
+    assert dict(graph_parameters(session_options(chosen))) == {
         'recorder.max_bag_size': str(SERVE_SPLIT[0]), 'recorder.max_bag_duration': '60.0',
         'recorder.max_bag_files': '0'}
 
@@ -333,7 +339,7 @@ def test_a_bag_its_recorder_left_cut_is_completed_once_the_graph_is_down(tmp_pat
 
     from walker_bag.core.bag_metadata import TopicMetadata
     from walker_bag.core.bag_writer import BagWriter
-    from walker_bringup.run import _recover_bags
+    from walker_bringup.graph_walkers import recover_bags as _recover_bags
 
     bag = tmp_path / 'bag'
     with BagWriter(bag) as writer:
@@ -355,11 +361,11 @@ def test_the_walk_summary_takes_what_the_bag_lacks_from_its_own_record(tmp_path)
     """A frozen recorder's losses and a killed one's gap: from the bag's metadata, as flushed."""
     from walker_bag.core.bag_writer import BagWriter
     from walker_core.robot_parameters import default_parameter_file
-    from walker_bringup.run import _Walker
+    from walker_bringup.graph_walkers import GraphWalker
 
     bag = tmp_path / 'bag'
     nodes = walker_graph(default_parameter_file(), record=True, bag_path=bag)
-    walker = _Walker('/walker', None, nodes, ProcessGroup(
+    walker = GraphWalker('/walker', None, nodes, ProcessGroup(
         tmp_path / 'logs', {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}))
     assert walker.recording() is None  # no bag yet
     with BagWriter(bag, custom_data={

@@ -4,7 +4,12 @@ import pytest
 
 from walker_config.core.configuration import load_configuration
 from walker_bringup.graph import several_walkers, walker_graph
-from walker_bringup.run import REALTIME_PRIORITY, _graph_parameters, parse_arguments
+from walker_bringup.graph_walkers import graph_parameters
+from walker_bringup.run import REALTIME_PRIORITY, parse_arguments, session_options
+
+
+def graph_parameters_of(args):
+    return graph_parameters(session_options(args))
 
 
 def test_the_graph_publishes_tf_and_markers_and_records_them():
@@ -42,13 +47,13 @@ def test_each_walker_of_several_has_its_own_tf_and_records_it():
 def test_real_time_priority_is_asked_for_only_with_realtime():
     """An idle SCHED_FIFO graph starved the machine's own tools: never by default."""
     assert load_configuration().walker.timing.realtime_priority == 0
-    assert not any('realtime' in name for name, _ in _graph_parameters(parse_arguments([])))
-    asked = _graph_parameters(parse_arguments(['--realtime']))
+    assert not any('realtime' in name for name, _ in graph_parameters_of(parse_arguments([])))
+    asked = graph_parameters_of(parse_arguments(['--realtime']))
     assert ('timing.realtime_priority', str(REALTIME_PRIORITY)) in asked
-    assert ('timing.realtime_priority', '70') in _graph_parameters(
+    assert ('timing.realtime_priority', '70') in graph_parameters_of(
         parse_arguments(['--realtime', '70']))
     # in sim time the lock-step has no deadlines: nothing is asked
-    assert not any(name == 'timing.realtime_priority' for name, _ in _graph_parameters(
+    assert not any(name == 'timing.realtime_priority' for name, _ in graph_parameters_of(
         parse_arguments(['--realtime', '--sim-time'])))
     for bad in ('0', '100', 'high'):
         with pytest.raises(SystemExit):

@@ -1,42 +1,62 @@
-"""The walk functions: run_all.py given the model's file, the plant the truth's; a summary back.
+"""The walk functions: a walk session in the worker, the plant given the truth's file.
 
-``run_all.py`` itself is replaced by a stand-in process that checks its command line with
-``run_all.py``'s own parser and writes a summary naming the files it was given, so the walk
-functions' contract with it is tested in a second.
+The session is replaced by a stand-in that records what it was built with and writes a summary
+naming it, so the walk functions' contract with the session is tested in a second; one real
+headless walk of one step shows the whole way through.
 """
 
 import json
+import os
 from pathlib import Path
 
 import pytest
+from ros_test_support import write_parameter_file
 
+import walker_bringup.session
+from walker_bringup.session_options import Arrangement, SessionError
 from walker_campaign import walks
 from walker_campaign.walks import WalkError, WalkRequest, walk_function
+from walker_core.parameter_file import default_values
 
-#: run_all.py's stand-in: parse as run_all.py does, write summary.json, or fail as told
-_STAND_IN = """
-import json, sys
-from pathlib import Path
-from walker_bringup.run import parse_arguments
-args = parse_arguments(sys.argv[1:])
-if args.target == 'nowhere':
-    print('the walk refused its target'); sys.exit(2)
-out = Path(args.out); out.mkdir(parents=True)
-(out / 'summary.json').write_text(json.dumps({
-    'steps': [], 'reached': True, 'message': '', 'headless': args.headless,
-    'sim_time': args.sim_time, 'model': args.params_file, 'truth': args.plant_params_file,
-    'record': args.record}))
-"""
+
+class _StandIn:
+    """Stands in for WalkSession: writes a summary of what it was given, or fails as told."""
+
+    def __init__(self, configuration, options):
+        self.configuration, self.options = configuration, options
+
+    def start(self):
+        return self
+
+    def walk(self, target):
+        if target == 'nowhere':
+            print('the walk refused its target')
+            raise SessionError('the walk refused its target', 2)
+        out = Path(self.options.out)
+        out.mkdir(parents=True)
+        (out / 'summary.json').write_text(json.dumps({
+            'steps': [], 'reached': True, 'message': '',
+            'arrangement': str(self.options.arrangement), 'sim_time': self.options.sim_time,
+            'model': str(self.configuration.path), 'truth': str(self.options.plant_params_file),
+            'plant_from_truth': self.configuration.plant is not None,
+            'record': self.options.record, 'report': self.options.report,
+            'domain': os.environ.get('ROS_DOMAIN_ID')}))
+
+    def stop(self):
+        return 0
 
 
 @pytest.fixture
 def stand_in(monkeypatch):
-    monkeypatch.setattr(walks, '_RUN_ALL', _STAND_IN)
+    monkeypatch.setattr(walker_bringup.session, 'WalkSession', _StandIn)
 
 
 def request(tmp_path: Path, target: str = 'n1_2', record: bool = False) -> WalkRequest:
-    return WalkRequest(tmp_path / 'model.yaml', tmp_path / 'truth.yaml', target,
-                       tmp_path / 'run', 60.0, record)
+    flat = dict(default_values())
+    model = write_parameter_file(tmp_path / 'model.yaml', flat)
+    flat['sim.imperfections.seed'] = 1  # the truth: the plant's own file
+    truth = write_parameter_file(tmp_path / 'truth.yaml', flat)
+    return WalkRequest(Path(model), Path(truth), target, tmp_path / 'run', 60.0, record)
 
 
 def test_the_default_walk_is_the_headless_runner():
@@ -46,15 +66,21 @@ def test_the_default_walk_is_the_headless_runner():
     assert walk_function('graph') is walks.graph_walk
 
 
-@pytest.mark.parametrize('name', ['headless', 'graph'])
-def test_the_plant_gets_the_truth_and_the_rest_the_model(stand_in, tmp_path, name):
+@pytest.mark.parametrize('name, arrangement', [('headless', Arrangement.HEADLESS),
+                                               ('graph', Arrangement.COMPOSED_LOOP)])
+def test_the_plant_gets_the_truth_and_the_rest_the_model(stand_in, tmp_path, name,
+                                                         arrangement, monkeypatch):
+    monkeypatch.delenv('ROS_DOMAIN_ID', raising=False)
     summary = walk_function(name)(request(tmp_path))
     assert summary['reached'] and summary['timed_out'] is False
-    assert summary['model'] == str(tmp_path / 'model.yaml')
-    assert summary['truth'] == str(tmp_path / 'truth.yaml')
-    assert summary['headless'] == (name == 'headless')
-    assert summary['sim_time'] == (name == 'graph')
-    assert summary['record'] is False
+    assert summary['model'] == str((tmp_path / 'model.yaml').resolve())
+    assert summary['truth'] == str((tmp_path / 'truth.yaml').resolve())
+    assert summary['plant_from_truth'] is True
+    assert summary['arrangement'] == arrangement and summary['sim_time'] is True
+    assert summary['record'] is False and summary['report'] is False
+    # the graph's walk ran in a domain of its own, given back after it
+    assert (summary['domain'] is not None) == (name == 'graph')
+    assert 'ROS_DOMAIN_ID' not in os.environ
 
 
 def test_a_recorded_walk_keeps_its_bag(stand_in, tmp_path):
@@ -65,6 +91,21 @@ def test_a_walk_without_a_summary_is_an_error_with_its_output(stand_in, tmp_path
     with pytest.raises(WalkError, match='refused its target') as error:
         walks.headless_walk(request(tmp_path, target='nowhere'))
     assert 'exit code 2' in str(error.value)
+
+
+def test_refused_parameter_files_are_an_error_naming_the_parameter(tmp_path):
+    flat = dict(default_values())
+    flat['sim.start.other_node'] = 'n9_9'
+    bad = write_parameter_file(tmp_path / 'truth.yaml', flat)
+    with pytest.raises(WalkError, match='sim.start.other_node'):
+        walks.headless_walk(WalkRequest(Path(bad), Path(bad), 'n1_2', tmp_path / 'run', 60.0))
+
+
+def test_a_real_headless_walk_of_one_step_writes_its_summary_and_its_log(tmp_path):
+    summary = walks.headless_walk(request(tmp_path))
+    assert summary['reached'] and summary['path'] == ['n1_2'] and summary['timed_out'] is False
+    assert summary['runner'] == 'headless'
+    assert '[walker] reached n1_2 in 1 steps' in (tmp_path / 'run' / 'walk.log').read_text()
 
 
 def test_an_unknown_walk_function_is_refused_by_name():

@@ -3,14 +3,14 @@
 A *walk function* takes a :class:`WalkRequest` and returns the walk's summary, the mapping
 ``run_all.py`` writes as ``summary.json`` (``steps``, ``reached``, ``message``; ``timed_out``
 when it ran out of wall-clock time). It raises :class:`WalkError` when the walk could not be
-carried out at all. Two are provided, each running ``run_all.py`` in a process of its own that
-ends with its caller (a worker that dies takes its walk down with it), the plant given the
-truth's file (``--plant-params-file``) and everything else the model's:
+carried out at all. Two are provided, each a walk session (:mod:`walker_bringup.session`) in
+the worker that runs it, the plant given the truth's file and everything else the model's,
+its output (the table, the progress) in ``walk.log``:
 
-* ``headless`` (the default): the cores in one lock-step loop (``run_all.py --headless``), no
+* ``headless`` (the default): the cores in one lock-step loop (``Arrangement.HEADLESS``), no
   DDS, many times faster than real time;
-* ``graph``: the full sim-time ROS graph (``run_all.py --sim-time --composed-loop``), in a ROS
-  domain of its own taken on the machine that runs it
+* ``graph``: the full sim-time ROS graph with the loop composed (``Arrangement.COMPOSED_LOOP``),
+  in a ROS domain of its own taken on the machine that runs it
   (:func:`walker_bringup.domains.isolated_domain`).
 
 Any callable with the same signature serves, named ``module:function`` (the tests use a
@@ -19,22 +19,17 @@ fast stand-in).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib
 import json
 import os
-import signal
-import subprocess
-import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 __all__ = ['WalkRequest', 'WalkError', 'WalkFunction', 'graph_walk', 'headless_walk', 'BACKENDS',
            'walk_function']
-
-_STOP_GRACE = 60.0  # [s] for a walk told to stop to shut its graph down before it is killed
-_STARTUP_ALLOWANCE = 300.0  # [s] beyond the walk's own timeout: bringing the graph up and down
 _LOG_TAIL = 2000  # characters of a failed walk's output kept in its error
 
 
@@ -73,53 +68,45 @@ class WalkError(RuntimeError):
 WalkFunction = Callable[[WalkRequest], dict[str, Any]]
 
 
-#: The walk's process: it asks for SIGTERM when its parent dies (Linux ``PR_SET_PDEATHSIG``,
-#: 1), which run_all.py answers by stopping its graph, then runs run_all.py's main job.
-_RUN_ALL = ('import ctypes, signal, sys; ctypes.CDLL(None).prctl(1, signal.SIGTERM); '
-            'from walker_bringup.run import main; sys.exit(main(sys.argv[1:]))')
-
-
-def _run_all_command(request: WalkRequest, options: list[str]) -> list[str]:
-    """Return the ``run_all.py`` command of a walk: the two files, the target, the output."""
-    command = [sys.executable, '-c', _RUN_ALL, *options, '--quiet',
-               '--params-file', str(request.model_file),
-               '--plant-params-file', str(request.truth_file),
-               '--target', request.target, '--out', str(Path(request.out_dir) / 'walk'),
-               '--walk-timeout', f'{request.walk_timeout:g}']
-    return command + (['--no-report'] if request.record else ['--no-record'])
-
-
-def _walk_in_process(request: WalkRequest, command: list[str], env: dict[str, str],
-                     what: str) -> dict[str, Any]:
-    """Run a walk's process to its end (stopped when it outlives its time); its summary.
+def _walk_in_session(request: WalkRequest, arrangement) -> dict[str, Any]:
+    """Run a walk session to its end in this process; return ``summary.json``'s mapping.
 
     Raises
     ------
     WalkError
-        The walk wrote no summary: the message ends with the end of its output.
+        A file refused, or the walk wrote no summary: the message says why.
     """
+    from walker_bringup.session import SessionError, SessionOptions, WalkSession
+    from walker_config.core.configuration import load_configuration
+    from walker_core.parameter_schema import ParameterError
+
     out = Path(request.out_dir)
-    log_path = out / 'walk.log'
-    timed_out = False
-    with open(log_path, 'w') as log:
-        process = subprocess.Popen(command, env=env, stdout=log, stderr=subprocess.STDOUT)
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        configuration = load_configuration(request.model_file, plant_path=request.truth_file)
+    except ParameterError as error:
+        raise WalkError(f'the parameter files are refused: {error}') from None
+    options = SessionOptions(arrangement=arrangement, sim_time=True, record=request.record,
+                             report=False, out=out / 'walk', walk_timeout=request.walk_timeout,
+                             quiet=True, plant_params_file=Path(request.truth_file).resolve())
+    code = None
+    with open(out / 'walk.log', 'w') as log, contextlib.redirect_stdout(log):
+        session = WalkSession(configuration, options)
         try:
-            process.wait(timeout=request.walk_timeout + _STARTUP_ALLOWANCE)
-        except subprocess.TimeoutExpired:
-            timed_out = True
-            process.send_signal(signal.SIGINT)  # run_all holds the walker and stops the graph
-            try:
-                process.wait(timeout=_STOP_GRACE)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+            session.start()
+            session.walk(request.target)
+        except SessionError as error:
+            print(f'[walker] error: {error}')
+            code = error.code
+        finally:
+            session.stop()
     summary_path = out / 'walk' / 'summary.json'
     if not summary_path.is_file():
-        tail = log_path.read_text(errors='replace')[-_LOG_TAIL:]
-        raise WalkError(f'the {what} wrote no summary (exit code {process.returncode}'
-                        f'{", timed out" if timed_out else ""}); its output ends:\n{tail}')
+        tail = (out / 'walk.log').read_text(errors='replace')[-_LOG_TAIL:]
+        raise WalkError(f'the {arrangement} walk wrote no summary (exit code {code}); its '
+                        f'output ends:\n{tail}')
     summary = json.loads(summary_path.read_text())
-    summary['timed_out'] = timed_out or bool(summary.get('timed_out'))
+    summary['timed_out'] = bool(summary.get('timed_out'))
     return summary
 
 
@@ -131,14 +118,17 @@ def headless_walk(request: WalkRequest) -> dict[str, Any]:
     WalkError
         The runner wrote no summary (a parameter refused, a crash).
     """
-    Path(request.out_dir).mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ, PYTHONUNBUFFERED='1')
-    return _walk_in_process(request, _run_all_command(request, ['--headless']), env,
-                            'headless runner')
+    from walker_bringup.session import Arrangement
+
+    return _walk_in_session(request, Arrangement.HEADLESS)
 
 
 def graph_walk(request: WalkRequest) -> dict[str, Any]:
     """Walk on the sim-time ROS graph, in a ROS domain of its own (see the module's docstring).
+
+    The domain, and a ROS home in the walk's directory, are this process's for the walk (the
+    session's client and the graph's processes take them from its environment), and given
+    back after it.
 
     Raises
     ------
@@ -147,15 +137,23 @@ def graph_walk(request: WalkRequest) -> dict[str, Any]:
         parameters): the message ends with the end of its output.
     """
     from walker_bringup.domains import isolated_domain
+    from walker_bringup.session import Arrangement
 
     out = Path(request.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    command = _run_all_command(request, ['--sim-time', '--composed-loop'])
     with isolated_domain() as domain:
-        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                   ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', ROS_HOME=str(out / 'ros_home'),
-                   PYTHONUNBUFFERED='1')
-        return _walk_in_process(request, command, env, 'graph')
+        names = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_HOME')
+        before = {name: os.environ.get(name) for name in names}
+        os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+                          ROS_HOME=str(out / 'ros_home'))
+        try:
+            return _walk_in_session(request, Arrangement.COMPOSED_LOOP)
+        finally:
+            for name, value in before.items():
+                if value is None:
+                    os.environ.pop(name, None)
+                else:
+                    os.environ[name] = value
 
 
 #: The walk functions a campaign can name (the default ``headless``; ``--graph``: ``graph``).

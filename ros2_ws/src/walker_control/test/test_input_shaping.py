@@ -31,7 +31,7 @@ def test_impulses_are_positive_and_sum_to_one(design, frequency, damping):
     assert sum(shaper.amplitudes) == pytest.approx(1.0, abs=1e-12)
     assert min(shaper.amplitudes) > 0.0
     assert shaper.times[0] == 0.0
-    assert all(b > a for a, b in zip(shaper.times, shaper.times[1:]))
+    assert all(b > a for a, b in zip(shaper.times, shaper.times[1:], strict=False))
 
 
 @pytest.mark.parametrize('frequency,damping', MODES)
@@ -43,7 +43,7 @@ def test_residual_matches_the_closed_form_and_a_simulated_mode(design, frequency
         wdw = w * math.sqrt(1.0 - damping ** 2)
         # amplitude of the free vibration after the impulses, against one unit impulse at the end
         x = v = 0.0
-        for t, a in zip(shaper.times, shaper.amplitudes):
+        for t, a in zip(shaper.times, shaper.amplitudes, strict=True):
             tau = shaper.duration - t
             decay = math.exp(-damping * w * tau)
             x += a * decay * math.sin(wdw * tau) / wdw

@@ -26,7 +26,8 @@ from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import ControlOutput, Measurement
 
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'MODE_SUBSCRIPTION_QOS',
-           'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel', 'CLOCK_SLACK_PERIODS', 'seconds']
+           'RESUBSCRIBE_AFTER_TIMEOUTS', 'JointChannel', 'CLOCK_SLACK_PERIODS', 'seconds',
+           'give_trajectory']
 
 #: joint_states and joint_accelerations: best effort, newest only (walker_runtime.qos)
 STATE_QOS = SENSOR_QOS
@@ -41,6 +42,27 @@ RESUBSCRIBE_AFTER_TIMEOUTS = 4.0
 def seconds(stamp) -> float:
     """Return a ``builtin_interfaces/Time`` as float seconds."""
     return stamp.sec + stamp.nanosec * 1e-9
+
+
+def give_trajectory(channels: list[JointChannel], msg) -> bool:
+    """Give a ``trajectory_msgs/JointTrajectory`` to each channel whose joint it names.
+
+    Returns whether any channel was given it (each channel's core refuses a malformed one and
+    logs why, :meth:`~walker_control.core.channel.ControllerChannel.take_trajectory`).
+    """
+    names = list(msg.joint_names)
+    taking = [channel for channel in channels if channel.joint in names]
+    if not taking:
+        return False
+    points = msg.points
+    times = [seconds(point.time_from_start) for point in points]
+    positions = [list(point.positions) for point in points]
+    velocities = [list(point.velocities) for point in points]
+    accelerations = [list(point.accelerations) for point in points]
+    start = seconds(msg.header.stamp)
+    for channel in taking:
+        channel.core.take_trajectory(names, times, positions, velocities, accelerations, start)
+    return True
 
 
 class JointChannel:

@@ -46,10 +46,10 @@ from walker_runtime.node_main import run_node
 from walker_runtime.watched_subscription import WatchedSubscription
 from walker_control.core.config import ControllerSettings
 from walker_control.core.joint_controller import Measurement
-from walker_control.core.joint_order import JointOrder, default_node_name
+from walker_control.core.joint_order import JointOrder, check_joint_names, default_node_name
 from walker_control.joint_channel import (
     COMMAND_QOS, MODE_QOS, MODE_SUBSCRIPTION_QOS, RESUBSCRIBE_AFTER_TIMEOUTS, STATE_QOS,
-    JointChannel, seconds)
+    JointChannel, give_trajectory, seconds)
 
 __all__ = ['STATE_QOS', 'COMMAND_QOS', 'MODE_QOS', 'ControllerNode', 'JointControllerNode',
            'default_node_name', 'run_controller_node', 'main']
@@ -80,16 +80,7 @@ class ControllerNode(Node):
             joints = self._declare_joints()
         except ParameterException as error:  # a value of the wrong type, say
             raise ValueError(f'parameter {self._joints_parameter} refused: {error}') from None
-        unknown = [j for j in joints if j not in PHYSICAL_JOINT_NAMES]
-        if unknown or not joints or len(set(joints)) != len(joints):
-            single = self._joints_parameter == 'joint_name'
-            shown = joints[0] if single else list(joints)
-            raise ValueError(
-                f'parameter {self._joints_parameter} = {shown!r} is not '
-                + ('a joint of the walker' if single
-                   else 'a list of distinct joints of the walker')
-                + f': expected {"one" if single else "some"} of '
-                + ', '.join(PHYSICAL_JOINT_NAMES))
+        check_joint_names(joints, self._joints_parameter)
         self._joints = tuple(joints)
         self._settings = declare_section(self, ControllerSettings)
         guard_section_updates(self, ControllerSettings, '', lambda: self._settings,
@@ -165,9 +156,7 @@ class ControllerNode(Node):
     def _sim_clock_now(self) -> float | None:
         """Return the simulated clock's time [s] with ``use_sim_time``; None on the wall clock."""
         clock = self.get_clock()
-        if not clock.ros_time_is_active:
-            return None
-        return clock.now().nanoseconds * 1e-9
+        return clock.now().nanoseconds * 1e-9 if clock.ros_time_is_active else None
 
     def answer_plant_directly(self, effort_sink) -> None:
         """Take the plant's states by call and answer them by calling ``effort_sink``.
@@ -267,20 +256,8 @@ class ControllerNode(Node):
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         """Give a whole trajectory to each joint of the node it names (others ignore it)."""
-        names = list(msg.joint_names)
-        channels = [channel for channel in self._channels if channel.joint in names]
-        if not channels:
-            return
-        points = msg.points
-        times = [seconds(point.time_from_start) for point in points]
-        positions = [list(point.positions) for point in points]
-        velocities = [list(point.velocities) for point in points]
-        accelerations = [list(point.accelerations) for point in points]
-        start = seconds(msg.header.stamp)
-        for channel in channels:
-            channel.core.take_trajectory(names, times, positions, velocities, accelerations,
-                                         start)
-        self._answer_waiting_state()
+        if give_trajectory(self._channels, msg):
+            self._answer_waiting_state()
 
     def _on_accelerations(self, msg: JointAccelerations) -> None:
         values = msg.acceleration

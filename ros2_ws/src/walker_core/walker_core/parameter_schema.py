@@ -27,7 +27,8 @@ import yaml
 
 __all__ = [
     'ParameterError', 'ParameterSpec', 'parameter', 'leaf_specs', 'section_from_flat',
-    'section_to_flat', 'flatten_mapping', 'load_parameter_file', 'replace_in_section',
+    'section_to_flat', 'flatten_mapping', 'load_parameter_file', 'read_parameter_document',
+    'parameter_values', 'replace_in_section',
 ]
 
 
@@ -255,6 +256,18 @@ def load_parameter_file(path: str | Path, node_name: str | None = None) -> dict[
         If the file is missing, is not YAML, or does not have the ``ros__parameters`` layout.
     """
     path = Path(path)
+    return parameter_values(read_parameter_document(path), node_name)
+
+
+def read_parameter_document(path: str | Path) -> Mapping[str, Any]:
+    """Parse a ROS 2 parameter YAML file once; return the document, its layout checked.
+
+    Raises
+    ------
+    ParameterError
+        If the file is missing, is not YAML, or does not have the ``ros__parameters`` layout.
+    """
+    path = Path(path)
     try:
         document = yaml.safe_load(path.read_text())
     except OSError as error:
@@ -263,8 +276,6 @@ def load_parameter_file(path: str | Path, node_name: str | None = None) -> dict[
         raise ParameterError(f'parameter file {path} is not valid YAML: {error}') from None
     if not isinstance(document, Mapping) or not document:
         raise ParameterError(f'parameter file {path} must map node names to sections')
-    wildcard: dict[str, Any] = {}
-    specific: dict[str, Any] = {}
     for key, section in document.items():
         if not isinstance(section, Mapping) or 'ros__parameters' not in section:
             raise ParameterError(
@@ -272,6 +283,19 @@ def load_parameter_file(path: str | Path, node_name: str | None = None) -> dict[
         if not isinstance(section['ros__parameters'], Mapping):
             raise ParameterError(
                 f'parameter file {path}: {key}.ros__parameters must be a mapping')
+    return document
+
+
+def parameter_values(document: Mapping[str, Any],
+                     node_name: str | None = None) -> dict[str, Any]:
+    """Return a parsed parameter file's flat ``{dotted name: value}`` mapping.
+
+    ``document`` is :func:`read_parameter_document`'s; ``node_name``'s section (by full name
+    or base name) is merged over the ``/**`` section.
+    """
+    wildcard: dict[str, Any] = {}
+    specific: dict[str, Any] = {}
+    for key, section in document.items():
         if str(key) in ('/**', '**'):
             wildcard.update(flatten_mapping(section['ros__parameters']))
         elif _node_key_matches(str(key), node_name):

@@ -93,7 +93,7 @@ class WalkResult:
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
-         wall_timeout: float = math.inf, survey: dict | None = None,
+         wall_timeout: float = math.inf, goal: str = 'walk_to', survey: dict | None = None,
          whole_trajectories: bool = False) -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
 
@@ -112,6 +112,8 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         ``say(level, text)`` for what the supervisor would log.
     wall_timeout : float
         Longest wall time [s] the walk may take; it ends unreached after it.
+    goal : str
+        ``'walk_to'`` (any node) or ``'step'`` (one step to a neighbouring node).
     survey : dict, optional
         A truss survey to start from (a survey file's content); raises
         :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit.
@@ -132,7 +134,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         shell = WalkShell(loop, say, progress)
         if survey is not None:
             shell.runner.mapped.map.load(survey)
-        shell.send_goal('walk_to', target)
+        shell.send_goal(goal, target)
         cpu_started = time.process_time()
         diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
         next_diagnostics = 0

@@ -19,8 +19,7 @@ from pathlib import Path
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.parameter_schema import ParameterError
 from walker_core.parameter_file import ParameterFile
-from walker_core.robot_parameters import WalkerParameters
-from walker_sim.core.config import SimParameters
+from walker_sim.core.config import plant_sections
 from walker_sim.core.flexibility import (
     IDENTIFIED_JOINTS, FlexTuning, default_stance, tune_flexibility)
 from walker_sim.core.identification import Excitation, JointModes, identify_modes
@@ -104,9 +103,7 @@ def main(argv=None) -> int:
     parser.add_argument('--plot', type=Path, help='write a plot of the records here (PNG)')
     args = parser.parse_args(argv)
     try:
-        file = ParameterFile.read(args.params_file)
-        params = file.section(WalkerParameters)
-        sim = file.section(SimParameters, 'sim.')
+        params, sim = plant_sections(ParameterFile.read(args.params_file))
         excitation = Excitation(duration=args.duration)
     except (ParameterError, ValueError) as error:
         print(f'identify_modes: {error}', file=sys.stderr)

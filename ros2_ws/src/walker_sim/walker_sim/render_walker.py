@@ -12,8 +12,7 @@ from pathlib import Path
 
 from walker_core.parameter_schema import ParameterError
 from walker_core.parameter_file import ParameterFile
-from walker_core.robot_parameters import WalkerParameters
-from walker_sim.core.config import SimParameters
+from walker_sim.core.config import plant_sections
 from walker_sim.core.plant import WalkerPlant
 from walker_sim.core.render import Camera, render_plant, save_png
 
@@ -32,9 +31,7 @@ def main(argv=None) -> int:
                         help='frame the robot rather than the whole truss')
     args = parser.parse_args(argv)
     try:
-        file = ParameterFile.read(args.params_file)
-        params = file.section(WalkerParameters)
-        sim = file.section(SimParameters, 'sim.')
+        params, sim = plant_sections(ParameterFile.read(args.params_file))
         with WalkerPlant(params, sim) as plant:
             camera = None
             if args.close_up:

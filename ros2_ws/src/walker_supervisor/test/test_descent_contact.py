@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from walker_supervisor.core import insertion
+from walker_supervisor.core import insertion, transitions
 from walker_supervisor.core.descent_contact import (
     CONTACT_DWELL, CONTACT_SPEED, SHORT_OF_THE_END, DescentContact)
 from walker_supervisor.core.step_run import StepRun
@@ -78,7 +78,7 @@ def run_at_insertion(overtravel):
 
 def test_the_descent_is_commanded_the_overtravel_past_the_mouth_on_the_hole_axis():
     run = run_at_insertion(OVERTRAVEL)
-    request = insertion.descent_request(run)
+    request = transitions.descent_request(run)
     mouth = run.targets.point_to
     np.testing.assert_allclose(request.goal_point, mouth - [0.0, 0.0, OVERTRAVEL], atol=1e-12)
     np.testing.assert_allclose(KIN.forward(request.goal)[:3], request.goal_point, atol=1e-9)
@@ -87,14 +87,14 @@ def test_the_descent_is_commanded_the_overtravel_past_the_mouth_on_the_hole_axis
 
 def test_no_overtravel_descends_to_the_nominal_mouth_as_before():
     run = run_at_insertion(0.0)
-    request = insertion.descent_request(run)
+    request = transitions.descent_request(run)
     np.testing.assert_array_equal(request.goal, run.targets.at_to)
     np.testing.assert_array_equal(request.goal_point, run.targets.point_to)
 
 
 def test_a_streaming_descent_stopped_by_the_face_says_where_it_felt_it_once():
     run = run_at_insertion(OVERTRAVEL)
-    insertion.enter(run, 0.0)
+    transitions.enter_insertion(run, 0.0)
     mouth = run.targets.point_to
     said = []
     for tick, height in enumerate(stopped_at(-0.001, start=0.01, ticks=60)):

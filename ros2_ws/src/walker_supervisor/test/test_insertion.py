@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sequencer_world import DT, KIN, SUPERVISOR, TRUSS, World, motion_purposes, stage_times
-from walker_supervisor.core.approach import MAX_FINE_LINES
+from walker_supervisor.core.transitions import MAX_FINE_LINES
 from walker_supervisor.core.commands import (
     GripperRequest, Notice, SetControlMode, TrajectoryRequest)
 from walker_supervisor.core.phases import Phase

@@ -44,7 +44,7 @@ from walker_supervisor.clocks import Clocks
 from walker_supervisor.core.commands import TrajectoryRequest
 from walker_supervisor.core.planner_calls import planner_call
 from walker_supervisor.core.runner import WalkRunner
-from walker_supervisor.core.approach import MAX_FINE_LINES
+from walker_supervisor.core.transitions import MAX_FINE_LINES
 from walker_supervisor.core.teleop import (
     GripperOperation, JointJog, SettleDetector, TeleopParameters, TeleopRefusedError,
     TeleopRules, TipJog)

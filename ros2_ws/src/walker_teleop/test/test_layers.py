@@ -6,7 +6,7 @@ import sys
 
 def test_the_core_and_the_command_line_import_without_rclpy():
     code = ('import sys\n'
-            'import walker_teleop.core.progress, walker_teleop.core.status\n'
+            'import walker_core.progress, walker_teleop.core.status\n'
             'import walker_teleop.walkerctl\n'
             'walker_teleop.walkerctl.build_parser()\n'
             "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy'))\n")

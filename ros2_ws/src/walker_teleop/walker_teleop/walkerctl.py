@@ -240,7 +240,7 @@ def _trigger(client, args) -> int:
 
 
 def _goal(client, args) -> int:
-    from walker_teleop.core.progress import ProgressLine, step_progress, walk_progress
+    from walker_core.progress import ProgressLine, step_progress, walk_progress
 
     progress = ProgressLine(quiet=args.quiet)
     started = time.monotonic()

@@ -18,7 +18,7 @@ from typing import Any
 import yaml
 
 from walker_core.parameter_schema import (
-    ParameterError, flatten_mapping, load_parameter_file)
+    ParameterError, flatten_mapping, parameter_values, read_parameter_document)
 
 __all__ = ['load_nominal', 'check_model', 'check_truth', 'parameter_document',
            'write_parameter_file', 'WILDCARD']
@@ -37,8 +37,8 @@ def load_nominal(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
         node sections besides ``/**`` (a run's files are written from ``/**`` alone).
     """
     path = Path(path)
-    flat = load_parameter_file(path)
-    document = yaml.safe_load(path.read_text())
+    document = read_parameter_document(path)  # parsed once: the values and the document
+    flat = parameter_values(document)
     others = sorted(str(k) for k in document if str(k) not in (WILDCARD, '**'))
     if others:
         raise ParameterError(f'parameter file {path}: a campaign takes the /** section only, '

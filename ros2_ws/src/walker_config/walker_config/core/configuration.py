@@ -25,18 +25,20 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from walker_bag.core.recorder_parameters import RECORDER_PREFIX, RecorderParameters
+from walker_bag.core.recorder_parameters import RecorderParameters
 from walker_control.core.config import ControllerSettings
 from walker_core.parameter_file import ParameterFile
 from walker_core.robot_parameters import WalkerParameters
-from walker_planner.core.parameters import PREFIX as PLANNER_PREFIX
 from walker_planner.core.parameters import PlannerParameters
 from walker_sim.core.config import SimParameters
 from walker_sim.core.config import check_against_walker as check_sim_against_walker
+from walker_sim.core.config import plant_sections
 from walker_supervisor.core.parameters import (
     SupervisorParameters, check_with_control, check_with_gripper, check_with_planner)
 from walker_supervisor.core.teleop import TeleopParameters
-from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
+from walker_viz.core.parameters import VizParameters
+
+from walker_config.core.sections import configuration_sections
 
 __all__ = ['WalkerConfiguration', 'load_configuration', 'configuration_of', 'plant_sections',
            'check_cross_section_rules']
@@ -112,20 +114,6 @@ def check_cross_section_rules(configuration: WalkerConfiguration) -> None:
     check_with_control(supervisor, configuration.controllers.control.relaxation.duration)
 
 
-def plant_sections(file: ParameterFile) -> tuple[WalkerParameters, SimParameters]:
-    """Return the plant's sections of a parameter file: the robot and ``sim.*``, checked.
-
-    Raises
-    ------
-    ParameterError
-        Naming the parameter: a value of either section, or the rule between them (start
-        nodes off the truss, a physics rate that is not a multiple of the control rate).
-    """
-    walker, sim = file.section(WalkerParameters), file.section(SimParameters, 'sim.')
-    check_sim_against_walker(sim, walker)
-    return walker, sim
-
-
 def configuration_of(file: ParameterFile,
                      plant: tuple[WalkerParameters, SimParameters] | None = None
                      ) -> WalkerConfiguration:
@@ -139,17 +127,10 @@ def configuration_of(file: ParameterFile,
     ParameterError
         Naming the parameter and the rule; nothing is half-built.
     """
-    configuration = WalkerConfiguration(
-        path=file.path,
-        walker=file.section(WalkerParameters),
-        sim=file.section(SimParameters, 'sim.'),
-        controllers=file.section(ControllerSettings),
-        planner=file.section(PlannerParameters, PLANNER_PREFIX),
-        supervisor=file.section(SupervisorParameters, 'supervisor.'),
-        teleop=file.section(TeleopParameters, 'teleop.'),
-        recorder=file.section(RecorderParameters, RECORDER_PREFIX),
-        viz=file.section(VizParameters, VIZ_PREFIX),
-        values=file.values, plant=plant)
+    sections = {field: file.section(section, prefix)  # the one table of the file's sections
+                for field, (section, prefix) in configuration_sections().items()}
+    configuration = WalkerConfiguration(path=file.path, values=file.values, plant=plant,
+                                        **sections)
     check_cross_section_rules(configuration)
     return configuration
 

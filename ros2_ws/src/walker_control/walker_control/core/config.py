@@ -188,11 +188,11 @@ class ShapingSettings:
     """The input shaper on the setpoints of each role, outside the loop (input_shaping)."""
 
     kind: str = parameter(
-        'input shaper family of the shaped roles (none: the paper\'s structure, no shaper)',
+        "input shaper family of the shaped roles (none: the paper's structure, no shaper)",
         choices=tuple(kind.value for kind in ShaperKind), read_only=False,
         source='paper: none; chosen: see docs/controllers.md, command shaping')
     frequency: tuple[float, ...] = parameter(
-        'flexible-mode frequency each role\'s shaper cancels (0: that role unshaped)',
+        "flexible-mode frequency each role's shaper cancels (0: that role unshaped)",
         'rad/s', 0.0, 1000.0, read_only=False,
         source='paper: none; chosen: 18 rad/s, the joint-1 mode (robot.flexibility.joint1_mode)')
     damping: float = parameter(
@@ -212,7 +212,7 @@ class ShapingSettings:
         _require_five(self, 'frequency')
 
     def design(self, role: int, sample_time: float):
-        """The role's :class:`~walker_control.core.input_shaping.Shaper`, or None unshaped."""
+        """Return the role's shaper (:class:`.input_shaping.Shaper`), or None unshaped."""
         frequency = self.frequency[role - 1]
         if self.kind == ShaperKind.NONE.value or frequency <= 0.0:
             return None

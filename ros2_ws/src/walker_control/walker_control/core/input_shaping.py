@@ -203,7 +203,7 @@ _SI_DIRECTIONS = 16
 def specified_insensitivity(low: float, high: float, sample_time: float,
                             tolerance: float = 0.05, damping: tuple[float, float] = (0.0, 0.0),
                             frequencies: int = 41) -> Shaper:
-    """The shortest shaper on the sample grid with ``V <= tolerance`` over ``[low, high]``.
+    """Return the shortest shaper on the sample grid with ``V <= tolerance`` over ``[low, high]``.
 
     Parameters
     ----------
@@ -286,7 +286,7 @@ def specified_insensitivity(low: float, high: float, sample_time: float,
 
 
 def convolve(*shapers: Shaper) -> Shaper:
-    """The shaper of several in series (multi-mode): impulses of each at every other's."""
+    """Return the shaper of several in series (multi-mode): impulses of each at every other's."""
     if not shapers:
         raise ShaperDesignError('convolve needs at least one shaper')
     amplitudes, times = np.array([1.0]), np.array([0.0])
@@ -303,7 +303,7 @@ def convolve(*shapers: Shaper) -> Shaper:
 @functools.lru_cache(maxsize=64)
 def design_shaper(kind: ShaperKind, frequency: float, damping: float, tolerance: float,
                   insensitivity: float, sample_time: float) -> Shaper:
-    """The shaper of ``kind`` for a mode at ``frequency`` [rad/s] (+-``insensitivity`` for SI).
+    """Return the ``kind`` shaper for a mode at ``frequency`` [rad/s] (+-``insensitivity``: SI).
 
     SI covers ``[frequency (1 - insensitivity), frequency (1 + insensitivity)]`` at damping
     ratios from 0 to ``damping``. NONE gives the identity (one unit impulse at 0).
@@ -365,6 +365,7 @@ class DiscreteShaper:
 
     @property
     def output(self) -> float:
+        """The last output sample."""
         return self._output
 
     def reset_to(self, value: float = 0.0) -> None:

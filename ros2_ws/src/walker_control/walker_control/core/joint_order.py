@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
-__all__ = ['JointOrder', 'default_node_name']
+__all__ = ['JointOrder', 'check_joint_names', 'default_node_name']
 
 
 class JointOrder:
@@ -77,3 +77,24 @@ def default_node_name(argv: list[str]) -> str:
             if joint in PHYSICAL_JOINT_NAMES:
                 return 'controller_' + joint.removesuffix('_joint')
     return 'joint_controller'
+
+
+def check_joint_names(joints: Sequence[str], parameter: str) -> None:
+    """Refuse a controller node's joints unless they are distinct physical joints.
+
+    ``parameter`` is the parameter that named them: ``joint_name`` (one joint) or a list.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter, its value and the joints expected.
+    """
+    unknown = [j for j in joints if j not in PHYSICAL_JOINT_NAMES]
+    if unknown or not joints or len(set(joints)) != len(joints):
+        single = parameter == 'joint_name'
+        shown = joints[0] if single and joints else list(joints)
+        raise ValueError(
+            f'parameter {parameter} = {shown!r} is not '
+            + ('a joint of the walker' if single
+               else 'a list of distinct joints of the walker')
+            + f': expected {"one" if single else "some"} of ' + ', '.join(PHYSICAL_JOINT_NAMES))

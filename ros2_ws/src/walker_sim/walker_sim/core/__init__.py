@@ -10,7 +10,7 @@ Modules: :mod:`~walker_sim.core.plant` (the plant behind ``reset()``, ``step(tor
 :mod:`~walker_sim.core.bullet` (pybullet helpers).
 
 :func:`make_plant` builds a plant from a parameter file, for tools and experiments that run
-other packages' cores on it (``control_analysis figure6``).
+other packages' cores on it (``ros2 run walker_headless figure6``).
 """
 
 from __future__ import annotations
@@ -44,13 +44,10 @@ def make_plant(params_file=None, *, other_attached: bool | None = None,
     """
     from walker_core.parameter_file import ParameterFile
     from walker_core.parameter_schema import replace_in_section
-    from walker_core.robot_parameters import WalkerParameters
-    from walker_sim.core.config import SimParameters
+    from walker_sim.core.config import plant_sections
     from walker_sim.core.plant import WalkerPlant
 
-    file = ParameterFile.read(params_file)
-    params = file.section(WalkerParameters)
-    sim = file.section(SimParameters, 'sim.')
+    params, sim = plant_sections(ParameterFile.read(params_file))
     changes = {f'sim.start.{name}': value
                for name, value in (('other_attached', other_attached),
                                    ('other_height', other_height)) if value is not None}

@@ -18,7 +18,7 @@ from walker_core.truss import Truss, UnknownNodeError
 from walker_sim.core.imperfections import Imperfections
 
 __all__ = ['CLOCK_MODES', 'StartConfiguration', 'SimParameters', 'load_sim_parameters',
-           'check_against_walker']
+           'check_against_walker', 'plant_sections']
 
 #: ``sim_time``: the plant publishes /clock and is lock-stepped with the controllers;
 #: ``real_time``: the plant steps on a wall-clock timer, like hardware.
@@ -131,6 +131,27 @@ def check_against_walker(sim: SimParameters, params) -> None:
         raise ParameterError(
             f'sim.physics_rate ({sim.physics_rate:g} Hz) must be an integer multiple of '
             f'timing.control_rate ({params.timing.control_rate:g} Hz)')
+
+
+def plant_sections(file: ParameterFile):
+    """Return the plant's sections of a parameter file: the robot and ``sim.*``, checked.
+
+    What every plant is built from (the graph's plant node, the headless loop, the tools that
+    run the plant core): ``(WalkerParameters, SimParameters)``, with the rule between them
+    (:func:`check_against_walker`) run, as :func:`walker_config.core.configuration.
+    load_configuration` runs it.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter: a value of either section, or the rule between them (start
+        nodes off the truss, a physics rate that is not a multiple of the control rate).
+    """
+    from walker_core.robot_parameters import WalkerParameters
+
+    walker, sim = file.section(WalkerParameters), file.section(SimParameters, 'sim.')
+    check_against_walker(sim, walker)
+    return walker, sim
 
 
 def load_sim_parameters(path=None) -> SimParameters:

@@ -12,73 +12,31 @@ it, joint 1 coming in behind its filter (not swinging through it), or within
 wait for the tip to come to rest, since the insertion settles at the mouth and checks the tip
 again, across the hole's axis, before anything screws in. A tip that settles (``settle_time``)
 anywhere else gets a constant-velocity fine line (paper section 5) from where it settled, up to
-:data:`MAX_FINE_LINES` times before insertion is tried anyway (the screw-in itself is the final
-check).
+:data:`~walker_supervisor.core.transitions.MAX_FINE_LINES` times before insertion is tried
+anyway (the screw-in itself is the final check). The entries into FINE and INSERTION are
+:mod:`~walker_supervisor.core.transitions`'.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from walker_supervisor.core import insertion, recovery
-from walker_supervisor.core.commands import PrepareTrajectory, SetControlMode, TrajectoryRequest
-from walker_supervisor.core.phases import Phase, Stage
+from walker_supervisor.core import transitions
+from walker_supervisor.core.phases import Stage
 from walker_supervisor.core.step_run import StepRun
 
-__all__ = ['MAX_FINE_LINES', 'coarse_request', 'enter_coarse', 'coarse_tick', 'enter_fine',
-           'fine_settling']
-
-#: Fine correction lines tried before insertion is attempted anyway.
-MAX_FINE_LINES = 3
-
-
-def coarse_request(run: StepRun) -> TrajectoryRequest:
-    """Return the coarse motion: the node-to-node sweep to above the target hole."""
-    t = run.targets
-    joints, point = t.coarse_goal
-    return run.request('coarse', t.above_from, joints, t.point_above_from, point,
-                       t.sweep)
-
-
-def enter_coarse(run: StepRun, now: float) -> list:
-    """Enter COARSE: the controllers in COARSE mode, the sweep asked for."""
-    run.enter(Phase.COARSE, now, Stage.MOVING)
-    return [SetControlMode('coarse', run.step.base_gripper), run.issue(coarse_request(run))]
+__all__ = ['coarse_tick', 'fine_settling']
 
 
 def coarse_tick(run: StepRun, now: float, velocities: np.ndarray) -> list:
     """Hand over to FINE inside the region, or once at rest outside it."""
     if run.tip_error() < run.parameters.coarse_to_fine_region:
-        return enter_fine(run, now, correction=False)
+        return transitions.enter_fine(run, now, correction=False)
     if run.stage == Stage.ARRIVING and run.settled(now, velocities, run.parameters.settle_time):
         # the coarse motion ended and the arm came to rest outside the region (friction,
         # overshoot): fine motion, with its higher gains and a fine line, takes it there
-        return enter_fine(run, now, correction=True)
+        return transitions.enter_fine(run, now, correction=True)
     return []
-
-
-def enter_fine(run: StepRun, now: float, correction: bool) -> list:
-    """Switch the controllers to FINE; with ``correction``, also run a fine line.
-
-    Without a correction the coarse trajectory (if still streaming) runs on to its end, the
-    point above the hole; a correction starts from where the joints have settled.
-    """
-    commands = []
-    if run.phase != Phase.FINE:
-        running = run.motions.running
-        run.enter(Phase.FINE, now, Stage.ARRIVING if running else Stage.SETTLING)
-        run.deadline = run.deadline if running else now + run.parameters.phase_timeout
-        commands.append(SetControlMode('fine', run.step.base_gripper))
-        # the descent starts where every fine motion ends: plan it now, stream it when due
-        commands.append(PrepareTrajectory(insertion.descent_request(run)))
-    if not correction:
-        return commands
-    run.tries.fine_lines += 1
-    run.stage = Stage.MOVING
-    purpose = recovery.way_back_purpose(run, 'fine')
-    if purpose is None:
-        return commands + run.abort(recovery.no_way_back(run), now)
-    return commands + [recovery.way_back(run, purpose)]
 
 
 def fine_settling(run: StepRun, now: float, velocities: np.ndarray) -> list:
@@ -86,13 +44,13 @@ def fine_settling(run: StepRun, now: float, velocities: np.ndarray) -> list:
     if _may_descend(run, velocities):
         # the descent need not wait for the tip to come to rest: the insertion settles at the
         # mouth and checks the tip against the axis again before it screws in
-        return insertion.enter(run, now)
+        return transitions.enter_insertion(run, now)
     if not run.settled(now, velocities, run.parameters.settle_time):
         return []
     if run.tip_error() <= run.parameters.insertion_alignment \
-            or run.tries.fine_lines >= MAX_FINE_LINES:
-        return insertion.enter(run, now)
-    return enter_fine(run, now, correction=True)  # settled, not aligned: a line
+            or run.tries.fine_lines >= transitions.MAX_FINE_LINES:
+        return transitions.enter_insertion(run, now)
+    return transitions.enter_fine(run, now, correction=True)  # settled, not aligned: a line
 
 
 def _may_descend(run: StepRun, velocities: np.ndarray) -> bool:

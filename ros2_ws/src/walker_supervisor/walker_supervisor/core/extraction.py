@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from walker_core.kinematics import KinematicsError
-from walker_supervisor.core import approach
+from walker_supervisor.core import transitions
 from walker_supervisor.core.commands import (
     GripperRequest, Notice, PrepareTrajectory, SetControlMode, TrajectoryRequest)
 from walker_supervisor.core.hole_search import HoleSearch
@@ -107,7 +107,7 @@ def coarse_when_there(run: StepRun, now: float) -> list:
     """
     gap = float(np.max(np.abs(run.theta - run.targets.above_from)))
     if gap <= run.parameters.coarse_start_tolerance:
-        return approach.enter_coarse(run, now)
+        return transitions.enter_coarse(run, now)
     return []
 
 
@@ -157,7 +157,7 @@ def _prepare(run: StepRun) -> list:
     """
     run.motions.planned_ahead, run.motions.asked_ahead = set(), {'extraction', 'coarse'}
     return [PrepareTrajectory(_lift_with_sweep(run, _extraction_request(run))),
-            PrepareTrajectory(approach.coarse_request(run))]
+            PrepareTrajectory(transitions.coarse_request(run))]
 
 
 def _lift_with_sweep(run: StepRun, extraction: TrajectoryRequest) -> TrajectoryRequest:
@@ -166,7 +166,7 @@ def _lift_with_sweep(run: StepRun, extraction: TrajectoryRequest) -> TrajectoryR
         return extraction
     # the controllers in COARSE mode from the start: acceleration feedback on joint 1 as its
     # sweep begins
-    return dataclasses.replace(extraction, then=approach.coarse_request(run),
+    return dataclasses.replace(extraction, then=transitions.coarse_request(run),
                                lead=run.parameters.sweep_lead, mode='coarse')
 
 

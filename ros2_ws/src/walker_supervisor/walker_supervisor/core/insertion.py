@@ -1,19 +1,19 @@
 """INSERTION: down the hole's axis to the node's face, settle, screw in (paper section 2).
 
 Insertion descends along the hole axis to contact: it is commanded ``insertion_overtravel``
-past the nominal mouth (:func:`descent_goal`), so that a node lower than the parameter file
-says is still reached, and the node's face stops it where the node really is (a node higher
-than nominal is not passed through); :mod:`.descent_contact` feels the face from the joints
-(:func:`feel_the_face`), and the screw-in is made where the descent came to rest on it (a
-descent whose tip leaves the axis by more
-than ``descent_axis_tolerance`` is stopped and the gripper lifted straight back to the approach
+past the nominal mouth (:func:`~walker_supervisor.core.transitions.descent_goal`), so that a
+node lower than the parameter file says is still reached, and the node's face stops it where
+the node really is (a node higher than nominal is not passed through); :mod:`.descent_contact`
+feels the face from the joints (:func:`feel_the_face`), and the screw-in is made where the
+descent came to rest on it (a descent whose tip leaves the axis by more than
+``descent_axis_tolerance`` is stopped and the gripper lifted straight back to the approach
 height, to come over the hole again: an insertion attempt, as a jam is; stopped before it went
 ``descent_region`` down, there is nothing to lift and a fine line brings it over the hole). The
 descent moves the joints, which stop in their friction again, so once they have been still for
 ``mouth_settle_time`` (the vertical descent hardly moves joint 1; after a line at the mouth,
 which does, for ``settle_time``) the tip is checked again, now across the hole's axis: more than
 ``insertion_alignment`` off it, a fine line at the mouth takes it there (up to
-:data:`~walker_supervisor.core.approach.MAX_FINE_LINES` times; more than
+:data:`~walker_supervisor.core.transitions.MAX_FINE_LINES` times; more than
 ``descent_axis_tolerance`` off, the gripper is lifted back instead), and only then is the
 gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`` times (each
 lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD;
@@ -30,75 +30,23 @@ import math
 import numpy as np
 
 from walker_core.kinematics import KinematicsError
-from walker_supervisor.core import approach
+from walker_supervisor.core import transitions
 from walker_supervisor.core.commands import (
-    CancelTrajectory, GripperRequest, Notice, SetControlMode, TrajectoryRequest)
+    CancelTrajectory, GripperRequest, Notice, SetControlMode)
 from walker_supervisor.core.descent_contact import DescentContact
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.step_geometry import probe_targets
 from walker_supervisor.core.step_run import StepRun
 
-__all__ = ['PREPARED_DESCENT_TOLERANCE', 'MAX_MOUTH_LINES', 'descent_goal', 'descent_request',
-           'enter', 'feel_the_face', 'at_mouth', 'left_the_axis', 'jammed', 'follow_screwing']
+__all__ = ['MAX_MOUTH_LINES', 'feel_the_face', 'at_mouth', 'left_the_axis', 'jammed',
+           'follow_screwing']
 
-#: [rad] The descent planned ahead (on entering FINE) starts at the configuration above the
-#: hole; joints farther than this from it (any joint) descend from where they are instead.
-PREPARED_DESCENT_TOLERANCE = 0.02
 #: Fine lines at the mouth tried before the gripper is screwed in anyway (as above the hole).
 MAX_MOUTH_LINES = 3
 #: [m] A line at the mouth after the descent felt the face ends this far below where it was
 #: felt: it keeps the gripper on the face (and drops it into the chamfer when it gets there)
 #: without pressing it so hard that the joints push it sideways.
 MOUTH_PRESS = 3e-4
-
-
-def descent_goal(run: StepRun) -> tuple[np.ndarray, np.ndarray]:
-    """Return the joints [rad] and the point [m] a descent is commanded to.
-
-    ``insertion_overtravel`` below the hole's nominal mouth on its axis, the tip vertical and
-    its yaw as at the mouth: the node's face stops the gripper before it, wherever the node
-    really is within that much. The nominal mouth if that point is out of reach.
-    """
-    t = run.targets
-    overtravel = run.parameters.insertion_overtravel
-    if overtravel <= 0.0:
-        return t.at_to, t.point_to
-    point = t.point_to - np.array([0.0, 0.0, overtravel])
-    try:
-        joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
-    except KinematicsError:
-        return t.at_to, t.point_to
-    return np.asarray(joints, dtype=float), point
-
-
-def descent_request(run: StepRun) -> TrajectoryRequest:
-    """Return the descent: straight down the hole's axis from the point above it to contact.
-
-    It starts at the configuration above the hole, where the coarse motion and every fine line
-    leave the setpoints, so it can be planned on entering FINE and streamed the moment FINE
-    ends; for joints farther than :data:`PREPARED_DESCENT_TOLERANCE` from it the same line is
-    planned on their IK branch and tip yaw instead (:func:`enter`).
-    """
-    t = run.targets
-    joints, point = descent_goal(run)
-    return run.request('insertion', t.above_to, joints, t.point_above_to, point)
-
-
-def enter(run: StepRun, now: float) -> list:
-    """Enter INSERTION: the descent streams."""
-    run.tries.insertion_error = run.tip_error()
-    run.tries.mouth_lines = 0
-    run.enter(Phase.INSERTION, now, Stage.DESCENDING)
-    joints, point = descent_goal(run)
-    run.tries.contact = DescentContact(float(run.targets.point_to[2]), float(point[2]))
-    request = descent_request(run)
-    if float(np.max(np.abs(run.theta - request.start))) > PREPARED_DESCENT_TOLERANCE:
-        # not where the step's own motions leave the arm (a resumed step's way back turns the
-        # wrist its own way): the same line down the axis, planned from the measured joints'
-        # IK branch and tip yaw (the planner checks its first setpoint against them)
-        t = run.targets
-        request = run.request('insertion', run.theta, joints, t.point_above_to, point)
-    return [run.issue(request)]
 
 
 def feel_the_face(run: StepRun, now: float) -> list:
@@ -216,7 +164,7 @@ def left_the_axis(run: StepRun, now: float) -> list:
         # a fine line from where the tip is brings it over the hole
         run.tries.fine_lines = 0
         return stop + [Notice(f'{reason} before it went down: brought over the hole again')] \
-            + approach.enter_fine(run, now, correction=True)
+            + transitions.enter_fine(run, now, correction=True)
     run.stage = Stage.RETRY_LIFT
     return stop + [Notice(f'{reason}: lifted back to come over the hole again'),
                    run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]

@@ -72,7 +72,7 @@ from walker_supervisor.core.health import (
 from walker_supervisor.core.map_planning import MapPlanning
 from walker_supervisor.core.motion_requests import (
     MotionEnded, MotionPlanned, MotionRequests, MotionStarted, PlannedAhead)
-from walker_supervisor.core.phases import Phase, SequencerError, StepOutcome
+from walker_supervisor.core.phases import Phase, SequencerError, Stage, StepOutcome
 from walker_supervisor.core.prepared_motions import PlanAnswer
 from walker_supervisor.core.reports import (
     PhaseAnnouncer, StepFigures, goal_ended, goal_feedback)
@@ -710,7 +710,8 @@ class WalkRunner:
             elif isinstance(item, MotionEnded):
                 self._execute(self.sequencer.trajectory_done(item.success, item.message, now),
                               now)
-                if self.sequencer.phase == Phase.INSERTION and self.sequencer.stage == 'settling':
+                if self.sequencer.phase == Phase.INSERTION \
+                        and self.sequencer.stage == Stage.SETTLING:
                     # at the mouth: the residual vibration and the true error are of the arm
                     # at rest there, not of the descent's last centimetres
                     self.figures.vibration.clear()

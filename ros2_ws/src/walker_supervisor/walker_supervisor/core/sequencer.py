@@ -27,9 +27,9 @@ from collections.abc import Callable
 import numpy as np
 
 from walker_core.kinematics import WalkerKinematics
-from walker_supervisor.core import approach, extraction, insertion, recovery
-from walker_supervisor.core.approach import MAX_FINE_LINES
+from walker_supervisor.core import approach, extraction, insertion, recovery, transitions
 from walker_supervisor.core.hole_search import HoleSearch
+from walker_supervisor.core.transitions import MAX_FINE_LINES
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, SequencerError, Stage, StepOutcome
 from walker_supervisor.core.progress import PhaseProgress
@@ -309,7 +309,7 @@ class StepSequencer:
             return run.wait_again(now, Stage.SETTLING)
         if run.stage == Stage.RETRY_LIFT:  # above the hole again: settle, check, insert again
             run.tries.fine_lines = 0
-            return approach.enter_fine(run, now, correction=False)
+            return transitions.enter_fine(run, now, correction=False)
         if run.stage in (Stage.DESCENDING, Stage.ALIGNING):  # at the mouth: settle, screw in
             return run.wait_again(now, Stage.SETTLING)
         return []

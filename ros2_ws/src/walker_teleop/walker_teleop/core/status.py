@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from walker_core.progress import PHASE_NAMES, name_of
 from walker_core.rotations import rotation_from_quaternion
 from walker_core.text import millimetres
 from walker_core.truss import Truss
@@ -20,17 +21,10 @@ from walker_core.truss import Truss
 __all__ = ['PHASE_NAMES', 'MODE_NAMES', 'GRIPPER_STATE_NAMES', 'GripperView', 'StatusView',
            'rotation_from_quaternion', 'hole_offset', 'format_status', 'name_of']
 
-#: Names of the ``walker_msgs/StepPhase`` constants, by value.
-PHASE_NAMES = ('IDLE', 'EXTRACTION', 'COARSE', 'FINE', 'INSERTION', 'SAFE_HOLD')
 #: Names of the ``walker_msgs/ControlMode`` constants, by value.
 MODE_NAMES = ('OFF', 'HOLD', 'COARSE', 'FINE')
 #: Names of the ``walker_msgs/GripperState`` constants, by value.
 GRIPPER_STATE_NAMES = ('free', 'screwing', 'attached', 'unscrewing', 'jammed')
-
-
-def name_of(value: int, names: Sequence[str]) -> str:
-    """Name of a message constant, or ``'unknown (<value>)'``."""
-    return names[value] if 0 <= value < len(names) else f'unknown ({value})'
 
 
 @dataclasses.dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 import io
 
-from walker_teleop.core.progress import ProgressLine, step_progress, walk_progress
+from walker_core.progress import ProgressLine, step_progress, walk_progress
 
 
 class _Terminal(io.StringIO):
@@ -59,3 +59,16 @@ def test_a_log_gets_a_line_per_new_phase_and_otherwise_one_per_period():
     line.update('fine 0.5 mm', key='fine')  # the period is over: written
     line.end()
     assert stream.getvalue().splitlines() == ['coarse 10 mm', 'fine 1 mm', 'fine 0.5 mm']
+
+
+def test_a_said_line_ends_the_status_line_and_an_error_is_shown_even_when_quiet():
+    terminal = _Terminal()
+    line = ProgressLine(stream=terminal)
+    line.update('step 1/3: coarse')
+    line.say('[walker] graph ready')
+    assert terminal.getvalue() == '\r\033[Kstep 1/3: coarse\n[walker] graph ready\n'
+    quiet = io.StringIO()
+    line = ProgressLine(quiet=True, stream=quiet)
+    line.say('[walker] graph ready')
+    line.error('[walker] error: the plant died')
+    assert quiet.getvalue() == '[walker] error: the plant died\n'

@@ -1,6 +1,8 @@
-"""The progress line of long commands (walk-to, step), quiet on request.
+"""The progress line of a walk: ``run_all.py`` (graph or headless), ``walkerctl``, campaigns.
 
-On a terminal the line is rewritten in place; in a log (no terminal) a line is written only when
+One place for every tool that shows a walk's or a step's progress (it needs nothing but the
+``walker_msgs`` feedback's fields, so the operator's tool and the bring-up share it). On a
+terminal the line is rewritten in place; in a log (no terminal) a line is written only when
 the step or phase changes, or every ``log_period`` seconds, so a long walk does not flood it.
 """
 
@@ -8,12 +10,18 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TextIO
 
-from walker_teleop.core.status import PHASE_NAMES, name_of
+__all__ = ['ProgressLine', 'walk_progress', 'step_progress', 'PHASE_NAMES', 'name_of']
 
-__all__ = ['ProgressLine', 'walk_progress', 'step_progress']
+#: Names of the ``walker_msgs/StepPhase`` constants, by value.
+PHASE_NAMES = ('IDLE', 'EXTRACTION', 'COARSE', 'FINE', 'INSERTION', 'SAFE_HOLD')
+
+
+def name_of(value: int, names: Sequence[str]) -> str:
+    """Name of a message constant, or ``'unknown (<value>)'``."""
+    return names[value] if 0 <= value < len(names) else f'unknown ({value})'
 
 
 def walk_progress(step_index: int, step_count: int, phase: int, from_node: str, to_node: str,
@@ -74,6 +82,21 @@ class ProgressLine:
         now = self.clock()
         if key != self._key or now - self._printed >= self.log_period:
             self._key, self._printed, self._last = key, now, text
+            print(text, file=self.stream, flush=True)
+
+    def say(self, text: str) -> None:
+        """Print a line of progress on a line of its own (not when quiet)."""
+        self._line(text, always=False)
+
+    def error(self, text: str) -> None:
+        """Print a line that says what went wrong, on a line of its own: also when quiet."""
+        self._line(text, always=True)
+
+    def _line(self, text: str, always: bool) -> None:
+        if self.tty and self._last:
+            print(file=self.stream, flush=True)
+        self._last = ''
+        if always or not self.quiet:
             print(text, file=self.stream, flush=True)
 
     def end(self) -> None:

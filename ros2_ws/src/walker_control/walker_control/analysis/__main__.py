@@ -1,0 +1,7 @@
+"""``python -m walker_control.analysis``: the ``control_analysis`` command line."""
+
+import sys
+
+from walker_control.analysis.command import main
+
+sys.exit(main())
