@@ -6,8 +6,15 @@ import os
 from collections.abc import Iterator
 
 import pytest
+from hypothesis import settings
 
 from ros_test_support import isolated_domain, ros_environment
+
+
+# Property tests are judged by what they find, not by how fast a loaded machine runs an example:
+# no per-example deadline, and the same examples on every run.
+settings.register_profile('walker', deadline=None, derandomize=True)
+settings.load_profile('walker')
 
 
 def pytest_configure(config: pytest.Config) -> None:
