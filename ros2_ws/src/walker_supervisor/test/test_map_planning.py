@@ -51,12 +51,13 @@ def test_the_first_stance_anchors_the_map_and_surveys_the_other_node():
     survey = planning.map
     assert survey.anchor == 'n1_1' and survey.surveyed('n2_1')
     # the heading is the nominal direction's: the surveyed node lies on it, at the measured
-    # distance and height
+    # distance and height (fused with its 2 mm prior, the joints' 0.2 mm survey moves it
+    # nearly all the way from the nominal place)
     measured = survey.position('n2_1')
     tip = KIN.forward(theta)[:3]
     assert np.linalg.norm(measured - TRUSS.position('n1_1')) == pytest.approx(
-        np.linalg.norm(tip), abs=1e-12)
-    assert measured[2] == pytest.approx(OFF[2], abs=1e-12)
+        np.linalg.norm(tip), abs=0.05 * np.linalg.norm(OFF))
+    assert measured[2] == pytest.approx(OFF[2], abs=0.05 * OFF[2])
     np.testing.assert_allclose(targets.frame.to_truss(targets.point_to), TRUSS.position('n1_2'),
                                atol=1e-12)
 
@@ -82,19 +83,27 @@ def test_a_screw_in_surveys_the_node_and_the_next_stance_surveys_it_again():
     at_hole = KIN.inverse([*targets.frame.to_base(hole), 0.0, KIN.forward(targets.at_to)[4]],
                           reference=targets.at_to)
     planning.screwed_in(STEP, targets, at_hole)
-    np.testing.assert_allclose(planning.map.position('n1_2'), hole, atol=1e-9)
+    # 1.5 mm off its nominal place, the node is surveyed where the hole is: the joints' 0.2 mm
+    # outweigh the 2 mm prior
+    screwed = planning.map.position('n1_2')
+    assert np.linalg.norm(screwed - hole) < 0.05 * np.linalg.norm(hole - TRUSS.position('n1_2'))
     # the next step pivots on b, in n1_2; its stance is the same joints in b's role order
     following = PlannedStep('b', 'n1_2', 'n1_1', 'n0_2',
                             step_sweep(TRUSS, 'n1_2', 'n1_1', 'n0_2'))
     relaxed = at_hole + np.array([0.0004, 0.0, 0.0, 0.0, 0.0])  # joint 1 slid in relaxing
     next_targets = planning.targets(following, relaxed[::-1])
     moved = planning.map.position('n1_2')
-    np.testing.assert_allclose(moved, targets.frame.to_truss(KIN.forward(relaxed)[:3]),
-                               atol=1e-9)
+    relaxed_point = targets.frame.to_truss(KIN.forward(relaxed)[:3])
+    # the relaxed reading replaces the screw-in's (the same joints' offsets: not two readings)
+    assert np.linalg.norm(moved - relaxed_point) < 0.05 * np.linalg.norm(relaxed_point - hole)
+    np.testing.assert_allclose(planning.map.estimate('n1_2').covariance,
+                               planning.map.measure('n1_2', targets.frame, 'n1_1', KIN,
+                                                    relaxed).covariance, rtol=0.05)
     # the new base frame sits on the node as surveyed, and its extraction on the tip in n1_1
+    # (to within the few hundredths of a millimetre the prior moved the base's estimate)
     np.testing.assert_allclose(next_targets.frame.origin, moved)
     np.testing.assert_allclose(next_targets.frame.to_truss(
-        next_targets.point_above_from - [0.0, 0.0, HEIGHT]), TRUSS.position('n1_1'), atol=1e-9)
+        next_targets.point_above_from - [0.0, 0.0, HEIGHT]), TRUSS.position('n1_1'), atol=1e-4)
 
 
 def test_the_search_follows_the_targets_uncertainty_and_zero_radius_turns_it_off():
