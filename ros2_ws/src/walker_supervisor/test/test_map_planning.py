@@ -139,3 +139,26 @@ def test_the_coarse_motion_keeps_its_starts_radius_and_height_and_fine_takes_the
                                 HEIGHT)
     assert nominal.coarse_to is None
     np.testing.assert_array_equal(nominal.coarse_goal[1], nominal.point_above_to)
+
+
+@pytest.mark.parametrize('side', [1.0, -1.0])
+def test_a_half_turn_to_a_node_off_its_bearing_ends_its_coarse_motion_opposite_its_start(side):
+    # a straight step (a half turn about n1_1), the target 1.5 mm across the line either way:
+    # its bearing is a hair short of or past 180 deg, the coarse motion's is 180 deg exactly
+    step = PlannedStep('a', 'n1_1', 'n2_1', 'n0_1', step_sweep(TRUSS, 'n1_1', 'n2_1', 'n0_1'))
+    planning = _planning()
+    theta = _stance(0.0, TRUSS.position('n2_1'))
+    planning.targets(step, theta)
+    displaced = TRUSS.position('n0_1') + np.array([0.0, side * 0.0015, 0.0])
+    planning.map.load({**planning.map.to_dict(), 'nodes': {
+        **planning.map.to_dict()['nodes'],
+        'n0_1': {'position': displaced.tolist(), 'covariance': (np.eye(3) * 1e-8).tolist()}}})
+    targets = planning.targets(step, theta)
+    joints, point = targets.coarse_goal
+    start = targets.point_above_from
+    np.testing.assert_allclose(point, [-start[0], -start[1], start[2]], atol=1e-12)
+    np.testing.assert_allclose(KIN.forward(joints)[:3], point, atol=1e-9)
+    # the base yaw turns by the route's half turn, the way it chose
+    assert joints[0] - theta[0] == pytest.approx(step.sweep, abs=1e-6)
+    # FINE is left the millimetres to the target
+    assert 0.001 < np.linalg.norm(targets.point_above_to - point) < 0.003
