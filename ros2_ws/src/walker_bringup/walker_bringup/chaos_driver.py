@@ -1,5 +1,9 @@
 """Apply a chaos plan to a running graph: faults on its processes, the walk kept going.
 
+An operator tool for trying a graph's fault tolerance, run by
+``python3 benchmarks/chaos_benchmark.py`` and documented in docs/reliability.md ("The chaos
+driver as an operator tool").
+
 The driver is the operator of a ``run_all.py --serve`` graph under fire. It walks the walker
 back and forth between two truss nodes (``walk_to`` goals), and applies the faults of a plan
 (:func:`walker_bringup.core.chaos.plan_faults`) one after another: it waits for the fault's

@@ -1,5 +1,8 @@
 """A lossy, late link between a publisher and its subscribers, for fault injection.
 
+The decisions of the ``lossy_link`` operator tool, documented in docs/ground_station.md
+("Operator tools: the lossy link and the transport probe").
+
 ROS-free: :class:`LossyLink` decides, message by message, whether a message is dropped and when
 a kept one is delivered. The ``lossy_link`` node (:mod:`walker_bringup.lossy_link_node`) puts it
 between a topic and a renamed copy of it that the node under test is remapped to read, so that

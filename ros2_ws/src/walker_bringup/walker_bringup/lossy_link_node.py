@@ -1,6 +1,7 @@
 r"""ROS layer: the ``lossy_link`` node relays a topic to a renamed copy, dropping and delaying.
 
-Fault injection for a link of the graph (``ros2 run walker_bringup lossy_link``)::
+An operator tool, documented in docs/ground_station.md ("Operator tools: the lossy link and
+the transport probe"): fault injection for a link of the graph::
 
     ros2 run walker_bringup lossy_link --ros-args -r __ns:=/walker \
         -p input:=controllers/vertex_joint/setpoint \
@@ -160,10 +161,7 @@ class LossyLinkNode(Node):
 def main(args: list[str] | None = None) -> int:
     """Run the link until interrupted; exit codes of :mod:`walker_runtime.node_main`.
 
-    The default executor: a test tool needs no speed. (Chosen when the link was seen to end in
-    SIGABRT as it stopped under the events executor, then taken for a race with that
-    executor's callbacks; it was a hang in the middleware's teardown that the stop escalation
-    ended: docs/faults.md, found and not fixed.)
+    The default executor: a tool for trying a link needs no speed.
     """
     return run_node(LossyLinkNode, 'lossy_link', args, executor=SingleThreadedExecutor,
                     before_destroy=LossyLinkNode.report)

@@ -1,5 +1,8 @@
 """A talker and a listener that show whether the DDS transport delivers between two processes.
 
+An operator tool, documented in docs/ground_station.md ("Operator tools: the lossy link and the
+transport probe").
+
 What the deaf-reader test and the transport benchmark start, two processes of one ROS domain,
 each with the environment under test (the rmw default, shared memory; or the UDP-on-loopback
 profile, :mod:`walker_bringup.transport`)::

@@ -1,5 +1,8 @@
 """A seeded chaos run: which node fails, in which phase of a step, how, and what it came to.
 
+Part of the chaos operator tool, documented in docs/reliability.md ("The chaos driver as an
+operator tool").
+
 The ROS-free half of the chaos driver (:mod:`walker_bringup.chaos_driver`). From a seed,
 :func:`plan_faults` lays out the faults of a run: which node of the graph's nine (the recorder,
 the plant, the five joint controllers, the planner, the supervisor), in which of the four
