@@ -41,3 +41,22 @@ def test_a_target_off_the_truss_ends_unreached_with_the_reason(tmp_path, capsys)
     assert code == 1 and 'not on the truss' in printed
     summary = json.loads((tmp_path / 'summary.json').read_text())
     assert not summary['reached'] and summary['steps'] == []
+
+
+def test_a_walks_truss_survey_starts_the_next_walk_and_a_bad_one_is_refused(tmp_path, capsys):
+    first, second, bad = tmp_path / 'first', tmp_path / 'second', tmp_path / 'bad.yaml'
+    assert main(['--headless', '--target', 'n1_2', '--out', str(first), '--no-record',
+                 '--quiet']) == 0
+    survey = first / 'truss_survey.yaml'
+    assert survey.exists(), 'a headless walk writes the survey of the nodes it screwed into'
+    assert main(['--headless', '--target', 'n1_2', '--out', str(second), '--no-record',
+                 '--quiet', '--truss-survey', str(survey)]) == 0
+    assert (second / 'truss_survey.yaml').exists()
+    capsys.readouterr()
+    bad.write_text('- not a mapping\n')
+    assert main(['--headless', '--target', 'n1_2', '--out', str(tmp_path / 'third'),
+                 '--no-record', '--quiet', '--truss-survey', str(bad)]) == 2
+    assert str(bad) in capsys.readouterr().out
+    assert not (tmp_path / 'third').exists(), 'a refused survey writes nothing'
+    assert main(['--target', 'n1_2', '--truss-survey', str(survey), '--no-record']) == 2
+    assert 'headless' in capsys.readouterr().out
