@@ -5,9 +5,8 @@ of ``walker_core``, is read (not imported) by :mod:`ros_free`; the checker itsel
 small trees written for the test.
 """
 
-import textwrap
-
 import pytest
+from package_tree import write_package
 from ros_free import is_ros_module, ros_free_violations, workspace_modules
 from ros_test_support import REPO_ROOT
 
@@ -39,23 +38,10 @@ def test_ros_modules_are_told_by_name(name, ros):
     assert is_ros_module(name) is ros
 
 
-def _package(root, name, files):
-    """Write a ROS package ``name`` with ``files`` ({relative path: source}) under ``root``."""
-    package = root / name
-    (package / name).mkdir(parents=True)
-    (package / 'package.xml').write_text(f'<package format="3"><name>{name}</name></package>\n')
-    (package / 'setup.py').write_text('')
-    (package / name / '__init__.py').write_text('')
-    for relative, text in files.items():
-        path = package / name / relative
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(textwrap.dedent(text))
-
-
 @pytest.fixture
 def clean_tree(tmp_path):
-    _package(tmp_path, 'walker_core', {'model.py': 'import numpy\n'})
-    _package(tmp_path, 'demo', {
+    write_package(tmp_path, 'walker_core', {'model.py': 'import numpy\n'})
+    write_package(tmp_path, 'demo', {
         'core/__init__.py': '',
         'core/law.py': 'from walker_core import model\nfrom . import helpers\n',
         'core/helpers.py': 'import math\n',

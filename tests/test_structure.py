@@ -4,9 +4,8 @@ No node file over 400 lines, no import circle among production modules, every co
 resolves, every import of a workspace package declared in package.xml (:mod:`structure`).
 """
 
-import textwrap
-
 import pytest
+from package_tree import write_package
 import structure
 from ros_test_support import REPO_ROOT
 
@@ -42,31 +41,10 @@ def test_the_checks_see_the_workspace():
     assert structure.long_node_files(SOURCE, limit=100)  # nodes are found, and measured
 
 
-def _package(root, name, files, depends=()):
-    """Write a ROS package ``name`` with ``files`` ({relative path: source}) under ``root``."""
-    package = root / name
-    (package / name).mkdir(parents=True)
-    tags = ''.join(f'<exec_depend>{d}</exec_depend>' for d in depends)
-    (package / 'package.xml').write_text(
-        f'<package format="3"><name>{name}</name>{tags}</package>\n')
-    (package / 'setup.py').write_text(textwrap.dedent(f"""\
-        from setuptools import setup
-        setup(name='{name}', entry_points={{'console_scripts': [
-            '{name}_tool = {name}.tool:main',
-        ]}})
-        """))
-    (package / name / '__init__.py').write_text('')
-    (package / name / 'tool.py').write_text('def main():\n    return 0\n')
-    for relative, text in files.items():
-        path = package / name / relative
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(textwrap.dedent(text))
-
-
 @pytest.fixture
 def clean_tree(tmp_path):
-    _package(tmp_path, 'walker_core', {'model.py': 'import numpy\n'})
-    _package(tmp_path, 'demo', {
+    write_package(tmp_path, 'walker_core', {'model.py': 'import numpy\n'})
+    write_package(tmp_path, 'demo', {
         'core/__init__.py': '',
         'core/law.py': 'from walker_core import model\nfrom . import helpers\n',
         'core/helpers.py': 'import math\n',
@@ -122,7 +100,7 @@ def test_a_console_script_without_its_function_or_module_fails(clean_tree):
 
 
 def test_an_undeclared_workspace_import_fails_even_inside_a_function(clean_tree):
-    _package(clean_tree, 'other', {})
+    write_package(clean_tree, 'other', {})
     helpers = clean_tree / 'demo' / 'demo' / 'core' / 'helpers.py'
     helpers.write_text('def later():\n    from other import tool\n')
     found = structure.undeclared_dependencies(clean_tree)
