@@ -18,7 +18,7 @@ from walker_control.core.config import ControllerSettings
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import JointController, Measurement
 from walker_control.core.modes import Mode
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, other_gripper
 from walker_sim.core.plant import PlantState, WalkerPlant
 
 __all__ = ['Record', 'ClosedLoop']
@@ -102,11 +102,13 @@ class ClosedLoop:
     def tip_and_fk(self, state: PlantState) -> tuple[np.ndarray, np.ndarray]:
         """Return the true tip and the forward kinematics of the joints [m], truss frame.
 
-        The base gripper is screwed in, so its true pose carries the kinematics' base frame.
+        The base gripper is screwed in, so its true pose carries the kinematics' base frame;
+        the tip is the gripper at the chain's other end (while both are attached the plant's
+        ``state.tip`` is the gripper the next step moves, which may be that base).
         """
         base = state.poses[state.base].matrix()
         fk = base @ self.plant.kinematics.forward_transform(state.position)
-        return state.poses[state.tip].position.copy(), fk[:3, 3].copy()
+        return state.poses[other_gripper(state.base)].position.copy(), fk[:3, 3].copy()
 
     def _log(self) -> None:
         tip, fk_tip = self.tip_and_fk(self.state)
