@@ -9,6 +9,8 @@ import pytest
 from walker_supervisor.core import insertion, transitions
 from walker_supervisor.core.descent_contact import (
     CONTACT_DWELL, CONTACT_SPEED, SHORT_OF_THE_END, DescentContact)
+from walker_supervisor.core.commands import CancelTrajectory, Notice, TrajectoryRequest
+from walker_supervisor.core.phases import Stage
 from walker_supervisor.core.step_run import StepRun
 
 from sequencer_world import KIN, SUPERVISOR, TRUSS, START
@@ -92,9 +94,10 @@ def test_no_overtravel_descends_to_the_nominal_mouth_as_before():
     np.testing.assert_array_equal(request.goal_point, run.targets.point_to)
 
 
-def test_a_streaming_descent_stopped_by_the_face_says_where_it_felt_it_once():
+def test_a_descent_stopped_by_the_face_says_where_once_and_stops_pressing_on_the_axis():
     run = run_at_insertion(OVERTRAVEL)
     transitions.enter_insertion(run, 0.0)
+    run.motions.running = True
     mouth = run.targets.point_to
     said = []
     for tick, height in enumerate(stopped_at(-0.001, start=0.01, ticks=60)):
@@ -102,5 +105,52 @@ def test_a_streaming_descent_stopped_by_the_face_says_where_it_felt_it_once():
         run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
                                          reference=run.targets.at_to))
         said += insertion.feel_the_face(run, tick * TICK)
-    (notice,) = said
+    notice, cancel, line = said
     assert notice.message == "the descent met the node's face 1.00 mm below the nominal mouth"
+    assert isinstance(cancel, CancelTrajectory)
+    # the rest of the descent (2 mm deeper) would push the tip sideways: a line to a light
+    # press below the contact, on the hole's axis, replaces it
+    assert line.purpose == 'insertion'
+    np.testing.assert_allclose(line.goal_point[:2], mouth[:2], atol=1e-12)
+    assert line.goal_point[2] == pytest.approx(mouth[2] - 0.001 - insertion.MOUTH_PRESS,
+                                               abs=1e-6)
+    np.testing.assert_allclose(KIN.forward(line.goal)[:3], line.goal_point, atol=1e-9)
+
+
+def test_a_face_felt_once_the_descent_has_ended_is_pressed_lightly_before_the_tip_is_judged():
+    run = run_at_insertion(OVERTRAVEL)
+    transitions.enter_insertion(run, 0.0)
+    run.stage = Stage.SETTLING  # the descent's stream ended above the face
+    mouth = run.targets.point_to
+    said = []
+    heights = stopped_at(0.0, start=0.004, ticks=60)
+    for tick, height in enumerate(heights):
+        moving = tick == 0 or height != heights[tick - 1]
+        velocities = np.full(5, 1.0 if moving else 0.0)
+        point = np.array([mouth[0], mouth[1], mouth[2] + height])
+        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
+                                         reference=run.targets.at_to))
+        said += insertion.at_mouth(run, tick * TICK, velocities,
+                                   {'a': 'attached', 'b': 'free'})
+        if said:
+            break
+    assert [type(command) for command in said] == [Notice, TrajectoryRequest]
+    # judged once the joints were still for the mouth's settling time, where the face held it
+    assert said[0].message == "the descent met the node's face at the nominal mouth"
+    assert tick * TICK >= 10 * TICK + SUPERVISOR.mouth_settle_time - 1e-9
+    assert run.stage == Stage.DESCENDING  # its end is waited for, then the tip is judged
+    assert said[1].goal_point[2] == pytest.approx(mouth[2] - insertion.MOUTH_PRESS, abs=1e-6)
+
+
+def test_without_overtravel_the_face_is_only_said():
+    run = run_at_insertion(0.0)
+    transitions.enter_insertion(run, 0.0)
+    run.motions.running = True
+    mouth = run.targets.point_to
+    said = []
+    for tick, height in enumerate(stopped_at(-0.0002, start=0.01, ticks=60)):
+        point = np.array([mouth[0], mouth[1], mouth[2] + height])
+        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
+                                         reference=run.targets.at_to))
+        said += insertion.feel_the_face(run, tick * TICK)
+    assert [type(command) for command in said] == [Notice]

@@ -52,16 +52,47 @@ MOUTH_PRESS = 3e-4
 def feel_the_face(run: StepRun, now: float) -> list:
     """Watch a streaming descent for the node's face (:mod:`.descent_contact`).
 
-    Contact is where the gripper will be screwed in: the descent's last setpoints (at most
-    ``insertion_overtravel`` past the nominal mouth) keep it pressed on the face until the
-    descent ends, and once the joints are still the tip is judged at the mouth. Only said
-    here: the descent goes on to its end.
+    Contact is where the gripper will be screwed in. Once it is felt, the rest of the descent
+    (down to ``insertion_overtravel`` past the nominal mouth) is cancelled and replaced by a
+    short line to :data:`MOUTH_PRESS` below the contact, on the hole's axis: the descent's
+    last setpoints would press the gripper into the face a millimetre or two deep, and the
+    joints pressing that hard push the tip sideways by as much as the insertion tolerance.
+    When that line ends and the joints are still, the tip is judged at the mouth. A descent
+    whose stream ends before the tip meets the face is judged at rest instead
+    (:func:`at_mouth`), and pressed lightly the same way.
     """
     contact = run.tries.contact
     if contact is None or not contact.update(now, float(run.tip()[2])):
         return []
     contact.judged = True
-    return [Notice(_felt(contact), 'info')]
+    if run.parameters.insertion_overtravel <= 0.0:
+        return [Notice(_felt(contact), 'info')]  # the descent ends at the mouth: no deeper
+    return [Notice(_felt(contact), 'info'), *_press_lightly(run)]
+
+
+def _press_lightly(run: StepRun) -> list:
+    """Replace the descent's press on the face by a light one, on the hole's axis."""
+    joints, point = _on_the_face(run, run.tries.contact)
+    stop = [CancelTrajectory()] if run.motions.running else []
+    run.motions.running = False
+    return [*stop, run.trajectory('insertion', run.theta, joints, run.tip(), point)]
+
+
+def _on_the_face(run: StepRun, contact: DescentContact) -> tuple[np.ndarray, np.ndarray]:
+    """Return the joints [rad] and point [m] on the hole's axis :data:`MOUTH_PRESS` below contact.
+
+    The point at the nominal mouth (and its joints) if the face was not felt or that point is
+    out of reach.
+    """
+    t = run.targets
+    if not contact.felt:
+        return t.at_to, t.point_to
+    point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
+    try:
+        joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
+    except KinematicsError:
+        return t.at_to, t.point_to
+    return np.asarray(joints, dtype=float), point
 
 
 def _felt(contact: DescentContact) -> str:
@@ -88,9 +119,15 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
     if not run.settled(now, velocities, settle_wait(run)):
         return []
     parameters = run.parameters
+    fresh = run.tries.contact is not None and not run.tries.contact.judged
     notices = _judge_contact(run)
     if run.mouth_offset() > parameters.descent_axis_tolerance:
         return notices + left_the_axis(run, now)  # too far to slide at the mouth's height
+    if fresh and run.tries.contact.felt:
+        # the descent's stream ended above the face and the tip came to rest on it behind
+        # the setpoints, pressed as deep as the overtravel: lighten that before judging it
+        run.stage = Stage.DESCENDING
+        return notices + _press_lightly(run)
     if run.mouth_offset() > parameters.insertion_alignment \
             and run.tries.mouth_lines < MAX_MOUTH_LINES:
         return notices + _align(run)
@@ -127,16 +164,11 @@ def _align(run: StepRun) -> list:
     """
     run.tries.mouth_lines += 1
     run.stage = Stage.ALIGNING
-    t = run.targets
     contact = run.tries.contact
-    joints, point = t.at_to, t.point_to
-    if contact is not None and contact.felt:
-        point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
-        try:
-            joints = np.asarray(run.kinematics.inverse([*point, 0.0, t.at_to[4]],
-                                                       reference=t.at_to), dtype=float)
-        except KinematicsError:
-            joints, point = t.at_to, t.point_to
+    if contact is None:
+        joints, point = run.targets.at_to, run.targets.point_to
+    else:
+        joints, point = _on_the_face(run, contact)
     return [run.trajectory('fine', run.theta, joints, run.tip(), point)]
 
 
