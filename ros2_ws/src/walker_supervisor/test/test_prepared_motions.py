@@ -119,3 +119,14 @@ def test_answers_are_taken_once_by_the_same_motion_and_forgotten_with_their_step
     motions.clear()
     assert motions.take(LIFT) is None
     assert motions.answered(3, _answer('lift', 0.29)) is None, 'an answer for a step gone'
+
+
+def test_a_motion_asked_ahead_behind_another_is_taken_without_comparing_their_arrays():
+    # two lifts of the same kind, to different heights: their requests differ only in arrays
+    higher = _request('extraction', 0.04)
+    motions = PreparedMotions(Joiner())
+    motions.add(LIFT, 1)
+    motions.add(higher, 2)
+    assert motions.take(higher) == (2, PENDING)
+    assert motions.take(LIFT) == (1, PENDING)
+    assert motions.take(higher) is None and motions.take(LIFT) is None

@@ -57,8 +57,8 @@ def test_a_survey_adds_the_base_nodes_uncertainty():
     theta = _joints_at(DISPLACED)
     from_anchor = TrussMap(TRUSS, prior_std=0.001, joint_std=2e-4)
     from_anchor.anchor_at('n1_1')
-    anchored = from_anchor.survey('n2_1', FRAME, 'n1_1', KIN, theta).covariance
-    unanchored = survey.survey('n2_1', FRAME, 'n1_1', KIN, theta).covariance
+    anchored = from_anchor.measure('n2_1', FRAME, 'n1_1', KIN, theta).covariance
+    unanchored = survey.measure('n2_1', FRAME, 'n1_1', KIN, theta).covariance
     np.testing.assert_allclose(unanchored - anchored, np.eye(3) * 0.001 ** 2, atol=1e-15)
 
 

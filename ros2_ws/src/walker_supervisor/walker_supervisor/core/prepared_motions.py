@@ -134,9 +134,9 @@ class PreparedMotions:
         The answer is :data:`PENDING` while it is not back. An answer that came back
         unsuccessful is not taken: the motion is planned afresh.
         """
-        for entry in self._entries:
+        for index, entry in enumerate(self._entries):
             if entry.request.same_motion(request):
-                self._entries.remove(entry)
+                del self._entries[index]  # by place: entries holding arrays do not compare
                 if entry.answer is not PENDING and (entry.answer is None
                                                     or not entry.answer.success):
                     return None

@@ -154,7 +154,7 @@ def plan_step_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plan
     above_to = kinematics.inverse([*(point_to + lift), 0.0, reference[4]], reference=reference)
     at_to = kinematics.inverse([*point_to, 0.0, reference[4]], reference=above_to)
     coarse_to, point_coarse_to = _coarse_end(kinematics, point_from + lift, point_to + lift,
-                                             reference)
+                                             reference, sweep)
     return StepTargets(frame, sweep, theta, above_from, above_to, at_to,
                        point_from + lift, point_to + lift, point_to, coarse_to, point_coarse_to)
 
@@ -164,13 +164,23 @@ COARSE_END_TOLERANCE = 1e-6
 
 
 def _coarse_end(kinematics: WalkerKinematics, start: np.ndarray, goal: np.ndarray,
-                reference: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+                reference: np.ndarray, sweep: float = 0.0,
+                ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Return where the node-to-node motion from ``start`` towards ``goal`` [m] ends.
 
     At ``goal``'s bearing about the base yaw axis, at ``start``'s distance from it and height
-    (the motion's own geometry); (None, None) when that is ``goal`` itself.
+    (the motion's own geometry); (None, None) when that is ``goal`` itself. A half turn
+    (``sweep`` [rad] +-pi) ends exactly opposite its start: with the nodes off their places,
+    the target's bearing is a hair short of or past 180 deg, and past it the planner would
+    have to turn the other way than the route chose (a sweep is at most 180 deg); FINE takes
+    the tip the millimetres left.
     """
     radius, goal_radius = math.hypot(start[0], start[1]), math.hypot(goal[0], goal[1])
+    if abs(abs(sweep) - math.pi) < 1e-9:
+        point = np.array([-start[0], -start[1], start[2]])
+        if np.linalg.norm(point - goal) <= COARSE_END_TOLERANCE:
+            return None, None
+        return kinematics.inverse([*point, 0.0, reference[4]], reference=reference), point
     if abs(radius - goal_radius) <= COARSE_END_TOLERANCE \
             and abs(start[2] - goal[2]) <= COARSE_END_TOLERANCE:
         return None, None

@@ -11,11 +11,20 @@ covariance:
   along x, y and z);
 * the node the walk starts from (the base of the first stance) anchors the frame: it is taken
   at its nominal place with no uncertainty, so every other estimate is relative to it;
-* a surveyed node is at the base frame's image of the forward kinematics
-  (:meth:`TrussMap.survey`), with the base node's covariance plus the joint readings' noise
+* a survey measures a node at the base frame's image of the forward kinematics
+  (:meth:`TrussMap.measure`), with the base node's covariance plus the joint readings' noise
   propagated through the Jacobian of eq (1): ``C = C_base + R J S J^T R^T``, ``S`` the
   joint readings' variances (``joint_reading_std``, offset and noise together), ``R`` the base
-  frame's heading.
+  frame's heading. The base node's covariance makes the measurement's uncertainty grow along
+  the chain of stances it was taken through;
+* a surveyed node's estimate is that measurement fused with what the map knew of the node
+  before (:meth:`TrussMap.survey`, :func:`fuse`: the least-squares update of two estimates
+  weighted by their covariances): the nominal place with the prior, or an earlier walk's
+  estimate. A survey taken through a long chain (a large covariance) barely moves a node known
+  well, and the nominal place bounds the drift that the joints' constant calibration offsets
+  would otherwise add step after step. A node surveyed again from the same base (the relaxed
+  stance after a screw-in) takes the new reading in place of the old one, fused with the same
+  prior: the two readings share their offsets and are not two measurements.
 
 The base frame's heading is taken again from each stance (both grippers attached) through the
 two nodes' estimates, so it follows the map; its own error is that of the two estimates and is
@@ -38,7 +47,7 @@ from walker_core.truss import Truss
 from walker_supervisor.core.step_geometry import BaseFrame
 
 __all__ = ['NodeEstimate', 'TrussMap', 'SurveyFileError', 'SURVEY_FORMAT', 'survey_covariance',
-           'node_frame_name', 'TRUSS_FRAME']
+           'fuse', 'node_frame_name', 'TRUSS_FRAME']
 
 #: The frame the map's positions are in (the viz's world frame).
 TRUSS_FRAME = 'truss'
@@ -95,6 +104,32 @@ def survey_covariance(kinematics: WalkerKinematics, theta_roles: np.ndarray, hea
     return jac_truss @ np.diag(np.asarray(joint_std, dtype=float) ** 2) @ jac_truss.T
 
 
+def fuse(prior: NodeEstimate, measured: NodeEstimate) -> NodeEstimate:
+    """Fuse two independent estimates of a node, weighted by their covariances.
+
+    The Kalman (least-squares) update of ``prior`` by a direct measurement of the position:
+    ``K = P (P + C)^-1``, ``x = x_p + K (x_m - x_p)``, covariance ``(I - K) P (I - K)^T
+    + K C K^T`` (Joseph's form: symmetric and positive semi-definite). A prior with no
+    uncertainty (the anchor) is kept; a measurement with none is taken as it is.
+
+    Parameters
+    ----------
+    prior, measured : NodeEstimate
+        Positions [m] and covariances [m^2] in the truss frame.
+
+    Returns
+    -------
+    NodeEstimate
+        The fused estimate, surveyed; its covariance no larger than either's.
+    """
+    p, c = prior.covariance, measured.covariance
+    gain = p @ np.linalg.pinv(p + c, hermitian=True)
+    rest = np.eye(3) - gain
+    position = prior.position + gain @ (measured.position - prior.position)
+    covariance = rest @ p @ rest.T + gain @ c @ gain.T
+    return NodeEstimate(position, (covariance + covariance.T) / 2.0, True)
+
+
 class TrussMap:
     """Every node's estimated place, nominal until the joints survey it.
 
@@ -118,6 +153,8 @@ class TrussMap:
         self.prior_std = float(prior_std)
         self.joint_std = std
         self._surveyed: dict[str, NodeEstimate] = {}
+        # per node, the base it was last surveyed from and the estimate before that survey
+        self._prior: dict[str, tuple[str, NodeEstimate]] = {}
         self.anchor: str = ''
         self.version = 0  # grows with every change: a publisher re-latches on it
 
@@ -154,9 +191,9 @@ class TrussMap:
         self._surveyed[node] = NodeEstimate(self.truss.position(node), np.zeros((3, 3)), True)
         self.version += 1
 
-    def survey(self, node: str, frame: BaseFrame, base_node: str,
-               kinematics: WalkerKinematics, theta_roles: np.ndarray) -> NodeEstimate:
-        """Survey ``node`` from the joints, both grippers attached.
+    def measure(self, node: str, frame: BaseFrame, base_node: str,
+                kinematics: WalkerKinematics, theta_roles: np.ndarray) -> NodeEstimate:
+        """Measure ``node`` from the joints, both grippers attached; the map is unchanged.
 
         Parameters
         ----------
@@ -172,7 +209,8 @@ class TrussMap:
         Returns
         -------
         NodeEstimate
-            The new estimate (also kept).
+            The forward kinematics' position [m] in the truss frame, with the base node's
+            covariance plus the readings' through the Jacobian [m^2].
         """
         if node == base_node:
             raise ValueError(f'cannot survey the base node {node} from itself')
@@ -181,10 +219,30 @@ class TrussMap:
         position = frame.to_truss(kinematics.forward(theta)[:3])
         covariance = self.estimate(base_node).covariance + survey_covariance(
             kinematics, theta, frame.heading, self.joint_std)
-        estimate = NodeEstimate(position, covariance, True)
-        if node != self.anchor:
-            self._surveyed[node] = estimate
-            self.version += 1
+        return NodeEstimate(position, covariance, True)
+
+    def survey(self, node: str, frame: BaseFrame, base_node: str,
+               kinematics: WalkerKinematics, theta_roles: np.ndarray) -> NodeEstimate:
+        """Survey ``node`` from the joints, fused into the map (:meth:`measure`, :func:`fuse`).
+
+        The prior is what the map knew of the node before it was surveyed from ``base_node``:
+        surveyed from the same base again, the new reading replaces the last one.
+
+        Returns
+        -------
+        NodeEstimate
+            The new estimate (also kept; the anchor is never moved).
+        """
+        measured = self.measure(node, frame, base_node, kinematics, theta_roles)
+        if node == self.anchor:
+            return self.estimate(node)
+        last_base, prior = self._prior.get(node, ('', None))
+        if prior is None or last_base != base_node:
+            prior = self.estimate(node)
+            self._prior[node] = (base_node, prior)
+        estimate = fuse(prior, measured)
+        self._surveyed[node] = estimate
+        self.version += 1
         return estimate
 
     def frames(self) -> list[tuple[str, np.ndarray, bool]]:
@@ -230,6 +288,7 @@ class TrussMap:
         if anchor and anchor not in taken:
             raise SurveyFileError(f'the anchor {anchor!r} has no survey entry')
         self._surveyed = taken
+        self._prior = {}
         self.anchor = anchor
         self.version += 1
 
