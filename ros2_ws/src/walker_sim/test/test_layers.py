@@ -3,8 +3,8 @@
 import subprocess
 import sys
 
-CORE_MODULES = ['bullet', 'commands', 'config', 'flexibility', 'grippers', 'identification',
-                'motor', 'plant', 'render']
+CORE_MODULES = ['bullet', 'commands', 'config', 'driven_modes', 'flexibility', 'grippers',
+                'identification', 'motor', 'plant', 'render']
 
 
 def test_the_core_imports_without_rclpy():

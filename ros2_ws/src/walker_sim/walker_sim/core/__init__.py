@@ -5,7 +5,9 @@ Modules: :mod:`~walker_sim.core.plant` (the plant behind ``reset()``, ``step(tor
 :mod:`~walker_sim.core.flexibility` (bending springs sized for the paper's modes),
 :mod:`~walker_sim.core.grippers` (tolerance, jamming, interlock),
 :mod:`~walker_sim.core.commands` (effort commands, watchdog, sim-time lock-step),
-:mod:`~walker_sim.core.identification` (measuring the modes), :mod:`~walker_sim.core.render`
+:mod:`~walker_sim.core.identification` (measuring the modes),
+:mod:`~walker_sim.core.driven_modes` (the modes joint 1's coarse motion excites, held or under its
+loop), :mod:`~walker_sim.core.render`
 (headless images), :mod:`~walker_sim.core.config` (the ``sim.*`` parameters),
 :mod:`~walker_sim.core.bullet` (pybullet helpers).
 
