@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy import signal
 
 from walker_control.core.config import load_controller_settings
 from walker_control.core.lowpass import design_lowpass_sos
@@ -16,8 +17,11 @@ from walker_control.core.modes import Mode
 from walker_sim.core.driven_modes import (
     DRIVEN_JOINT, JointLoop, Plane, dominant_mode, driven_modes, held_modes, stance_at,
     stance_model)
+from walker_sim.core.config import StartConfiguration
 from walker_sim.core.flexibility import default_stance
-from walker_sim.core.identification import MAX_DAMPING
+from walker_sim.core.identification import (
+    MAX_DAMPING, RIG_SOLVER_ITERATIONS, RIG_SOLVER_RESIDUAL, fit_modes)
+from walker_sim.core.plant import WalkerPlant
 
 
 @pytest.fixture(scope='module')
@@ -70,6 +74,57 @@ def test_a_soft_loop_leaves_joint_one_at_its_free_joint_resonance(tuning, defaul
     modes = driven_modes(default, tuning, loop, settings.sample_time, visible=0.0)
     lowest = min(m.frequency for m in modes if m.plane == Plane.OUT_OF_PLANE)
     assert lowest == pytest.approx(tuning.free_joint[DRIVEN_JOINT], rel=0.01)
+
+
+def _strike_under_the_coarse_loop(plant, loop, inertia, sample_time, steps):
+    """Joint 1 under its coarse loop, struck by a torque doublet; its velocity [rad/s]."""
+    held = np.ones(5, dtype=bool)
+    held[0] = False
+    plant.hold_joints(held)
+    plant.enable_friction(held)  # joint 1 slides: no stiction, as in the motion
+    start = plant.state().position[0]
+    state = np.zeros((len(loop.filter_sos), 2))
+    theta = omega = previous = 0.0
+    velocity = []
+    for k in range(steps):
+        command = (-inertia * loop.bandwidth ** 2 * theta
+                   - 2.0 * loop.damping * loop.bandwidth * inertia * omega
+                   - loop.acceleration_feedback * inertia * (omega - previous) / sample_time)
+        filtered, state = signal.sosfilt(loop.filter_sos, [command], zi=state)
+        torque = np.zeros(5)
+        torque[0] = filtered[0] + (1.0 if k < 10 else -1.0 if k < 20 else 0.0)
+        previous = omega
+        measured = plant.step(torque, sample_time)
+        theta, omega = measured.position[0] - start, measured.velocity[0]
+        velocity.append(omega)
+    return np.array(velocity[20:])
+
+
+def test_the_driven_modes_are_those_the_simulated_plant_rings_at(params, sim, tuning, settings,
+                                                                  coarse_loop):
+    """Strike joint 1 on the plant under its coarse loop, fit its ring: the linearisation's."""
+    plant = WalkerPlant(params, sim)
+    try:
+        plant.set_solver(RIG_SOLVER_ITERATIONS, RIG_SOLVER_RESIDUAL)
+        plant.enable_contact(False)
+        base = sim.start.base_node
+        plant.reset(StartConfiguration(base_gripper='a', base_node=base,
+                                       other_node=plant.truss.neighbors(base)[0],
+                                       other_attached=False, other_height=0.0))
+        stance = stance_model(params, plant.state().position)
+        loop = coarse_loop[DRIVEN_JOINT]
+        velocity = _strike_under_the_coarse_loop(plant, loop, stance.inertia[0],
+                                                 settings.sample_time, steps=2000)
+    finally:
+        plant.close()
+    time = np.arange(1, len(velocity) + 1) * settings.sample_time
+    fitted = fit_modes(time, velocity)
+    predicted = [m for m in driven_modes(stance, tuning, coarse_loop, settings.sample_time,
+                                         visible=0.0) if m.plane == Plane.OUT_OF_PLANE]
+    assert len(fitted) == len(predicted)
+    for found, mode in zip(fitted, predicted, strict=True):
+        assert found.frequency == pytest.approx(mode.frequency, rel=0.02)
+        assert found.damping == pytest.approx(mode.damping, abs=0.02)
 
 
 def test_the_driven_modes_are_positive_damped_and_out_of_the_arm_plane(tuning, approach,
