@@ -25,10 +25,12 @@ radius) from 0.5 to 1.1 m at ``Theta = 0``; joint 1's angle ``Theta`` from 0 to 
 one truss spacing; and the quarter and half turns' paths, as the planner plans them (rate
 capped: a pure rotation at one spacing) and at the torque bound (the tip pulled in to
 ``min_radius``). All at the approach height, gripper a as base. Each mode with the plant's two
-modes at the corners of the campaigns' +-15 % dispersion too. Finally the residual vibration
-(Singer and Seering's ``V``) each shaper of the shaping benchmark's design leaves at the
-dominant mode, worst over the map. Writes ``benchmarks/results/mode_map.json`` and
-``docs/images/mode_map.png``; prints the table.
+modes at the corners of the campaigns' +-15 % dispersion too. Joint 1's modes are those of its
+(out-of-plane) bending plane, numbered by frequency: each is continuous in the configuration,
+while which of them dominates can change. Finally the residual vibration (Singer and Seering's
+``V``) each shaper of the shaping benchmark's design leaves at each mode, worst over the
+dispersion, at the nodes (one spacing, where joint 1 stops) and along the turns. Writes
+``benchmarks/results/mode_map.json`` and ``docs/images/mode_map.png``; prints the table.
 """
 
 from __future__ import annotations
