@@ -115,22 +115,30 @@ def settle_wait(run: StepRun) -> float:
 
 
 def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[str, str]) -> list:
-    """Settled at the mouth: check the tip across the axis, then align it or screw in."""
+    """Settled at the mouth: check the tip across the axis, then align it or screw in.
+
+    A descent whose stream ended before the tip met the face is judged first, at rest: stopped
+    short of its end, the tip rests on the face behind setpoints as deep as the overtravel, and
+    that press is lightened (:func:`feel_the_face`) before the tip is judged across the axis.
+    """
     if not run.settled(now, velocities, settle_wait(run)):
         return []
     parameters = run.parameters
-    fresh = run.tries.contact is not None and not run.tries.contact.judged
     notices = _judge_contact(run)
     if run.mouth_offset() > parameters.descent_axis_tolerance:
         return notices + left_the_axis(run, now)  # too far to slide at the mouth's height
-    if fresh and run.tries.contact.felt:
-        # the descent's stream ended above the face and the tip came to rest on it behind
-        # the setpoints, pressed as deep as the overtravel: lighten that before judging it
+    if notices and run.tries.contact.felt:  # just felt at rest
         run.stage = Stage.DESCENDING
         return notices + _press_lightly(run)
+    return notices + _judged_at_mouth(run, now, grippers)
+
+
+def _judged_at_mouth(run: StepRun, now: float, grippers: dict[str, str]) -> list:
+    """The tip at rest on the hole's axis at the mouth: align it or screw in."""
+    parameters = run.parameters
     if run.mouth_offset() > parameters.insertion_alignment \
             and run.tries.mouth_lines < MAX_MOUTH_LINES:
-        return notices + _align(run)
+        return _align(run)
     run.stage = Stage.SCREWING
     run.tries.insertion_error = run.mouth_offset()  # the same moment as the plant's
     run.deadline = math.inf
@@ -138,7 +146,7 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
     run.gripper.answers_due += 1
     # a retry starts from 'jammed': that report is the last attempt's, not this one's
     run.gripper.state_before_screwing = grippers.get(run.step.moving_gripper, '')
-    return notices + [GripperRequest(run.step.moving_gripper, 'screw_in')]
+    return [GripperRequest(run.step.moving_gripper, 'screw_in')]
 
 
 def _judge_contact(run: StepRun) -> list:
