@@ -87,6 +87,7 @@ class WalkShell:
         self._watch_ns = round(WATCH_PERIOD * 1e9)
         self._next_tick = self._next_watch = 0  # [ns]
         self._poses: list = []  # (stamp [s], tip position [m]) since the last sample
+        self._map_version = -1  # the truss map's version last drawn
 
     @property
     def done(self) -> bool:
@@ -119,6 +120,10 @@ class WalkShell:
                 self._next_watch += self._watch_ns
             self._carry_out(runner.watch(now, now))
             self._settle()
+        survey = runner.mapped.map
+        if loop.viz is not None and survey.version != self._map_version:
+            self._map_version = survey.version  # the node latches the map's markers again
+            loop.viz.truss_map(loop.stamp, survey.estimates())
 
     def _settle(self) -> None:
         """Decide while a decision is due, and hand the runner the answers waiting."""
