@@ -10,7 +10,9 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
 from ros_test_support import write_parameter_file
 
 import walker_bringup.session
@@ -132,3 +134,18 @@ def test_a_route_walked_twice_gives_the_second_session_the_first_ones_survey(sta
     assert first.is_file() and (tmp_path / 'run' / 'walk_2' / 'walk' / 'summary.json').is_file()
     second = json.loads((tmp_path / 'run' / 'walk_2' / 'walk' / 'summary.json').read_text())
     assert second['started_from'] == str(first)
+
+
+def test_a_real_headless_step_walked_twice_gives_the_second_walk_the_first_ones_survey(
+        tmp_path):
+    summary = walks.repeated_walk(walks.headless_walk, request(tmp_path), 2)
+    assert [w['reached'] for w in summary['walks']] == [True, True] and summary['reached']
+    assert [s['walk'] for s in summary['steps']] == [1, 2]
+    first, second = (yaml.safe_load((tmp_path / 'run' / f'walk_{k}' / 'walk' /
+                                     'truss_survey.yaml').read_text()) for k in (1, 2))
+    # the second walk kept the first one's frame and knew every node the first surveyed
+    assert second['anchor'] == first['anchor'] and set(first['nodes']) <= set(second['nodes'])
+    # its survey of the step's node was fused with the first's: known better than after one
+    variance = {k: np.trace(survey['nodes']['n1_2']['covariance'])
+                for k, survey in (('first', first), ('second', second))}
+    assert variance['second'] < variance['first']
