@@ -1,5 +1,7 @@
 """A campaign's truss survey: read and checked once, given to every walk; a route walked twice."""
 
+import json
+
 import pytest
 import yaml
 
@@ -8,6 +10,8 @@ from campaign_samples import (
 from walker_campaign.campaign import main
 from walker_campaign.core.errors import SpecError
 from walker_campaign.core.plan import plan_run
+from walker_campaign.core.report import make_campaign_report
+from walker_campaign.core.results import ResultsWriter
 from walker_campaign.core.rows import combined_summary, run_rows
 from walker_campaign.core.spec import load_spec, shipped_spec, with_truss_survey
 from walker_campaign.execution import RunTask, execute_run
@@ -165,3 +169,24 @@ def test_the_shipped_twice_campaign_walks_each_truss_twice(tmp_path):
     *steps, run = execute_run(task(spec, 0, surveying_stand_in_walk), spec.document)
     assert {s['walk'] for s in steps} == {1, 2}
     assert run['walk2.probes'] < run['walk1.probes']
+
+
+def test_the_report_sets_the_walks_of_each_truss_side_by_side(write_spec, tmp_path):
+    spec = write_spec({**SMALL_SPEC, 'route': {'target': 'n1_2', 'walks': 2}})
+    path = tmp_path / 'results.jsonl'
+    runs = []
+    with ResultsWriter(path, spec) as writer:
+        for index in range(spec.total_runs):
+            rows = execute_run(task(spec, index, surveying_stand_in_walk), spec.document)
+            writer.append(rows)
+            runs.append(rows[-1])
+    report = make_campaign_report(path, tmp_path / 'report')
+    first, second = report.analysis.walks
+    assert (first.walk, second.walk) == (1, 2)
+    assert first.rate.trials == second.rate.trials == spec.total_runs
+    assert first.rate.successes == sum(r['walk1.reached'] for r in runs)
+    assert first.probes == sum(r['walk1.probes'] for r in runs) > 0 and second.probes == 0
+    assert first.steps == sum(r['walk1.steps'] for r in runs)
+    assert '## The same truss, walk after walk' in report.markdown.read_text()
+    data = json.loads(report.json.read_text())
+    assert [w['probes'] for w in data['walks']] == [first.probes, 0]
