@@ -32,7 +32,8 @@ RECORDED_TOPICS = ('joint_states', 'tip_pose', 'gripper_a_pose', 'gripper_b_pose
                    'gripper_states', 'phase', 'phase_history', 'goal_rejections',
                    'step_reports', 'control_mode',
                    'controllers/*/state', 'planned_trajectory', 'robot_description',
-                   'markers', '/tf', '/tf_static', '/diagnostics', '/clock')
+                   'markers', 'truss_map_markers', '/tf', '/tf_static', '/diagnostics',
+                   '/clock')
 
 
 @dataclasses.dataclass(frozen=True)

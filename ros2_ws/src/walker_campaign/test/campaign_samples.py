@@ -7,8 +7,12 @@ milliseconds. Its figures mean nothing about the walker.
 
 import math
 import time
+from pathlib import Path
+
+import yaml
 
 from walker_core.parameter_schema import load_parameter_file
+from walker_supervisor.core.truss_map import SURVEY_FORMAT
 
 #: Two dispersions (one drawn per joint), a 2 x 2 sweep, 3 runs per point: 12 runs.
 SMALL_SPEC = {
@@ -54,3 +58,35 @@ def stand_in_walk(request, seconds: float = 0.0):
 def slow_stand_in_walk(request):
     """Walk the stand-in for a few seconds, as a short walk takes (for the Ray test)."""
     return stand_in_walk(request, seconds=4.0)
+
+
+def survey_content(nodes: dict[str, list[float]], anchor: str = 'n2_1') -> dict:
+    """Return a survey file's content: ``nodes`` at the positions [m] given, 1 mm std."""
+    entries = {node: {'position': position,
+                      'covariance': [[1e-6 if i == j else 0.0 for j in range(3)]
+                                     for i in range(3)]}
+               for node, position in nodes.items()}
+    entries.setdefault(anchor, {'position': [0.0, 0.0, 0.0],
+                                'covariance': [[0.0] * 3 for _ in range(3)]})
+    return {'format': SURVEY_FORMAT, 'frame': 'truss', 'anchor': anchor, 'nodes': entries}
+
+
+def surveying_stand_in_walk(request):
+    """Walk the stand-in, surveying: probe for a hole unless the survey has the target.
+
+    It writes a survey of the target into its output directory and names it in its summary,
+    as a headless walk does; the survey it started from is named in the summary too.
+    """
+    summary = stand_in_walk(request)
+    known = {}
+    if request.truss_survey is not None:
+        known = yaml.safe_load(Path(request.truss_survey).read_text())['nodes']
+    for step in summary['steps']:
+        step['search_probes'] = 0 if request.target in known else 4
+    out = Path(request.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    survey = out / 'truss_survey.yaml'
+    survey.write_text(yaml.safe_dump(survey_content({request.target: [0.0, 0.3, 0.0]})))
+    summary['truss_survey_file'] = str(survey)
+    summary['started_from'] = str(request.truss_survey) if request.truss_survey else None
+    return summary

@@ -4,7 +4,7 @@ import subprocess
 import sys
 
 CORE = ['analysis', 'distributions', 'errors', 'figures', 'parameter_sets', 'plan', 'progress',
-        'report', 'results', 'rows', 'spec', 'statistics', 'targets']
+        'report', 'results', 'rows', 'spec', 'statistics', 'survey', 'targets']
 
 
 def test_the_core_and_the_execution_import_without_rclpy_or_ray():

@@ -40,6 +40,7 @@ def test_the_analysis_counts_what_the_rows_say(results_path):
     assert any(p.pareto for p in analysis.points)
     parameters = {s.parameter for s in analysis.sensitivities}
     assert 'friction' in parameters
+    assert analysis.walks == []  # one walk per run: nothing to set side by side
 
 
 def test_the_stand_in_figures_follow_their_parameters(results_path):

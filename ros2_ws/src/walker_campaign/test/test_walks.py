@@ -5,11 +5,14 @@ naming it, so the walk functions' contract with the session is tested in a secon
 headless walk of one step shows the whole way through.
 """
 
+import dataclasses
 import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
 from ros_test_support import write_parameter_file
 
 import walker_bringup.session
@@ -40,7 +43,9 @@ class _StandIn:
             'model': str(self.configuration.path), 'truth': str(self.options.plant_params_file),
             'plant_from_truth': self.configuration.plant is not None,
             'record': self.options.record, 'report': self.options.report,
-            'domain': os.environ.get('ROS_DOMAIN_ID')}))
+            'domain': os.environ.get('ROS_DOMAIN_ID'),
+            'started_from': str(self.options.truss_survey)}))
+        (out / 'truss_survey.yaml').write_text('# the survey this walk wrote\n')
 
     def stop(self):
         return 0
@@ -112,3 +117,35 @@ def test_an_unknown_walk_function_is_refused_by_name():
     with pytest.raises(ValueError, match='no walk function'):
         walk_function('teleport')
     assert walk_function('json:dumps') is json.dumps
+
+
+def test_the_session_starts_from_the_requests_survey_and_names_the_one_it_wrote(
+        stand_in, tmp_path):
+    survey = tmp_path / 'start_survey.yaml'
+    summary = walks.headless_walk(dataclasses.replace(request(tmp_path), truss_survey=survey))
+    assert summary['started_from'] == str(survey)
+    assert summary[walks.SURVEY_FILE_KEY] == str(tmp_path / 'run' / 'walk' / 'truss_survey.yaml')
+
+
+def test_a_route_walked_twice_gives_the_second_session_the_first_ones_survey(stand_in, tmp_path):
+    summary = walks.repeated_walk(walks.headless_walk, request(tmp_path), 2)
+    assert [w['reached'] for w in summary['walks']] == [True, True]
+    first = tmp_path / 'run' / 'walk_1' / 'walk' / 'truss_survey.yaml'
+    assert first.is_file() and (tmp_path / 'run' / 'walk_2' / 'walk' / 'summary.json').is_file()
+    second = json.loads((tmp_path / 'run' / 'walk_2' / 'walk' / 'summary.json').read_text())
+    assert second['started_from'] == str(first)
+
+
+def test_a_real_headless_step_walked_twice_gives_the_second_walk_the_first_ones_survey(
+        tmp_path):
+    summary = walks.repeated_walk(walks.headless_walk, request(tmp_path), 2)
+    assert [w['reached'] for w in summary['walks']] == [True, True] and summary['reached']
+    assert [s['walk'] for s in summary['steps']] == [1, 2]
+    first, second = (yaml.safe_load((tmp_path / 'run' / f'walk_{k}' / 'walk' /
+                                     'truss_survey.yaml').read_text()) for k in (1, 2))
+    # the second walk kept the first one's frame and knew every node the first surveyed
+    assert second['anchor'] == first['anchor'] and set(first['nodes']) <= set(second['nodes'])
+    # its survey of the step's node was fused with the first's: known better than after one
+    variance = {k: np.trace(survey['nodes']['n1_2']['covariance'])
+                for k, survey in (('first', first), ('second', second))}
+    assert variance['second'] < variance['first']

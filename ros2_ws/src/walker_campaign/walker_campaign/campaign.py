@@ -9,6 +9,7 @@
     python3 scripts/campaign.py SPEC --run-index 17    # run 17 again alone, compare its row
     python3 scripts/campaign.py SPEC --run-index 17 --bag   # ... and write its bag and report
     python3 scripts/campaign.py SPEC --report-only     # the report from the results so far
+    python3 scripts/campaign.py SPEC --truss-survey FILE   # every walk starts from a survey
 
 Results go to ``<out>/results.jsonl`` (``--out``, default ``runs/campaigns/<name>``), the
 report to ``<out>/report/``. Exit codes: 0 complete, 1 a re-run differs from its row, 2 a bad
@@ -31,7 +32,7 @@ from walker_campaign.core.progress import duration_text, progress_text
 from walker_campaign.core.report import make_campaign_report
 from walker_campaign.core.results import ResultsWriter, read_results
 from walker_campaign.core.rows import RUN, deterministic_part
-from walker_campaign.core.spec import CampaignSpec, find_spec, load_spec
+from walker_campaign.core.spec import CampaignSpec, find_spec, load_spec, with_truss_survey
 from walker_campaign.execution import RunTask, execute_run
 from walker_report.progress import ProgressLine
 
@@ -48,7 +49,7 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
         '(locally, or on a cluster with --address), resume it, and write its report.')
     parser.add_argument('spec', help='the campaign spec (YAML; docs/campaigns.md), or the name '
                                      'of a shipped one (default_walk, ka_filter_sweep, '
-                                     'truss_as_built)')
+                                     'truss_as_built, truss_twice)')
     parser.add_argument('--out', default=None,
                         help='output directory (default: runs/campaigns/<name>)')
     parser.add_argument('--address', default=None,
@@ -62,6 +63,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--walk', default=None, metavar='MODULE:FUNCTION',
                         help='a walk function of your own, importable where the walks run '
                              '(walker_campaign.walks explains the interface)')
+    parser.add_argument('--truss-survey', default=None, metavar='FILE',
+                        help="every walk starts from this truss survey (a walk's "
+                             "truss_survey.yaml), in place of the spec's truss_survey")
     parser.add_argument('--check', action='store_true',
                         help="check the spec and every run's parameters; run nothing")
     parser.add_argument('--run-index', type=int, default=None, metavar='K',
@@ -95,14 +99,18 @@ def _say(text: str) -> None:
 def _describe(spec: CampaignSpec) -> str:
     grid = (f'{spec.point_count} grid points x {spec.runs} runs' if spec.sweeps
             else f'{spec.runs} runs')
-    return (f'{spec.name}: {grid} = {spec.total_runs} walks to {spec.target}, '
+    walks = f' ({spec.walks} walks each on the same truss)' if spec.walks > 1 else ''
+    survey = (f', starting from the truss survey {spec.truss_survey_file}'
+              if spec.truss_survey is not None else '')
+    unit = 'runs' if spec.walks > 1 else 'walks'
+    return (f'{spec.name}: {grid}{walks} = {spec.total_runs} {unit} to {spec.target}, '
             f'{len(spec.dispersions)} dispersion{"s" if len(spec.dispersions) != 1 else ""}, '
-            f'seed {spec.seed}')
+            f'seed {spec.seed}{survey}')
 
 
 def _task(spec: CampaignSpec, index: int, walk: str, record_dir: str | None = None) -> RunTask:
     return RunTask(spec.name, plan_run(spec, index), spec.target, spec.walk_timeout, walk,
-                   record_dir)
+                   record_dir, spec.truss_survey, spec.walks)
 
 
 def _run_campaign(spec: CampaignSpec, args, results_path: Path, walk: str) -> int:
@@ -209,9 +217,14 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, _interrupt)  # a scheduler's stop: as Ctrl-C, resumable
     try:
         spec = load_spec(find_spec(args.spec))
+        if args.truss_survey is not None:
+            spec = with_truss_survey(spec, args.truss_survey)
         out = Path(args.out or Path('runs') / 'campaigns' / spec.name).resolve()
         results_path = out / 'results.jsonl'
         walk = args.walk or ('graph' if args.graph else DEFAULT_WALK)
+        if walk == 'graph' and (spec.truss_survey is not None or spec.walks > 1):
+            raise SpecError('a truss survey is read by the headless runner: leave --graph out '
+                            'for a spec with truss_survey, --truss-survey or route.walks > 1')
         if args.check:
             check_every_run(spec)
             _say(f'{_describe(spec)}: every run checked')
@@ -227,8 +240,9 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     if args.report:
         tolerance = spec.nominal.get('gripper.insertion_position_tolerance')
-        report = make_campaign_report(results_path, out / 'report', tolerance,
-                                      f'python3 scripts/campaign.py {args.spec}')
+        command = f'python3 scripts/campaign.py {args.spec}' + (
+            f' --truss-survey {args.truss_survey}' if args.truss_survey else '')
+        report = make_campaign_report(results_path, out / 'report', tolerance, command)
         _say(f'report: {report.markdown}')
     return code
 

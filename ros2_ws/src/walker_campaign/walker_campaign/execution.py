@@ -19,12 +19,15 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from walker_campaign.core.parameter_sets import write_parameter_file
 from walker_campaign.core.plan import RunPlan
 from walker_campaign.core.rows import error_rows, run_rows
-from walker_campaign.walks import WalkError, WalkFunction, WalkRequest, walk_function
+from walker_campaign.walks import (
+    WalkError, WalkFunction, WalkRequest, repeated_walk, walk_function)
 
-__all__ = ['RunTask', 'execute_run']
+__all__ = ['RunTask', 'execute_run', 'START_SURVEY_FILE']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,6 +48,10 @@ class RunTask:
         The walk function, by name (:data:`walker_campaign.walks.BACKENDS`) or itself.
     record_dir : str or None
         Keep the walk's output (and its bag) there; ``None``: a scratch directory, removed.
+    truss_survey : dict or None
+        A truss survey's content the (first) walk starts from; None: the nominal truss.
+    walks : int
+        Walks of the route on the same truss (:func:`walker_campaign.walks.repeated_walk`).
     """
 
     campaign: str
@@ -53,6 +60,12 @@ class RunTask:
     walk_timeout: float
     walk: Any = 'headless'
     record_dir: str | None = None
+    truss_survey: dict[str, Any] | None = None
+    walks: int = 1
+
+
+#: The name of the survey file a run's walk starts from, next to its parameter files.
+START_SURVEY_FILE = 'start_survey.yaml'
 
 
 def _execution(started: float, walk: Any) -> dict[str, Any]:
@@ -81,12 +94,17 @@ def execute_run(task: RunTask, document: dict[str, Any]) -> list[dict[str, Any]]
         out = Path(task.record_dir) if task.record_dir else Path(scratch)
         out.mkdir(parents=True, exist_ok=True)
         try:
+            survey = None
+            if task.truss_survey is not None:
+                survey = out / START_SURVEY_FILE
+                survey.write_text(yaml.safe_dump(task.truss_survey, sort_keys=False))
             request = WalkRequest(
                 model_file=write_parameter_file(document, plan.model_values, out / 'model.yaml'),
                 truth_file=write_parameter_file(document, plan.truth_values, out / 'truth.yaml'),
                 target=task.target, out_dir=out, walk_timeout=task.walk_timeout,
-                record=task.record_dir is not None)
-            summary = walk(request)
+                record=task.record_dir is not None, truss_survey=survey)
+            summary = walk(request) if task.walks == 1 else repeated_walk(walk, request,
+                                                                          task.walks)
         except WalkError as error:
             return error_rows(task.campaign, plan, str(error), _execution(started, task.walk))
         except Exception as error:  # the row says what went wrong; the campaign goes on

@@ -15,6 +15,11 @@ its output (the table, the progress) in ``walk.log``:
 
 Any callable with the same signature serves, named ``module:function`` (the tests use a
 fast stand-in).
+
+A walk given a truss survey (:attr:`WalkRequest.truss_survey`) starts from it; a walk that
+surveys the truss puts the path of the survey it wrote into its summary
+(:data:`SURVEY_FILE_KEY`). :func:`repeated_walk` walks a route several times on the same truss,
+each walk after the first from the survey the one before it wrote (a spec's ``route.walks``).
 """
 
 from __future__ import annotations
@@ -29,8 +34,10 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ['WalkRequest', 'WalkError', 'WalkFunction', 'graph_walk', 'headless_walk', 'BACKENDS',
-           'walk_function']
+           'walk_function', 'repeated_walk', 'SURVEY_FILE_KEY']
 _LOG_TAIL = 2000  # characters of a failed walk's output kept in its error
+#: The summary's entry naming the truss survey file a walk wrote (absent: it wrote none).
+SURVEY_FILE_KEY = 'truss_survey_file'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,6 +58,9 @@ class WalkRequest:
         Wall-clock seconds the walk may take.
     record : bool
         Record the walk's bag (``out_dir/bag``) for the walk report.
+    truss_survey : Path or None
+        A truss survey file the walk starts from (the headless runner's ``--truss-survey``);
+        None: the nominal truss.
     """
 
     model_file: Path
@@ -59,6 +69,7 @@ class WalkRequest:
     out_dir: Path
     walk_timeout: float
     record: bool = False
+    truss_survey: Path | None = None
 
 
 class WalkError(RuntimeError):
@@ -77,6 +88,7 @@ def _walk_in_session(request: WalkRequest, arrangement) -> dict[str, Any]:
         A file refused, or the walk wrote no summary: the message says why.
     """
     from walker_bringup.session import SessionError, SessionOptions, WalkSession
+    from walker_supervisor.core.survey_file import SURVEY_FILE_NAME
     from walker_config.core.configuration import load_configuration
     from walker_core.parameter_schema import ParameterError
 
@@ -88,7 +100,8 @@ def _walk_in_session(request: WalkRequest, arrangement) -> dict[str, Any]:
         raise WalkError(f'the parameter files are refused: {error}') from None
     options = SessionOptions(arrangement=arrangement, sim_time=True, record=request.record,
                              report=False, out=out / 'walk', walk_timeout=request.walk_timeout,
-                             quiet=True, plant_params_file=Path(request.truth_file).resolve())
+                             quiet=True, plant_params_file=Path(request.truth_file).resolve(),
+                             truss_survey=request.truss_survey)
     code = None
     with open(out / 'walk.log', 'w') as log, contextlib.redirect_stdout(log):
         session = WalkSession(configuration, options)
@@ -107,7 +120,44 @@ def _walk_in_session(request: WalkRequest, arrangement) -> dict[str, Any]:
                         f'output ends:\n{tail}')
     summary = json.loads(summary_path.read_text())
     summary['timed_out'] = bool(summary.get('timed_out'))
+    survey = out / 'walk' / SURVEY_FILE_NAME
+    if survey.is_file():
+        summary[SURVEY_FILE_KEY] = str(survey)
     return summary
+
+
+def repeated_walk(walk: WalkFunction, request: WalkRequest, count: int) -> dict[str, Any]:
+    """Walk the request's route ``count`` times on the same truss; return the walks' summary.
+
+    Walk ``k`` writes into ``out_dir/walk_<k>``; each walk after the first starts from the
+    survey the one before it wrote (its summary's :data:`SURVEY_FILE_KEY`), the first from
+    the request's own survey, if any. Each walk has the request's wall-clock time.
+
+    Returns
+    -------
+    dict
+        :func:`walker_campaign.core.rows.combined_summary` of the walks' summaries.
+
+    Raises
+    ------
+    WalkError
+        A walk could not be carried out, or wrote no survey for the next to start from.
+    """
+    from walker_campaign.core.rows import combined_summary
+
+    summaries = []
+    survey = request.truss_survey
+    for number in range(1, count + 1):
+        summary = walk(dataclasses.replace(request, out_dir=Path(request.out_dir) /
+                                           f'walk_{number}', truss_survey=survey))
+        summaries.append(summary)
+        if number < count:
+            survey = summary.get(SURVEY_FILE_KEY)
+            if not survey or not Path(survey).is_file():
+                raise WalkError(f'walk {number} of {count} wrote no truss survey for walk '
+                                f'{number + 1} to start from')
+            survey = Path(survey)
+    return combined_summary(summaries)
 
 
 def headless_walk(request: WalkRequest) -> dict[str, Any]:

@@ -19,6 +19,7 @@ from walker_headless.recording import WalkRecording
 from walker_headless.runner import walk
 from walker_report.core.walk_data import load_walk
 from walker_supervisor.core.phases import Phase
+from walker_viz.core.map_markers import NOMINAL_COLOR, SURVEYED_COLOR
 from walker_viz.core.robot_tree import WORLD_FRAME
 
 TARGET = 'n1_2'
@@ -165,6 +166,31 @@ def test_tf_composed_from_the_bag_puts_both_grippers_where_the_plant_has_them(wa
             compared += 1
     assert compared > 100
     assert worst < 1e-6, f'{worst * 1e3:.4f} mm'
+
+
+def test_the_bag_carries_the_truss_map_as_the_supervisor_latches_it(walks):
+    """``truss_map_markers``: all nominal at first, the step's nodes surveyed by its end."""
+    result, bag = walks[0]
+    with BagReader(bag) as reader:
+        records = list(reader.messages([t for t in reader.topics
+                                        if t.endswith('truss_map_markers')]))
+    assert len(records) >= 2, 'latched at the start and again as the surveys changed the map'
+
+    def rgb(r, g, b, *alpha):
+        return tuple(round(float(v), 3) for v in (r, g, b))  # the message's are float32
+
+    def status(record):
+        return {m.text: rgb(m.color.r, m.color.g, m.color.b) for m in record.message.markers
+                if m.ns == 'truss_map_status'}
+
+    nominal, surveyed = rgb(*NOMINAL_COLOR), rgb(*SURVEYED_COLOR)
+    first, last = status(records[0]), status(records[-1])
+    assert set(first.values()) == {nominal} and len(first) == len(last)
+    # the start's two nodes (n1_1 anchors the frame, n2_1 surveyed) and the step's target
+    assert {node for node, colour in last.items() if colour == surveyed} == \
+        set(result.survey['nodes'])
+    assert TARGET in result.survey['nodes']
+    assert all(m.header.frame_id == WORLD_FRAME for r in records for m in r.message.markers)
 
 
 def test_an_unknown_target_is_refused_before_anything_moves(configuration, tmp_path):

@@ -53,6 +53,7 @@ TOPICS = {
     'planned_trajectory': ('trajectory_msgs/msg/JointTrajectory', _LATCHED),
     'robot_description': ('std_msgs/msg/String', _LATCHED),
     'markers': ('visualization_msgs/msg/MarkerArray', _LATCHED),
+    'truss_map_markers': ('visualization_msgs/msg/MarkerArray', _LATCHED),
     '/tf': ('tf2_msgs/msg/TFMessage', _RELIABLE),
     '/tf_static': ('tf2_msgs/msg/TFMessage', _LATCHED),
     '/diagnostics': ('diagnostic_msgs/msg/DiagnosticArray', _RELIABLE),

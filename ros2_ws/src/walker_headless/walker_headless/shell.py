@@ -87,6 +87,7 @@ class WalkShell:
         self._watch_ns = round(WATCH_PERIOD * 1e9)
         self._next_tick = self._next_watch = 0  # [ns]
         self._poses: list = []  # (stamp [s], tip position [m]) since the last sample
+        self._map_version = -1  # the truss map's version last drawn
 
     @property
     def done(self) -> bool:
@@ -102,6 +103,7 @@ class WalkShell:
         """Hear the loop's state stamped ``loop.stamp`` and decide, as the node does then."""
         loop, runner = self.loop, self.runner
         stamp, now = loop.stamp, loop.time
+        self._draw_map()  # the map as it starts, before the first decision changes it
         if loop.poses_out:
             state = loop.state
             self._poses.append((stamp_seconds(stamp), state.poses[state.tip].position))
@@ -119,6 +121,14 @@ class WalkShell:
                 self._next_watch += self._watch_ns
             self._carry_out(runner.watch(now, now))
             self._settle()
+        self._draw_map()
+
+    def _draw_map(self) -> None:
+        """Draw the truss map if it has changed since last drawn, as the node latches it."""
+        survey, viz = self.runner.mapped.map, self.loop.viz
+        if viz is not None and survey.version != self._map_version:
+            self._map_version = survey.version
+            viz.truss_map(self.loop.stamp, survey.estimates())
 
     def _settle(self) -> None:
         """Decide while a decision is due, and hand the runner the answers waiting."""

@@ -5,8 +5,10 @@ In the graph the viz node (``walker_viz viz_node``) hears ``joint_states`` or, w
 bending joints, at ``sim.pose_rate``), ``gripper_states``, ``control_mode``, ``phase`` and
 ``planned_trajectory``, and sends ``/tf`` every ``1 / viz.tf_rate`` of the simulated clock
 (every flexible state since, or the newest joint state), ``/tf_static`` once and ``markers``
-when they change. :class:`HeadlessViz` takes the same topics from the loop by calls, lets the
-same :class:`~walker_viz.core.scene.WalkerScene` decide, and writes what the node would send
+when they change; the supervisor node latches its truss map's markers on
+``truss_map_markers`` when the map changes (:meth:`HeadlessViz.truss_map`).
+:class:`HeadlessViz` takes the same topics from the loop by calls, lets the same
+:class:`~walker_viz.core.scene.WalkerScene` decide, and writes what the node would send
 into the bag (:class:`~walker_headless.recording.WalkRecording`), as rosbags messages of the
 same types (``walker_viz.messages`` builds the rclpy ones).
 """
@@ -18,6 +20,8 @@ import numpy as np
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.rotations import quaternion_from_matrix
 from walker_core.urdf import flex_joints
+from walker_viz.core.map_markers import truss_map_markers
+from walker_viz.core.markers import POSED_KINDS
 from walker_viz.core.robot_tree import WORLD_FRAME
 from walker_viz.core.scene import WalkerScene
 
@@ -25,7 +29,7 @@ __all__ = ['HeadlessViz']
 
 _MARKER = 'visualization_msgs/msg/Marker'
 _KINDS = {'line_list': 'LINE_LIST', 'line_strip': 'LINE_STRIP', 'sphere_list': 'SPHERE_LIST',
-          'cylinder': 'CYLINDER', 'text': 'TEXT_VIEW_FACING'}
+          'sphere': 'SPHERE', 'cylinder': 'CYLINDER', 'text': 'TEXT_VIEW_FACING'}
 
 
 class HeadlessViz:
@@ -106,11 +110,22 @@ class HeadlessViz:
             values += quaternion_from_matrix(edge.matrix).tolist()
         self._recording.transforms(topic, stamp, tuple(frames), values)
 
+    def truss_map(self, stamp: int, estimates) -> None:
+        """Take the supervisor's truss map, changed: its markers on ``truss_map_markers``.
+
+        ``estimates``: every node with its estimate (``TrussMap.estimates()``), as the
+        supervisor node latches them (``walker_supervisor.map_frames``).
+        """
+        self._write_markers('truss_map_markers', truss_map_markers(estimates), (), stamp)
+
     def _send_markers(self, stamp: int) -> None:
-        specs, deleted = self.scene.markers()
+        self._write_markers('markers', *self.scene.markers(), stamp)
+
+    def _write_markers(self, topic: str, specs, deleted, stamp: int) -> None:
+        """Write a ``MarkerArray`` of ``specs`` and of deletions of ``deleted`` on ``topic``."""
         markers = [self._marker(spec) for spec in specs]
         markers += [self._marker(None, namespace) for namespace in deleted]
-        self._recording.serialize('markers', self._types['visualization_msgs/msg/MarkerArray'](
+        self._recording.serialize(topic, self._types['visualization_msgs/msg/MarkerArray'](
             markers=markers), stamp)
 
     def _marker(self, spec, deleted: str = ''):
@@ -119,9 +134,11 @@ class HeadlessViz:
         kind = t[_MARKER]
         point = t['geometry_msgs/msg/Point']
         position, points, fields = point(x=0.0, y=0.0, z=0.0), [], {}
+        orientation = (0.0, 0.0, 0.0, 1.0)
         if spec is not None:
+            orientation = spec.orientation
             coordinates = np.asarray(spec.points, dtype=float)
-            if spec.kind in ('cylinder', 'text'):
+            if spec.kind in POSED_KINDS:
                 position = point(*(float(v) for v in coordinates[0]))
             else:
                 points = [point(x=float(x), y=float(y), z=float(z)) for x, y, z in coordinates]
@@ -136,7 +153,7 @@ class HeadlessViz:
             'type': 0, 'action': kind.DELETE,
             'pose': t['geometry_msgs/msg/Pose'](
                 position=position,
-                orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0)),
+                orientation=t['geometry_msgs/msg/Quaternion'](*(float(v) for v in orientation))),
             'scale': t['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=0.0),
             'color': t['std_msgs/msg/ColorRGBA'](r=0.0, g=0.0, b=0.0, a=0.0),
             'lifetime': t['builtin_interfaces/msg/Duration'](sec=0, nanosec=0),

@@ -16,7 +16,8 @@ def test_the_foxglove_layout_is_what_the_sdk_builds():
     assert shipped == layout_json('/walker'), \
         'regenerate: python -m walker_viz.foxglove_layout > config/walker.foxglove.json'
     text = json.dumps(json.loads(shipped))
-    for path in ('/walker/robot_description', '/walker/markers', '/walker/phase.phase',
+    for path in ('/walker/robot_description', '/walker/markers', '/walker/truss_map_markers',
+                 '/walker/phase.phase',
                  *(f'/walker/controllers/{j}/state.position_error' for j in PHYSICAL_JOINT_NAMES)):
         assert path in text, path
     assert '"fixedFrame": "truss"' in text
@@ -28,9 +29,10 @@ def test_the_rviz_configuration_reads_the_latched_topics_in_the_truss_frame():
     assert manager['Global Options']['Fixed Frame'] == 'truss'
     displays = {d['Class']: d for d in manager['Displays']}
     model = displays['rviz_default_plugins/RobotModel']
-    markers = displays['rviz_default_plugins/MarkerArray']
+    markers = [d for d in manager['Displays'] if d['Class'] == 'rviz_default_plugins/MarkerArray']
     assert 'rviz_default_plugins/TF' in displays
     assert model['Description Topic']['Value'] == '/walker/robot_description'
-    assert markers['Topic']['Value'] == '/walker/markers'
-    for topic in (model['Description Topic'], markers['Topic']):
+    assert sorted(m['Topic']['Value'] for m in markers) == ['/walker/markers',
+                                                           '/walker/truss_map_markers']
+    for topic in (model['Description Topic'], *(m['Topic'] for m in markers)):
         assert topic['Durability Policy'] == 'Transient Local'  # a late RViz still gets them

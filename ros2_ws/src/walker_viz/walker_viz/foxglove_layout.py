@@ -4,7 +4,8 @@
 [namespace] > walker.foxglove.json``); a test checks the file is what it builds. The layout:
 
 * a 3D panel in the ``truss`` frame: the robot from ``robot_description`` moved by TF, the
-  transforms, and the markers (truss, target node, planned tip path);
+  transforms, the markers (truss, target node, planned tip path) and the truss map's markers
+  (each node surveyed or nominal, its uncertainty ellipsoid);
 * a plot of every joint controller's position error [rad] (``controllers/<joint>/state``);
 * the step phases as state transitions (``phase``), beside the controllers' mode
   (``control_mode``).
@@ -47,7 +48,8 @@ def walker_layout(namespace: str = '/walker') -> fl.Layout:
             layer_id='foxglove.Urdf', instance_id='walker', label='walker',
             source_type='topic', topic=f'{ns}/robot_description',
             control_mode='transforms', display_mode='visual')},
-        topics={f'{ns}/markers': fl.BaseRendererRosMarkerTopicSettings(visible=True)}))
+        topics={f'{ns}/{topic}': fl.BaseRendererRosMarkerTopicSettings(visible=True)
+                for topic in ('markers', 'truss_map_markers')}))
     errors = fl.PlotPanel(title='joint position errors [rad]', config=fl.PlotConfig(
         paths=[fl.PlotSeries(value=f'{ns}/controllers/{joint}/state.position_error',
                              label=joint, timestamp_method='headerStamp')

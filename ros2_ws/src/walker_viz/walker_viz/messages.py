@@ -11,14 +11,15 @@ from std_msgs.msg import ColorRGBA
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
-from walker_viz.core.markers import MarkerSpec
+from walker_viz.core.markers import POSED_KINDS, MarkerSpec
 from walker_core.rotations import quaternion_from_matrix, rotation_from_quaternion
 from walker_viz.core.robot_tree import WORLD_FRAME, JointTransform
 
 __all__ = ['tf_message', 'marker_array', 'deleted_marker', 'pose_matrix']
 
 _KINDS = {'line_list': Marker.LINE_LIST, 'line_strip': Marker.LINE_STRIP,
-          'sphere_list': Marker.SPHERE_LIST, 'cylinder': Marker.CYLINDER,
+          'sphere_list': Marker.SPHERE_LIST, 'sphere': Marker.SPHERE,
+          'cylinder': Marker.CYLINDER,
           'text': Marker.TEXT_VIEW_FACING}
 
 
@@ -51,12 +52,13 @@ def _marker_msg(spec: MarkerSpec) -> Marker:
     marker = Marker(ns=spec.namespace, id=spec.marker_id, type=_KINDS[spec.kind],
                     action=Marker.ADD, text=spec.text)
     marker.header.frame_id = WORLD_FRAME
-    marker.pose.orientation.w = 1.0
+    o = marker.pose.orientation
+    o.x, o.y, o.z, o.w = (float(v) for v in spec.orientation)
     marker.scale.x, marker.scale.y, marker.scale.z = (float(v) for v in spec.scale)
     marker.color = ColorRGBA(r=spec.color[0], g=spec.color[1], b=spec.color[2],
                              a=spec.color[3])
     points = np.asarray(spec.points, dtype=float)
-    if spec.kind in ('cylinder', 'text'):
+    if spec.kind in POSED_KINDS:
         marker.pose.position.x, marker.pose.position.y, marker.pose.position.z = (
             float(v) for v in points[0])
     else:

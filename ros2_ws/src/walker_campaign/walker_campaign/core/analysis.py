@@ -1,6 +1,8 @@
 """What a campaign's results say, and over a sweep's grid, each point's figures.
 
-Success with its interval, distributions, causes, sensitivities, the Pareto front.
+Success with its interval, distributions, causes, sensitivities, the Pareto front, and for a
+route walked more than once on the same truss (``route.walks``) each walk's figures side by
+side (:class:`WalkFigures`).
 
 Input: :class:`~walker_campaign.core.results.Results`; output: plain dataclasses the figures and
 the Markdown draw from, and that :func:`as_json` writes. Figures of steps are over every step
@@ -13,6 +15,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import math
+import re
 import statistics as pystats
 from typing import Any
 
@@ -20,14 +23,15 @@ from walker_campaign.core.results import Results
 from walker_campaign.core.statistics import (
     Sensitivity, pareto_front, quantiles, rank_correlations, wilson_interval)
 
-__all__ = ['CONFIDENCE', 'RUN_FIGURES', 'Rate', 'PointSummary', 'CauseCount', 'Analysis',
-           'analyse', 'as_json']
+__all__ = ['CONFIDENCE', 'RUN_FIGURES', 'Rate', 'PointSummary', 'CauseCount', 'WalkFigures',
+           'Analysis', 'analyse', 'compare_walks', 'as_json']
 
 CONFIDENCE = 0.95
 #: Run figures whose sensitivity to each dispersed parameter is reported (name: label).
 RUN_FIGURES = {'reached': 'reached (1) or not (0)', 'bound_ratio': 'walk time / bound',
                'step_ratio_max': 'slowest step / its bound', 'tip_error_max': 'largest tip error',
                'tip_error_mean': 'mean tip error', 'jams': 'jammed screw-ins'}
+_WALK_REACHED = re.compile(r'walk(\d+)\.reached')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,6 +70,30 @@ class PointSummary:
 
 
 @dataclasses.dataclass(frozen=True)
+class WalkFigures:
+    """The ``k``-th walk of a route walked several times on the same truss, over the runs.
+
+    Attributes
+    ----------
+    walk : int
+        ``k`` (1: the first walk, from the spec's survey or the nominal truss).
+    rate : Rate
+        Runs whose ``k``-th walk reached the target, of the runs walked.
+    steps, probes, jams : int
+        Steps taken, search probes and jammed screw-ins of the ``k``-th walks, in all.
+    bound_ratio_median : float
+        Median over the runs of the walk's time over its time-optimal bound.
+    """
+
+    walk: int
+    rate: Rate
+    steps: int
+    probes: int
+    jams: int
+    bound_ratio_median: float
+
+
+@dataclasses.dataclass(frozen=True)
 class CauseCount:
     """How often something went wrong, and the first runs it did so in."""
 
@@ -90,6 +118,7 @@ class Analysis:
     sensitivities: list[Sensitivity]
     points: list[PointSummary]
     failed_runs: list[dict[str, Any]]
+    walks: list[WalkFigures] = dataclasses.field(default_factory=list)
 
     @property
     def draw_columns(self) -> list[str]:
@@ -143,6 +172,26 @@ def _points(results: Results) -> list[PointSummary]:
     return summaries
 
 
+def compare_walks(runs: list[dict[str, Any]]) -> list[WalkFigures]:
+    """Return each walk's figures of runs that walked their route several times (else none).
+
+    ``runs``: the run rows; those of runs that could not be carried out are left out.
+    """
+    walked = [r for r in runs if r['outcome'] != 'error']
+    numbers = sorted({int(m.group(1)) for r in walked for m in map(_WALK_REACHED.fullmatch, r)
+                      if m})
+    figures = []
+    for k in numbers:
+        rows = [r for r in walked if f'walk{k}.reached' in r]
+        figures.append(WalkFigures(
+            k, Rate.of(sum(bool(r[f'walk{k}.reached']) for r in rows), len(rows)),
+            sum(r[f'walk{k}.steps'] or 0 for r in rows),
+            sum(r[f'walk{k}.probes'] or 0 for r in rows),
+            sum(r[f'walk{k}.jams'] or 0 for r in rows),
+            _median(_values(rows, f'walk{k}.bound_ratio'))))
+    return figures
+
+
 def analyse(results: Results) -> Analysis:
     """Compute what the report shows from a campaign's results."""
     runs, steps = results.run_rows, results.step_rows
@@ -170,7 +219,8 @@ def analyse(results: Results) -> Analysis:
               'steps with a jam': len(jam_steps),
               'runs with a jam': len({s['index'] for s in jam_steps}),
               'steps': len(steps)},
-        sensitivities=sensitivities, points=_points(results), failed_runs=failed)
+        sensitivities=sensitivities, points=_points(results), failed_runs=failed,
+        walks=compare_walks(runs))
 
 
 def _clean(value: Any) -> Any:
@@ -198,4 +248,7 @@ def as_json(analysis: Analysis) -> dict[str, Any]:
         'points': [{**dataclasses.asdict(p), 'rate': p.rate.value, 'wilson_low': p.rate.low,
                     'wilson_high': p.rate.high, 'reached': p.rate.successes,
                     'walks': p.rate.trials} for p in analysis.points],
-        'not_reached': analysis.failed_runs})
+        'not_reached': analysis.failed_runs,
+        'walks': [{**dataclasses.asdict(w), 'rate': w.rate.value, 'wilson_low': w.rate.low,
+                   'wilson_high': w.rate.high, 'reached': w.rate.successes,
+                   'runs': w.rate.trials} for w in analysis.walks]})

@@ -124,6 +124,16 @@ def markdown(analysis: Analysis, figure_names: dict[str, str], results_path: Pat
                'yes' if p.pareto else ''] for p in analysis.points])
         lines += [f'![grid]({figure_names["grid"]})', '',
                   f'![pareto]({figure_names["pareto"]})', '']
+    if analysis.walks:
+        lines += ['## The same truss, walk after walk', '',
+                  'Each run walked its route several times on one drawn truss, each walk after '
+                  'the first from the truss survey the one before it wrote: a row per walk.',
+                  '']
+        lines += _table(['walk', 'reached', 'rate [95 % interval]', 'steps', 'search probes',
+                         'jams', 'walk time / bound, median'], [
+            [str(w.walk), f'{w.rate.successes}/{w.rate.trials}',
+             f'{_pct(w.rate.value)} [{_pct(w.rate.low)}, {_pct(w.rate.high)}]', str(w.steps),
+             str(w.probes), str(w.jams), _num(w.bound_ratio_median)] for w in analysis.walks])
     if analysis.failed_runs:
         lines += ['## Runs that did not reach their target', '']
         lines += _table(['run', 'point', 'outcome', 'cause', 'message'], [

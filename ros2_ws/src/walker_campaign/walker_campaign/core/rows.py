@@ -11,6 +11,11 @@ a safe hold, ``cause`` saying why), ``timeout`` (it ran out of wall-clock time),
 (the run could not be carried out: a parameter refused, a crash; ``message`` says what). Only
 ``exec.*`` fields (wall time, host, process) differ when a run is repeated; the rest of a row is
 reproduced exactly (:func:`deterministic_part`).
+
+A run that walks its route several times on the same truss (a spec's ``route.walks``) gives
+one summary of its walks (:func:`combined_summary`): its step rows carry ``walk`` (1, 2, ...),
+its run row is reached when every walk reached, and adds ``walk<k>.<figure>`` for each walk
+(:data:`WALK_FIGURES`: reached, steps, probes, jams, walk time and its ratio to the bound).
 """
 
 from __future__ import annotations
@@ -24,12 +29,14 @@ from typing import Any
 from walker_campaign.core.plan import RunPlan
 
 __all__ = ['OUTCOMES', 'RUN', 'STEP', 'cause_of', 'run_rows', 'error_rows', 'deterministic_part',
-           'EXEC_PREFIX']
+           'EXEC_PREFIX', 'combined_summary', 'WALK_FIGURES']
 
 OUTCOMES = ('reached', 'failed', 'timeout', 'error')
 RUN, STEP = 'run', 'step'
 #: Fields that describe how a run was executed, not what it gave.
 EXEC_PREFIX = 'exec.'
+#: The figures of each walk of a repeated route in the run row, as ``walk<k>.<figure>``.
+WALK_FIGURES = ('steps', 'steps_ok', 'probes', 'jams', 'walk_time', 'bound', 'bound_ratio')
 _NUMBER = re.compile(r'[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?')
 
 
@@ -79,6 +86,8 @@ def _step_row(identity: Mapping[str, Any], step: Mapping[str, Any]) -> dict[str,
            'hole_offset': _finite(step.get('hole_offset')),
            'message': step.get('message', '') or '',
            'cause': '' if success else cause_of(step.get('message', ''))}
+    if 'walk' in step:
+        row['walk'] = int(step['walk'])
     for phase, seconds in (step.get('phase_durations') or {}).items():
         row[f'phase.{phase}'] = _finite(seconds)
     return row
@@ -134,8 +143,31 @@ def run_rows(campaign: str, plan: RunPlan, summary: Mapping[str, Any],
         cause = failed_step['cause'] if failed_step else cause_of(message)
     run = {'kind': RUN, **identity, 'outcome': outcome, 'reached': reached, 'cause': cause,
            'message': message, **_summary_figures(steps)}
+    for number, walk in enumerate(summary.get('walks') or [], start=1):
+        figures = _summary_figures([s for s in steps if s.get('walk') == number])
+        run[f'walk{number}.reached'] = bool(walk.get('reached'))
+        run.update({f'walk{number}.{k}': figures[k] for k in WALK_FIGURES})
     run.update({f'{EXEC_PREFIX}{k}': v for k, v in (execution or {}).items()})
     return steps + [run]
+
+
+def combined_summary(summaries: list[Mapping[str, Any]]) -> dict[str, Any]:
+    """Return one summary of walks of the same route on the same truss, in order.
+
+    Its ``steps`` are every walk's, each with ``walk`` (1, 2, ...); ``reached`` when every walk
+    reached; ``message`` the first walk's that did not reach (else the last's); ``timed_out``
+    when one ran out of time; ``walks`` each walk's ``reached``, ``timed_out`` and ``message``.
+    """
+    if not summaries:
+        raise ValueError('a combined summary needs at least one walk')
+    steps = [{**step, 'walk': number} for number, summary in enumerate(summaries, start=1)
+             for step in summary.get('steps') or []]
+    short = next((s for s in summaries if not s.get('reached')), summaries[-1])
+    return {'steps': steps, 'reached': all(bool(s.get('reached')) for s in summaries),
+            'message': str(short.get('message') or ''),
+            'timed_out': any(bool(s.get('timed_out')) for s in summaries),
+            'walks': [{'reached': bool(s.get('reached')), 'timed_out': bool(s.get('timed_out')),
+                       'message': str(s.get('message') or '')} for s in summaries]}
 
 
 def error_rows(campaign: str, plan: RunPlan, message: str,

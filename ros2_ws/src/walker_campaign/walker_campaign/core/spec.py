@@ -7,9 +7,13 @@
     runs: 200                      # dispersed walks per grid point (without sweeps: in all)
     params_file: walker.yaml       # optional nominal file, relative to the spec; default: the
                                    # installed walker.yaml
+    truss_survey: survey.yaml      # optional survey file (relative to the spec) every walk
+                                   # starts from
     route:
       target: n4_3                 # the node each walk goes to, from the file's sim.start
       walk_timeout: 1800           # optional [s] of wall clock per walk
+      walks: 1                     # optional: 2 walks the route twice on the same truss, the
+                                   # second from the survey the first wrote
     dispersions:                   # the truth against the model (the plant's file only)
       joint_friction:              # a name of your own: the column in the results
         parameters: [robot.drive.*.friction_torque, robot.drive.*.stiction_torque]
@@ -45,15 +49,19 @@ from walker_core.truss import Truss, UnknownNodeError
 from walker_campaign.core.distributions import KINDS, Distribution, distribution_from_spec
 from walker_campaign.core.errors import SpecError
 from walker_campaign.core.parameter_sets import check_model, check_truth, load_nominal
+from walker_campaign.core.survey import load_campaign_survey
 from walker_campaign.core.targets import ParameterTarget, truth_targets, tunable_target
 
 __all__ = ['APPLY_MODES', 'Dispersion', 'Sweep', 'CampaignSpec', 'load_spec', 'parse_spec',
-           'applied_value', 'shipped_spec', 'find_spec']
+           'applied_value', 'shipped_spec', 'find_spec', 'with_truss_survey', 'MAX_WALKS']
 
 #: How a drawn number changes a parameter: replaces it, multiplies it, or is added to it.
 APPLY_MODES = ('value', 'scale', 'offset')
-_TOP_KEYS = {'name', 'seed', 'runs', 'params_file', 'route', 'dispersions', 'sweeps'}
-_ROUTE_KEYS = {'target', 'walk_timeout'}
+_TOP_KEYS = {'name', 'seed', 'runs', 'params_file', 'truss_survey', 'route', 'dispersions',
+             'sweeps'}
+_ROUTE_KEYS = {'target', 'walk_timeout', 'walks'}
+#: Most walks of the route in one run (``route.walks``).
+MAX_WALKS = 10
 _DISPERSION_KEYS = {'parameters', 'parameter', 'apply', 'per_parameter', *KINDS}
 _MAX_RUNS = 1_000_000
 DEFAULT_WALK_TIMEOUT = 1800.0  # [s] wall clock: a walk of the default route takes far less
@@ -139,6 +147,14 @@ class CampaignSpec:
         Its flat values.
     document : dict
         Its YAML document (each run's files are written from it).
+    truss_survey : dict or None
+        The survey file's content every walk starts from (checked against the truss), or
+        None: the walks start from the nominal truss.
+    truss_survey_file : Path or None
+        The file it was read from.
+    walks : int
+        Walks of the route in each run, on the same truss; each after the first starts from
+        the survey the one before it wrote.
     """
 
     name: str
@@ -151,6 +167,9 @@ class CampaignSpec:
     params_file: Path
     nominal: dict[str, Any] = dataclasses.field(repr=False)
     document: dict[str, Any] = dataclasses.field(repr=False)
+    truss_survey: dict[str, Any] | None = dataclasses.field(default=None, repr=False)
+    truss_survey_file: Path | None = None
+    walks: int = 1
 
     @property
     def grid(self) -> list[tuple[Any, ...]]:
@@ -183,6 +202,10 @@ class CampaignSpec:
             'dispersions': [[d.name, [t.key for t in d.targets], d.apply,
                              repr(d.distribution), d.per_parameter] for d in self.dispersions],
             'sweeps': [[s.target.key, list(s.values)] for s in self.sweeps]}
+        if self.truss_survey is not None:  # absent: the digests of specs without one stay
+            content['truss_survey'] = self.truss_survey
+        if self.walks != 1:
+            content['walks'] = self.walks
         text = json.dumps(content, sort_keys=True, default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -192,6 +215,22 @@ class CampaignSpec:
         for sweep, value in zip(self.sweeps, self.grid[point], strict=True):
             sweep.target.set(flat, value)
         return flat
+
+
+def with_truss_survey(spec: CampaignSpec, path: str | Path) -> CampaignSpec:
+    """Return ``spec`` with every walk starting from the survey file at ``path``.
+
+    The option ``--truss-survey FILE`` (relative to the working directory): it takes the place
+    of the spec's own ``truss_survey``.
+
+    Raises
+    ------
+    SpecError
+        The file is missing or is not a survey of the spec's truss.
+    """
+    path = Path(path).expanduser().resolve()
+    survey = load_campaign_survey(path, spec.nominal, '--truss-survey')
+    return dataclasses.replace(spec, truss_survey=survey, truss_survey_file=path)
 
 
 def _shipped_dir() -> Path:
@@ -322,6 +361,14 @@ def parse_spec(mapping: Any, default_name: str = 'campaign',
             or not 0 < timeout < math.inf:
         raise SpecError(f'route.walk_timeout: expected a positive number of seconds, got '
                         f'{timeout!r}')
+    walks = _integer(route.get('walks', 1), 'route.walks', 1, MAX_WALKS)
+    survey_file = spec.get('truss_survey')
+    survey = None
+    if survey_file is not None:
+        if not isinstance(survey_file, str) or not survey_file:
+            raise SpecError(f'truss_survey: expected a path, got {survey_file!r}')
+        survey_file = (Path(base_dir) / Path(survey_file).expanduser()).resolve()
+        survey = load_campaign_survey(survey_file, nominal)
     dispersions = tuple(
         _dispersion(key, body, nominal)
         for key, body in _mapping(spec.get('dispersions'), 'dispersions', False).items())
@@ -329,7 +376,7 @@ def parse_spec(mapping: Any, default_name: str = 'campaign',
                    for key, values in _mapping(spec.get('sweeps'), 'sweeps', False).items())
     _check_unique(dispersions)
     result = CampaignSpec(name, seed, runs, target, float(timeout), dispersions, sweeps,
-                          params_file, nominal, document)
+                          params_file, nominal, document, survey, survey_file, walks)
     _check_grid(result)
     _check_extremes(result)
     return result

@@ -245,6 +245,10 @@ class TrussMap:
         self.version += 1
         return estimate
 
+    def estimates(self) -> list[tuple[str, NodeEstimate]]:
+        """Return every node with its estimate (surveyed, or nominal), in the truss's order."""
+        return [(n, self.estimate(n)) for n in self.truss.node_names]
+
     def frames(self) -> list[tuple[str, np.ndarray, bool]]:
         """Return every node's frame: its TF name, position [m] in the truss frame, surveyed."""
         return [(node_frame_name(n), e.position.copy(), e.surveyed)

@@ -22,11 +22,13 @@ from walker_core.urdf import GRIPPER_LINKS
 from walker_viz.core.base_anchor import BaseAnchor
 from walker_viz.core.robot_tree import RobotTree
 
-__all__ = ['MarkerSpec', 'TRUSS_NAMESPACES', 'truss_markers', 'target_marker',
+__all__ = ['MarkerSpec', 'POSED_KINDS', 'TRUSS_NAMESPACES', 'truss_markers', 'target_marker',
            'tip_path_marker', 'tip_path', 'MAX_PATH_POINTS']
 
 #: Most points of a drawn tip path: a trajectory of many samples is thinned evenly.
 MAX_PATH_POINTS = 200
+#: Marker kinds placed by their pose (one point: the centre), not by their points.
+POSED_KINDS = ('sphere', 'cylinder', 'text')
 #: Marker namespaces of the truss.
 TRUSS_NAMESPACES = ('truss_members', 'truss_nodes', 'truss_holes', 'truss_labels')
 
@@ -58,16 +60,20 @@ class MarkerSpec:
     marker_id : int
         ``id`` within the namespace.
     kind : str
-        ``'line_list'``, ``'line_strip'``, ``'sphere_list'``, ``'cylinder'`` or ``'text'``.
+        ``'line_list'``, ``'line_strip'``, ``'sphere_list'``, ``'sphere'`` (an ellipsoid),
+        ``'cylinder'`` or ``'text'``.
     points : ndarray, shape (N, 3)
-        The points of a list or strip [m]; for a cylinder or a text, one point: its centre.
+        The points of a list or strip [m]; for a kind of :data:`POSED_KINDS`, one point: its
+        centre.
     scale : tuple of 3 float
-        Line width in x for lines; diameters for spheres; diameters and height for a
-        cylinder; the text height in z [m].
+        Line width in x for lines; diameters for spheres (an ellipsoid's along its own axes);
+        diameters and height for a cylinder; the text height in z [m].
     color : tuple of 4 float
         r, g, b, a in [0, 1].
     text : str
         The text of a ``'text'`` marker.
+    orientation : tuple of 4 float
+        Quaternion ``(x, y, z, w)`` of a posed marker's axes in the truss frame.
     """
 
     namespace: str
@@ -77,6 +83,7 @@ class MarkerSpec:
     scale: tuple[float, float, float]
     color: tuple[float, float, float, float]
     text: str = ''
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
 
 
 def truss_markers(truss: Truss, hole_depth: float) -> list[MarkerSpec]:
