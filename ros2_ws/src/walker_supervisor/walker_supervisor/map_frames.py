@@ -1,7 +1,7 @@
 """The truss map for people: ``truss`` -> ``node_<i>_<j>`` frames on ``/tf_static``.
 
 The supervisor's truss map (:class:`~walker_supervisor.core.truss_map.TrussMap`) is latched as
-one static transform per node, the estimate where surveyed, the nominal place elsewhere, and
+one static transform per node, the estimate where surveyed, the prediction elsewhere, and
 latched again whenever a survey changes it.
 """
 

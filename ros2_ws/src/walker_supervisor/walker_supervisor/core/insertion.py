@@ -224,6 +224,8 @@ def jammed(run: StepRun, message: str, now: float) -> list:
     holds (the base gripper attached, the moving one free above the truss).
     """
     run.tries.insertions += 1
+    if run.tries.contact is not None and run.tries.contact.felt:
+        run.felt_faces.append(run.theta.copy())  # resting on the face: the node's height
     notices = []
     if run.search is not None:
         probe = _next_probe(run)

@@ -138,6 +138,12 @@ class StepSequencer:
         """
         return extraction.awaiting_plan(self._run)
 
+    def take_felt_faces(self) -> list[np.ndarray]:
+        """Return, once, the joints [rad] (role order of the step's base) of each jam since the
+        last call where the descent had felt the node's face (the gripper resting on it)."""
+        felt, self._run.felt_faces = self._run.felt_faces, []
+        return felt
+
     def take_outcome(self) -> StepOutcome | None:
         """Return the outcome of the step that ended since the last call, once; else None.
 
