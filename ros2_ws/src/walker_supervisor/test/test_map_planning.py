@@ -202,3 +202,20 @@ def test_a_half_turn_to_a_node_off_its_bearing_ends_its_coarse_motion_opposite_i
     assert joints[0] - theta[0] == pytest.approx(step.sweep, abs=1e-6)
     # FINE is left the millimetres to the target
     assert 0.001 < np.linalg.norm(targets.point_above_to - point) < 0.003
+
+
+def test_a_probe_goes_to_its_offset_and_to_the_height_felt_since_the_step_began():
+    from walker_supervisor.core.step_geometry import probe_targets
+
+    planning = _planning()
+    targets = planning.targets(STEP, _stance(0.0, TRUSS.position('n2_1') + OFF))
+    offset, low = np.array([0.0026, -0.0015]), -0.003  # [m]
+    probe = probe_targets(KIN, targets, offset, low)
+    moved = probe.frame.to_truss(probe.point_to) - targets.frame.to_truss(targets.point_to)
+    np.testing.assert_allclose(moved, [*offset, low], atol=1e-12)
+    np.testing.assert_allclose(probe.point_above_to - targets.point_above_to,
+                               probe.point_to - targets.point_to, atol=1e-12)
+    # the joints go there: the descent of the probe ends on the felt mouth
+    np.testing.assert_allclose(KIN.forward(probe.at_to)[:3], probe.point_to, atol=1e-9)
+    np.testing.assert_allclose(KIN.forward(probe.above_to)[:3], probe.point_above_to,
+                               atol=1e-9)

@@ -256,7 +256,7 @@ def _next_probe(run: StepRun) -> Notice | str:
                     f'{(pattern.covered + pattern.reach) * 1e3:.1f} mm of the estimate, and '
                     f'the estimate again')
         try:
-            run.targets = probe_targets(run.kinematics, run.estimate, offset)
+            run.targets = probe_targets(run.kinematics, run.estimate, offset, run.height_shift)
         except KinematicsError:
             continue  # out of reach: the next probe
         return Notice(f'insertion jammed: probe {search.probe} of {len(search) - 1}, '

@@ -598,6 +598,8 @@ class WalkRunner:
         for theta in self.sequencer.take_felt_faces():
             if step is not None and targets is not None:
                 self.mapped.felt_face(step, targets.frame, theta)
+                self.sequencer.move_mouth(
+                    float(targets.frame.to_base(self.mapped.map.position(step.to_node))[2]))
 
     def _survey_screw_in(self, outcome: StepOutcome) -> None:
         """Survey the node a step screwed into from the joints, in its base's role order."""
