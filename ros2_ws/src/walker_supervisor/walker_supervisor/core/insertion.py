@@ -18,9 +18,9 @@ which does, for ``settle_time``) the tip is checked again, now across the hole's
 gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`` times (each
 lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD;
 with a search (:mod:`~walker_supervisor.core.hole_search`), each jam moves the targets to the
-next probe instead, and the step holds once the last probe has jammed. A
-step ends when the gripper reports attached, with the controllers commanded to HOLD under the
-new base (which starts their relaxation).
+next probe instead (descending at the height a jam on the node's face felt), and the step holds
+once the last probe has jammed. A step ends when the gripper reports attached, with the
+controllers commanded to HOLD under the new base (which starts their relaxation).
 """
 
 from __future__ import annotations
