@@ -81,13 +81,19 @@ def _press_lightly(run: StepRun) -> list:
 def _on_the_face(run: StepRun, contact: DescentContact) -> tuple[np.ndarray, np.ndarray]:
     """Return the joints [rad] and point [m] on the hole's axis :data:`MOUTH_PRESS` below contact.
 
-    The point at the nominal mouth (and its joints) if the face was not felt or that point is
-    out of reach.
+    The press is a line along the hole's axis, which the planner accepts only from within the
+    insertion tolerance of it: a tip that met the face farther than ``descent_region`` (at most
+    that tolerance) from the axis, as a descent swinging 2-3 mm off it does, is pressed
+    straight down where it is, and the lines at the mouth bring it over the hole. The point at
+    the nominal mouth (and its joints) if the face was not felt or that point is out of reach.
     """
     t = run.targets
     if not contact.felt:
         return t.at_to, t.point_to
     point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
+    tip = run.tip()
+    if np.linalg.norm(tip[:2] - point[:2]) > run.parameters.descent_region:
+        point[:2] = tip[:2]
     try:
         joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
     except KinematicsError:
