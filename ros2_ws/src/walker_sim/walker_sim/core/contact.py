@@ -10,11 +10,11 @@ the bore), then the bore down to ``truss.hole_depth``.
 The gripper meets it at two points: its **shoulder**, the contact point itself (the frame the
 plant reports, which sits on the mouth when screwed in), a flat wider than the chamfer that
 rests on the face whatever its offset; and its **screw's tip**, ``screw_length`` below the
-shoulder along the gripper's axis (``gripper.screw_length``), which meets the face off the hole, slides down the chamfer
-into the bore within it, and is kept in the bore by its wall. So a gripper lowered off the hole
-rests on the face with its shoulder ``screw_length`` above the mouth (the screw-in then
-jams: that is farther from the hole than the tolerance); one lowered within the chamfer is
-guided into the bore and its shoulder comes to rest on the mouth.
+shoulder along the gripper's axis (``gripper.screw_length``), which meets the face off the
+hole, slides down the chamfer into the bore within it, and is kept in the bore by its wall.
+So a gripper lowered off the hole rests on the face with its shoulder ``screw_length`` above
+the mouth (the screw-in then jams: that is farther from the hole than the tolerance); one
+lowered within the chamfer is guided into the bore and its shoulder comes to rest on the mouth.
 
 Each contact is a stiff one-sided spring-damper on the penetration (never pulling), applied as
 an external force in the physics step: pybullet's collision pipeline is not needed (the walker

@@ -139,8 +139,11 @@ class StepSequencer:
         return extraction.awaiting_plan(self._run)
 
     def take_felt_faces(self) -> list[np.ndarray]:
-        """Return, once, the joints [rad] (role order of the step's base) of each jam since the
-        last call where the descent had felt the node's face (the gripper resting on it)."""
+        """Return, once, the joints [rad] of the jams that rested on the node's face.
+
+        Role order of the step's base; each a jam since the last call whose descent had felt
+        the face (the gripper resting on it).
+        """
         felt, self._run.felt_faces = self._run.felt_faces, []
         return felt
 

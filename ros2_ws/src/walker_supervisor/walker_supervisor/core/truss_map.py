@@ -24,8 +24,9 @@ covariance:
 * a surveyed node's estimate is that measurement fused with what the map knew of the node
   before (:meth:`TrussMap.survey`, :func:`fuse`: the least-squares update of two estimates
   weighted by their covariances): the nominal place with the prior, or an earlier walk's
-  estimate (not the prediction, which is taken through the same base node as the survey). A survey taken through a long chain (a large covariance) barely moves a node known
-  well, and the nominal place bounds the drift that the joints' constant calibration offsets
+  estimate (not the prediction, which is taken through the same base node as the survey). A
+  survey taken through a long chain (a large covariance) barely moves a node known well, and
+  the nominal place bounds the drift that the joints' constant calibration offsets
   would otherwise add step after step. A node surveyed again from the same base (the relaxed
   stance after a screw-in) takes the new reading in place of the old one, fused with the same
   prior: the two readings share their offsets and are not two measurements.
