@@ -92,7 +92,7 @@ class SupervisorParameters:
     node_prior_std: float = parameter(
         "standard deviation of a truss node's place relative to a neighbour's, along x, y and z",
         'm', 0.0, 0.02, read_only=False,
-        source="chosen: nodes placed to 1.4 mm each, and the map frame's heading")
+        source="chosen: two nodes placed to 1.4 mm each; the frame's heading error adds to it")
     joint_reading_std: float = parameter(
         "standard deviation of a joint's reading, offset and noise together (the map's survey)",
         'rad', 0.0, 0.01, read_only=False,
