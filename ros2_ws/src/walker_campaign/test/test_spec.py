@@ -136,7 +136,8 @@ def test_the_shipped_specs_are_valid(name):
 @pytest.mark.parametrize('changes, words', [
     # a rule between the supervisor's and the gripper's sections
     ({'supervisor.insertion_alignment': 0.004, 'supervisor.coarse_to_fine_region': 0.01,
-      'supervisor.descent_region': 0.005, 'supervisor.descent_axis_tolerance': 0.006},
+      'supervisor.descent_region': 0.005, 'supervisor.descent_axis_tolerance': 0.006,
+      'supervisor.search_radius': 0.006},
      'smaller than gripper.insertion_position_tolerance'),
     # and one of the plant's, on the model's set
     ({'sim.physics_rate': 1250.0}, 'integer multiple of timing.control_rate'),

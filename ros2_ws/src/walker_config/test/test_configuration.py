@@ -95,7 +95,8 @@ def test_overrides_apply_over_the_file(defaults):
     ({'sim.start.other_node': 'n9_9'}, (), 'sim.start.other_node'),
     ({'sim.physics_rate': 1250.0}, (), 'integer multiple of timing.control_rate'),
     ({'supervisor.insertion_alignment': 0.004, 'supervisor.coarse_to_fine_region': 0.01,
-      'supervisor.descent_region': 0.005, 'supervisor.descent_axis_tolerance': 0.006}, (),
+      'supervisor.descent_region': 0.005, 'supervisor.descent_axis_tolerance': 0.006,
+      'supervisor.search_radius': 0.006}, (),
      'smaller than gripper.insertion_position_tolerance'),
     ({'control.hold.bandwidth': [6.0, 5.0, 5.0, 8.0, 8.0]}, (), 'role J1, mode hold'),
 ])

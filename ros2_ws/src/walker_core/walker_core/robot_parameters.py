@@ -217,6 +217,11 @@ class GripperParameters:
         'height above the hole where insertion starts and extraction ends', 'm', 0.001, 0.5,
         source='chosen: insertion starts 30 mm above the hole')
     screw_time: float = parameter('time to screw in or unscrew', 's', 0.0, 60.0, source='chosen')
+    # last, with its value also here: sections built field by field keep working without it
+    screw_length: float = dataclasses.field(default=0.003, metadata=parameter(
+        "how far the screw's tip reaches below the gripper's shoulder (its contact point)", 'm',
+        0.0, 0.05, source='chosen: a few threads; a gripper beside the hole rests this high on '
+                          'the face').metadata)
 
 
 @dataclasses.dataclass(frozen=True)

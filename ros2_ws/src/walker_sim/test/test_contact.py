@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
+from walker_core.robot_parameters import load_walker_parameters
 from walker_sim.core.config import StartConfiguration
 from walker_sim.core.contact import (
-    CONTACT_STIFFNESS, SCREW_LENGTH, NodeGeometry, Seat, contact_forces, where_the_screw_is)
+    CONTACT_STIFFNESS, NodeGeometry, Seat, contact_forces, where_the_screw_is)
 from walker_sim.core.grippers import GripperMode
 from walker_sim.core.imperfections import NodePlacement
 
@@ -13,6 +14,8 @@ NODE = (1.8, 0.9, 0.0)
 UP = (0.0, 0.0, 1.0)
 STILL = (0.0, 0.0, 0.0)
 PERIOD = 0.002
+#: [m] the gripper's screw below its shoulder (``gripper.screw_length``)
+SCREW_LENGTH = load_walker_parameters().gripper.screw_length
 
 
 @pytest.fixture(scope='module')

@@ -64,3 +64,21 @@ def test_the_search_visits_every_probe_once_then_the_estimate_again_then_stops()
 def test_a_reach_that_is_not_positive_is_refused():
     with pytest.raises(ValueError, match='reach'):
         hex_pattern(0.0, 0.003)
+
+
+@pytest.mark.parametrize('radius', [0.0065, 0.015, 0.029])
+def test_an_estimate_known_to_centimetres_is_searched_to_the_radius_with_bounded_probes(radius):
+    """The extent follows the estimate up to ``search_radius``: no farther, no more probes.
+
+    Hex cells of area ``3 sqrt(3) / 2 reach^2`` around probes within ``radius`` lie in the
+    disc of ``radius + reach``: the count is bounded by the ratio of the two areas.
+    """
+    pattern = SearchPattern.around(REACH, 0.02, 3.0, radius)
+    assert pattern.covered == pytest.approx(radius - REACH)
+    assert np.linalg.norm(pattern.offsets, axis=1).max() <= radius + 1e-12
+    assert _gap(pattern.offsets, pattern.covered, REACH) <= REACH * (1 + 1e-9)
+    cell = 1.5 * math.sqrt(3.0) * REACH ** 2
+    assert len(pattern) <= math.pi * (radius + REACH) ** 2 / cell
+    # a smaller estimate's pattern is the start of it: nearest first, the same probes
+    smaller = SearchPattern.around(REACH, 0.002, 3.0, radius)
+    np.testing.assert_allclose(pattern.offsets[:len(smaller)], smaller.offsets, atol=1e-12)

@@ -179,3 +179,35 @@ def test_too_many_jams_abort_to_safe_hold_with_the_base_attached():
     assert world.sequencer.phase == Phase.SAFE_HOLD
     assert world.grippers['a'] == 'attached'
     assert world.log[-1] == SetControlMode('hold', 'a')
+
+
+@pytest.mark.parametrize('off_axis', [0.001, 0.0028])
+def test_the_light_press_on_the_face_is_a_line_the_planner_accepts(off_axis):
+    """A descent that met the face off the axis presses along a vertical the planner takes.
+
+    The press is planned as a line along the hole's axis (refused beyond the insertion
+    tolerance horizontally): near the axis it goes onto it, farther it goes straight down
+    where the tip is, and the lines at the mouth bring it over the hole.
+    """
+    from walker_supervisor.core.descent_contact import DescentContact
+    from walker_supervisor.core.insertion import MOUTH_PRESS, _on_the_face
+    from walker_supervisor.core.step_run import StepRun
+
+    world = World()
+    step = possible_steps(TRUSS, world.stance)[0]
+    world.run_step(step)  # the ideal step, for its targets
+    run = StepRun(SUPERVISOR, KIN, step.base_gripper, 0.5)
+    run.targets = world.targets
+    mouth = world.targets.point_to
+    resting = mouth + np.array([off_axis, 0.0, 0.0005])
+    run.theta = KIN.inverse([*resting, 0.0, world.targets.at_to[4]],
+                            reference=world.targets.at_to)
+    contact = DescentContact(float(mouth[2]), float(mouth[2]) - 0.002)
+    contact.height = float(resting[2])
+    joints, point = _on_the_face(run, contact)
+    horizontal = np.linalg.norm(point[:2] - resting[:2])
+    assert horizontal <= SUPERVISOR.descent_region  # within what the planner accepts
+    assert point[2] == pytest.approx(resting[2] - MOUTH_PRESS)
+    np.testing.assert_allclose(KIN.forward(joints)[:3], point, atol=1e-9)
+    if off_axis <= SUPERVISOR.descent_region:
+        np.testing.assert_allclose(point[:2], mouth[:2], atol=1e-12)  # onto the axis

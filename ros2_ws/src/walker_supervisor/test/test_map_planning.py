@@ -28,7 +28,7 @@ def _stance(heading: float, from_point) -> np.ndarray:
 
 def _planning() -> MapPlanning:
     return MapPlanning(KIN, TRUSS, SETTINGS, PARAMS.gripper.insertion_position_tolerance,
-                       HEIGHT)
+                       HEIGHT, PARAMS.gripper.screw_length)
 
 
 def test_the_extraction_line_rises_from_the_measured_tip_not_the_nominal_node():
@@ -110,12 +110,52 @@ def test_the_search_follows_the_targets_uncertainty_and_zero_radius_turns_it_off
     planning = _planning()
     search = planning.search(STEP)
     assert search is not None and len(search.pattern) > 1
+    std = planning.map.estimate(STEP.to_node).horizontal_std
+    assert std >= SETTINGS.node_prior_std  # known relative to its neighbour only
     assert search.pattern.covered == pytest.approx(
-        min(SETTINGS.search_sigmas * SETTINGS.node_prior_std,
-            SETTINGS.search_radius - search.pattern.reach))
+        min(SETTINGS.search_sigmas * std, SETTINGS.search_radius - search.pattern.reach))
     import dataclasses
     planning.set_settings(dataclasses.replace(SETTINGS, search_radius=0.0))
     assert planning.search(STEP) is None
+
+
+def test_a_target_known_worse_gets_a_wider_search_up_to_the_radius_and_no_farther():
+    """Farther along the chain the estimate is known worse: the search covers more of it."""
+    import dataclasses
+    planning = _planning()
+    planning.targets(STEP, _stance(0.0, TRUSS.position('n2_1') + OFF))
+    near = planning.search(STEP).pattern
+    # the same step with every node known 1.5 times worse: the extent follows the estimate
+    wider = dataclasses.replace(SETTINGS, node_prior_std=1.5 * SETTINGS.node_prior_std)
+    planning.set_settings(wider)
+    far = planning.search(STEP).pattern
+    assert far.covered == pytest.approx(min(1.5 * near.covered,
+                                            SETTINGS.search_radius - far.reach))
+    assert len(far) > len(near)
+    # an estimate known to centimetres: bounded by search_radius, every probe within it
+    planning.set_settings(dataclasses.replace(SETTINGS, node_prior_std=0.015))
+    capped = planning.search(STEP).pattern
+    assert capped.covered == pytest.approx(SETTINGS.search_radius - capped.reach)
+    assert np.linalg.norm(capped.offsets, axis=1).max() <= SETTINGS.search_radius + 1e-12
+
+
+def test_a_jam_on_the_targets_face_sets_its_height_for_the_steps_after_it():
+    """A gripper resting on the face beside the hole stands a screw's length above the mouth."""
+    planning = _planning()
+    targets = planning.targets(STEP, _stance(0.0, TRUSS.position('n2_1') + OFF))
+    low = 0.0025  # [m] the target node sits this far under its estimate (more than overtravel)
+    before = planning.map.estimate(STEP.to_node)
+    resting = targets.point_to + np.array([0.004, 0.0, PARAMS.gripper.screw_length - low])
+    theta = KIN.inverse([*resting, 0.0, targets.at_to[4]], reference=targets.at_to)
+    planning.felt_face(STEP, targets.frame, theta)
+    after = planning.map.estimate(STEP.to_node)
+    assert after.position[2] == pytest.approx(before.position[2] - low, abs=0.1 * low)
+    assert after.covariance[2, 2] < 0.1 * before.covariance[2, 2]
+    np.testing.assert_allclose(after.position[:2], before.position[:2], atol=1e-9)
+    assert not after.surveyed
+    # a later step to the node plans its descent at the height felt
+    again = planning.targets(STEP, _stance(0.0, TRUSS.position('n2_1') + OFF))
+    assert again.point_to[2] == pytest.approx(targets.point_to[2] - low, abs=0.1 * low)
 
 
 def test_the_coarse_motion_keeps_its_starts_radius_and_height_and_fine_takes_the_rest():
@@ -162,3 +202,20 @@ def test_a_half_turn_to_a_node_off_its_bearing_ends_its_coarse_motion_opposite_i
     assert joints[0] - theta[0] == pytest.approx(step.sweep, abs=1e-6)
     # FINE is left the millimetres to the target
     assert 0.001 < np.linalg.norm(targets.point_above_to - point) < 0.003
+
+
+def test_a_probe_goes_to_its_offset_and_to_the_height_felt_since_the_step_began():
+    from walker_supervisor.core.step_geometry import probe_targets
+
+    planning = _planning()
+    targets = planning.targets(STEP, _stance(0.0, TRUSS.position('n2_1') + OFF))
+    offset, low = np.array([0.0026, -0.0015]), -0.003  # [m]
+    probe = probe_targets(KIN, targets, offset, low)
+    moved = probe.frame.to_truss(probe.point_to) - targets.frame.to_truss(targets.point_to)
+    np.testing.assert_allclose(moved, [*offset, low], atol=1e-12)
+    np.testing.assert_allclose(probe.point_above_to - targets.point_above_to,
+                               probe.point_to - targets.point_to, atol=1e-12)
+    # the joints go there: the descent of the probe ends on the felt mouth
+    np.testing.assert_allclose(KIN.forward(probe.at_to)[:3], probe.point_to, atol=1e-9)
+    np.testing.assert_allclose(KIN.forward(probe.above_to)[:3], probe.point_above_to,
+                               atol=1e-9)

@@ -8,7 +8,7 @@ from walker_core.robot_parameters import load_walker_parameters
 from walker_core.truss import Truss
 from walker_supervisor.core.step_geometry import BaseFrame
 from walker_supervisor.core.truss_map import (
-    SURVEY_FORMAT, SurveyFileError, TrussMap, survey_covariance)
+    SURVEY_FORMAT, NodeEstimate, SurveyFileError, TrussMap, fuse, fuse_height, survey_covariance)
 
 PARAMS = load_walker_parameters()
 KIN = WalkerKinematics.from_parameters(PARAMS)
@@ -123,4 +123,109 @@ def test_every_node_has_a_frame_at_its_estimate_marked_surveyed_or_nominal():
     assert len(frames) == len(TRUSS.node_names)
     np.testing.assert_allclose(frames['node_2_1'][0], survey.position('n2_1'))
     assert frames['node_2_1'][1] and frames['node_1_1'][1] and not frames['node_3_2'][1]
-    np.testing.assert_array_equal(frames['node_3_2'][0], TRUSS.position('n3_2'))
+    # a node not surveyed where the map predicts it: from n2_1, displaced with it
+    np.testing.assert_allclose(frames['node_3_2'][0], survey.position('n3_2'))
+    np.testing.assert_allclose(frames['node_3_2'][0] - TRUSS.position('n3_2'),
+                               survey.position('n2_1') - TRUSS.position('n2_1'))
+
+
+def _rotated_truss(angle: float) -> dict[str, np.ndarray]:
+    """Where every node really is: the truss turned by ``angle`` [rad] about n1_1."""
+    pivot = TRUSS.position('n1_1')
+    c, s = np.cos(angle), np.sin(angle)
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return {n: pivot + turn @ (TRUSS.position(n) - pivot) for n in TRUSS.node_names}
+
+
+def test_a_node_not_surveyed_is_predicted_from_its_surveyed_neighbour():
+    """The chain's error: a truss turned by 5 mrad is 9 mm off its drawing two bays out.
+
+    Predicted from its surveyed neighbour, the node is off only by what the turn does over one
+    bay, within three of the prediction's standard deviations; the drawing is not.
+    """
+    prior = 0.002
+    survey = TrussMap(TRUSS, prior_std=prior, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    true = _rotated_truss(0.005)
+    surveyed = survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(true['n2_1']))
+    predicted = survey.estimate('n3_1')
+    assert not predicted.surveyed
+    np.testing.assert_allclose(predicted.position, surveyed.position
+                               + TRUSS.position('n3_1') - TRUSS.position('n2_1'))
+    np.testing.assert_allclose(predicted.covariance,
+                               surveyed.covariance + np.eye(3) * prior ** 2, atol=1e-15)
+    off_drawing = np.linalg.norm(TRUSS.position('n3_1') - true['n3_1'])
+    off_prediction = np.linalg.norm(predicted.position - true['n3_1'])
+    assert off_drawing > 3.0 * predicted.horizontal_std > off_prediction
+    # the uncertainty grows with the distance from what was surveyed
+    assert survey.estimate('n4_1').horizontal_std > predicted.horizontal_std > prior
+    # a map with nothing surveyed has every node on its drawing, with the prior
+    np.testing.assert_array_equal(TrussMap(TRUSS, prior, 2e-4).position('n3_1'),
+                                  TRUSS.position('n3_1'))
+
+
+def test_a_survey_is_fused_with_the_drawing_not_with_the_prediction():
+    """The prediction is taken through the same base node as the survey: not a second reading."""
+    survey = TrussMap(TRUSS, prior_std=0.002, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    true = _rotated_truss(0.005)
+    frame = BaseFrame(TRUSS.position('n1_1'), 0.0)
+    survey.survey('n2_1', frame, 'n1_1', KIN,
+                  KIN.inverse([*frame.to_base(true['n2_1']), 0.0, 0.0]))
+    theta = KIN.inverse([*BaseFrame(survey.position('n2_1'), 0.0).to_base(true['n3_1']),
+                         0.0, 0.0])
+    base = BaseFrame(survey.position('n2_1'), 0.0)
+    measured = survey.measure('n3_1', base, 'n2_1', KIN, theta)
+    estimate = survey.survey('n3_1', base, 'n2_1', KIN, theta)
+    expected = fuse(survey.nominal('n3_1'), measured)
+    np.testing.assert_allclose(estimate.position, expected.position, atol=1e-12)
+    np.testing.assert_allclose(estimate.covariance, expected.covariance, atol=1e-15)
+
+
+def test_a_height_alone_moves_the_height_and_what_is_correlated_with_it():
+    prior = NodeEstimate(np.array([1.0, 2.0, 0.0]), np.diag([4e-6, 4e-6, 4e-6]), False)
+    felt = fuse_height(prior, -0.002, 4e-6)
+    # equally known: halfway, half the variance; x and y untouched when uncorrelated
+    assert felt.position[2] == pytest.approx(-0.001)
+    assert felt.covariance[2, 2] == pytest.approx(2e-6)
+    np.testing.assert_array_equal(felt.position[:2], prior.position[:2])
+    np.testing.assert_allclose(felt.covariance[:2, :2], prior.covariance[:2, :2])
+    assert not felt.surveyed
+    # x correlated with z moves with it, by the regression of x on z
+    correlated = NodeEstimate(prior.position, np.array([[4e-6, 0.0, 2e-6], [0.0, 4e-6, 0.0],
+                                                        [2e-6, 0.0, 4e-6]]), True)
+    moved = fuse_height(correlated, -0.002, 4e-6)
+    assert moved.position[0] == pytest.approx(1.0 - 0.0005)
+    assert np.linalg.eigvalsh(moved.covariance).min() > 0.0 and moved.surveyed
+
+
+def test_a_felt_height_is_kept_until_a_survey_takes_its_place():
+    survey = TrussMap(TRUSS, prior_std=0.002, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    screw = 0.003  # [m] the gripper rests this far above the mouth beside the hole
+    low = DISPLACED - np.array([0.0, 0.0, 0.002])  # the node 2.7 mm under its drawing
+    resting = low + np.array([0.004, 0.0, screw])
+    version = survey.version
+    felt = survey.measure_height('n2_1', FRAME, 'n1_1', KIN, _joints_at(resting), screw, 3e-4)
+    assert survey.version > version and not survey.surveyed('n2_1')
+    assert felt.position[2] == pytest.approx(low[2], abs=2e-4)
+    np.testing.assert_allclose(felt.position[:2], TRUSS.position('n2_1')[:2])
+    # felt again from the same base: the new reading replaces the old, not added to it
+    again = survey.measure_height('n2_1', FRAME, 'n1_1', KIN, _joints_at(resting), screw, 3e-4)
+    np.testing.assert_allclose(again.covariance, felt.covariance)
+    # the survey at the screw-in takes its place (the same joints measure the height)
+    screwed = survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(low))
+    expected = fuse(survey.nominal('n2_1'), survey.measure('n2_1', FRAME, 'n1_1', KIN,
+                                                           _joints_at(low)))
+    np.testing.assert_allclose(screwed.position, expected.position, atol=1e-12)
+    # the anchor is not moved; bad input is refused and changes nothing
+    np.testing.assert_array_equal(
+        survey.measure_height('n1_1', BaseFrame(TRUSS.position('n2_1'), 0.0), 'n2_1', KIN,
+                              _joints_at(resting), screw, 3e-4).position,
+        TRUSS.position('n1_1'))
+    version = survey.version
+    with pytest.raises(ValueError, match='contact_std'):
+        survey.measure_height('n3_1', FRAME, 'n1_1', KIN, _joints_at(resting), screw, -1.0)
+    with pytest.raises(ValueError, match='base node'):
+        survey.measure_height('n1_1', FRAME, 'n1_1', KIN, _joints_at(resting), screw, 3e-4)
+    assert survey.version == version

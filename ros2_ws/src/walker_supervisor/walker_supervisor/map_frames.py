@@ -2,9 +2,9 @@
 
 The supervisor's truss map (:class:`~walker_supervisor.core.truss_map.TrussMap`) is latched as
 one static transform ``truss`` -> ``node_<i>_<j>`` per node, the estimate where surveyed, the
-nominal place elsewhere, and as markers (``visualization_msgs/MarkerArray``: each node's
-status and uncertainty ellipsoid, :func:`walker_viz.core.map_markers.truss_map_markers`), both
-latched again whenever a survey changes the map.
+prediction elsewhere, and as markers (``visualization_msgs/MarkerArray``: each node's status
+and uncertainty ellipsoid, :func:`walker_viz.core.map_markers.truss_map_markers`), both latched
+again whenever a survey or a felt height changes the map.
 """
 
 from __future__ import annotations

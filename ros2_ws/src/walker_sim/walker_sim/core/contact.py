@@ -9,12 +9,12 @@ the bore), then the bore down to ``truss.hole_depth``.
 
 The gripper meets it at two points: its **shoulder**, the contact point itself (the frame the
 plant reports, which sits on the mouth when screwed in), a flat wider than the chamfer that
-rests on the face whatever its offset; and its **screw's tip**, :data:`SCREW_LENGTH` below the
-shoulder along the gripper's axis, which meets the face off the hole, slides down the chamfer
-into the bore within it, and is kept in the bore by its wall. So a gripper lowered off the hole
-rests on the face with its shoulder :data:`SCREW_LENGTH` above the mouth (the screw-in then
-jams: that is farther from the hole than the tolerance); one lowered within the chamfer is
-guided into the bore and its shoulder comes to rest on the mouth.
+rests on the face whatever its offset; and its **screw's tip**, ``screw_length`` below the
+shoulder along the gripper's axis (``gripper.screw_length``), which meets the face off the
+hole, slides down the chamfer into the bore within it, and is kept in the bore by its wall.
+So a gripper lowered off the hole rests on the face with its shoulder ``screw_length`` above
+the mouth (the screw-in then jams: that is farther from the hole than the tolerance); one
+lowered within the chamfer is guided into the bore and its shoulder comes to rest on the mouth.
 
 Each contact is a stiff one-sided spring-damper on the penetration (never pulling), applied as
 an external force in the physics step: pybullet's collision pipeline is not needed (the walker
@@ -36,14 +36,12 @@ import dataclasses
 import enum
 import math
 
-__all__ = ['FACE_RADIUS', 'SCREW_LENGTH', 'BORE_RADIUS_FRACTION', 'CONTACT_STIFFNESS',
+__all__ = ['FACE_RADIUS', 'BORE_RADIUS_FRACTION', 'CONTACT_STIFFNESS',
            'CONTACT_DAMPING', 'NodeGeometry', 'ContactForce', 'Seat', 'contact_forces',
            'where_the_screw_is']
 
 #: [m] Radius of a node's face around its hole: farther out a gripper passes beside the node.
 FACE_RADIUS = 0.025
-#: [m] How far the screw's tip reaches below the gripper's shoulder (the contact point).
-SCREW_LENGTH = 0.003
 #: The bore's radius (the screw's clearance) as a fraction of the chamfer's radius.
 BORE_RADIUS_FRACTION = 0.5
 #: [N/m] Contact stiffness: 20 N (the drives' most at the tip) sinks 0.2 mm into the face.
@@ -73,17 +71,21 @@ class NodeGeometry:
         [m] Radius the screw's tip can move off the axis in the bore.
     hole_depth : float
         [m] Depth of the bore below the mouth.
+    screw_length : float
+        [m] How far the gripper's screw reaches below its shoulder (``gripper.screw_length``).
     """
 
     chamfer_radius: float
     bore_radius: float
     hole_depth: float
+    screw_length: float
 
     @classmethod
     def from_parameters(cls, params) -> 'NodeGeometry':
         """Return the node of the shared ``gripper.*`` and ``truss.*`` parameters."""
         chamfer = params.gripper.insertion_position_tolerance
-        return cls(chamfer, BORE_RADIUS_FRACTION * chamfer, params.truss.hole_depth)
+        return cls(chamfer, BORE_RADIUS_FRACTION * chamfer, params.truss.hole_depth,
+                   params.gripper.screw_length)
 
     @property
     def chamfer_depth(self) -> float:
@@ -153,9 +155,10 @@ def _point_contact(geometry: NodeGeometry, node, point, velocity, face_only: boo
     return ContactForce(tuple(magnitude * n for n in normal), tuple(point), depth)
 
 
-def screw_tip(position, z_axis) -> tuple[float, float, float]:
-    """Return the screw's tip [m]: :data:`SCREW_LENGTH` below the contact point along the axis."""
-    return tuple(p - SCREW_LENGTH * a for p, a in zip(position, z_axis, strict=True))
+def screw_tip(geometry: NodeGeometry, position, z_axis) -> tuple[float, float, float]:
+    """Return the screw's tip [m]: ``screw_length`` below the contact point along the axis."""
+    length = geometry.screw_length
+    return tuple(p - length * a for p, a in zip(position, z_axis, strict=True))
 
 
 def contact_forces(geometry: NodeGeometry, node, position, z_axis, velocity, spin,
@@ -175,10 +178,11 @@ def contact_forces(geometry: NodeGeometry, node, position, z_axis, velocity, spi
     centre : sequence of 3 float
         The gripper link's centre of mass [m].
     """
-    if position[2] - node[2] > SCREW_LENGTH + 1e-3:
+    if position[2] - node[2] > geometry.screw_length + 1e-3:
         return []  # the screw's tip is above the face: nothing can touch
     forces = []
-    for point, face_only in ((tuple(position), True), (screw_tip(position, z_axis), False)):
+    for point, face_only in ((tuple(position), True),
+                             (screw_tip(geometry, position, z_axis), False)):
         arm = [p - c for p, c in zip(point, centre, strict=True)]
         point_velocity = (velocity[0] + spin[1] * arm[2] - spin[2] * arm[1],
                           velocity[1] + spin[2] * arm[0] - spin[0] * arm[2],
@@ -201,7 +205,7 @@ def where_the_screw_is(geometry: NodeGeometry, node, position, z_axis
     offset : float
         [m] The screw's tip from the hole's axis.
     """
-    tip = screw_tip(position, z_axis)
+    tip = screw_tip(geometry, position, z_axis)
     offset = math.hypot(tip[0] - node[0], tip[1] - node[1])
     height = position[2] - node[2]
     tip_height = tip[2] - node[2]

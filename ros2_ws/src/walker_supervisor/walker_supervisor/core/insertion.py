@@ -18,9 +18,9 @@ which does, for ``settle_time``) the tip is checked again, now across the hole's
 gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`` times (each
 lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD;
 with a search (:mod:`~walker_supervisor.core.hole_search`), each jam moves the targets to the
-next probe instead, and the step holds once the last probe has jammed. A
-step ends when the gripper reports attached, with the controllers commanded to HOLD under the
-new base (which starts their relaxation).
+next probe instead (descending at the height a jam on the node's face felt), and the step holds
+once the last probe has jammed. A step ends when the gripper reports attached, with the
+controllers commanded to HOLD under the new base (which starts their relaxation).
 """
 
 from __future__ import annotations
@@ -81,13 +81,19 @@ def _press_lightly(run: StepRun) -> list:
 def _on_the_face(run: StepRun, contact: DescentContact) -> tuple[np.ndarray, np.ndarray]:
     """Return the joints [rad] and point [m] on the hole's axis :data:`MOUTH_PRESS` below contact.
 
-    The point at the nominal mouth (and its joints) if the face was not felt or that point is
-    out of reach.
+    The press is a line along the hole's axis, which the planner accepts only from within the
+    insertion tolerance of it: a tip that met the face farther than ``descent_region`` (at most
+    that tolerance) from the axis, as a descent swinging 2-3 mm off it does, is pressed
+    straight down where it is, and the lines at the mouth bring it over the hole. The point at
+    the nominal mouth (and its joints) if the face was not felt or that point is out of reach.
     """
     t = run.targets
     if not contact.felt:
         return t.at_to, t.point_to
     point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
+    tip = run.tip()
+    if np.linalg.norm(tip[:2] - point[:2]) > run.parameters.descent_region:
+        point[:2] = tip[:2]
     try:
         joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
     except KinematicsError:
@@ -232,6 +238,8 @@ def jammed(run: StepRun, message: str, now: float) -> list:
     holds (the base gripper attached, the moving one free above the truss).
     """
     run.tries.insertions += 1
+    if run.tries.contact is not None and run.tries.contact.felt:
+        run.felt_faces.append(run.theta.copy())  # resting on the face: the node's height
     notices = []
     if run.search is not None:
         probe = _next_probe(run)
@@ -262,7 +270,7 @@ def _next_probe(run: StepRun) -> Notice | str:
                     f'{(pattern.covered + pattern.reach) * 1e3:.1f} mm of the estimate, and '
                     f'the estimate again')
         try:
-            run.targets = probe_targets(run.kinematics, run.estimate, offset)
+            run.targets = probe_targets(run.kinematics, run.estimate, offset, run.height_shift)
         except KinematicsError:
             continue  # out of reach: the next probe
         return Notice(f'insertion jammed: probe {search.probe} of {len(search) - 1}, '

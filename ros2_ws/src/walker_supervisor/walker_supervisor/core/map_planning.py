@@ -12,7 +12,12 @@ TrussMap` up to date from the joints:
   screwed in and its frame unchanged), now with the chain's bend of the screw-in let out;
 * every step's base frame is measured from its stance through the two nodes' estimates, its
   extraction starts where the joints put the moving gripper, and its coarse and fine targets
-  are the map's estimate of the target node.
+  are the map's estimate of the target node (predicted from the base node when it has not
+  been surveyed: :meth:`TrussMap.predicted`);
+* a jam with the gripper resting on the target node's face measures the node's height
+  (:meth:`MapPlanning.felt_face`);
+* a search covers ``search_sigmas`` standard deviations of the target's estimate, with no
+  probe farther than ``search_radius`` from it.
 """
 
 from __future__ import annotations
@@ -46,16 +51,19 @@ class MapPlanning:
         [m] ``gripper.insertion_position_tolerance``.
     approach_height : float
         [m] ``gripper.approach_height``.
+    screw_length : float
+        [m] ``gripper.screw_length``: a gripper beside the hole rests this high on the face.
     """
 
     def __init__(self, kinematics: WalkerKinematics, truss: Truss,
                  settings: SupervisorParameters, insertion_tolerance: float,
-                 approach_height: float) -> None:
+                 approach_height: float, screw_length: float) -> None:
         self.kinematics = kinematics
         self.map = TrussMap(truss, settings.node_prior_std, settings.joint_reading_std)
         self.settings = settings
         self.insertion_tolerance = float(insertion_tolerance)
         self.approach_height = float(approach_height)
+        self.screw_length = float(screw_length)
         # the last step that screwed in, with its base frame: its base is still attached at
         # the next stance, which surveys the step's node again from it
         self._last: tuple[PlannedStep, BaseFrame] | None = None
@@ -90,7 +98,12 @@ class MapPlanning:
                                  survey.position(step.to_node), theta, self.approach_height)
 
     def search(self, step: PlannedStep) -> HoleSearch | None:
-        """Return the search for the step's target hole on a jam (None: ``search_radius`` 0)."""
+        """Return the search for the step's target hole on a jam (None: ``search_radius`` 0).
+
+        It covers ``search_sigmas`` standard deviations of the target's estimate along its
+        worst horizontal direction, no probe farther than ``search_radius`` from the estimate
+        (:meth:`SearchPattern.around`); probes the arm cannot reach are passed over.
+        """
         settings = self.settings
         if settings.search_radius <= 0.0:
             return None
@@ -98,6 +111,17 @@ class MapPlanning:
         estimate = self.map.estimate(step.to_node)
         return HoleSearch(SearchPattern.around(reach, estimate.horizontal_std,
                                                settings.search_sigmas, settings.search_radius))
+
+    def felt_face(self, step: PlannedStep, frame: BaseFrame, theta_roles: np.ndarray) -> None:
+        """Take the target node's height from a jam, the gripper resting on the node's face.
+
+        A screw-in jams when the screw's tip is beside the hole (over the chamfer the node
+        guides it into the bore), so the gripper rests ``screw_length`` above the mouth: the
+        joints ``theta_roles`` [rad] (role order of the step's base, whose frame is ``frame``)
+        measure the node's height (:meth:`TrussMap.measure_height`, ``face_height_std``).
+        """
+        self.map.measure_height(step.to_node, frame, step.base_node, self.kinematics,
+                                theta_roles, self.screw_length, self.settings.face_height_std)
 
     def screwed_in(self, step: PlannedStep, targets: StepTargets,
                    theta_roles: np.ndarray) -> None:

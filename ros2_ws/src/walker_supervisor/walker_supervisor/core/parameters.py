@@ -90,17 +90,17 @@ class SupervisorParameters:
         's', 0.0, 1.0, read_only=False,
         source="chosen: joint 1's filter holds the sweep back while the gripper rises")
     node_prior_std: float = parameter(
-        "standard deviation of a truss node's place along x, y and z until the joints survey it",
+        "standard deviation of a truss node's place relative to a neighbour's, along x, y and z",
         'm', 0.0, 0.02, read_only=False,
-        source="chosen: nodes placed to 1 mm, relative to the base and the first stance's heading")
+        source="chosen: two nodes placed to 1.4 mm each; the frame's heading error adds to it")
     joint_reading_std: float = parameter(
         "standard deviation of a joint's reading, offset and noise together (the map's survey)",
         'rad', 0.0, 0.01, read_only=False,
         source="chosen: an output encoder's calibration to 0.2 mrad")
     search_radius: float = parameter(
-        'farthest a search probe goes from the estimate of a hole (0: jams retried in place)',
-        'm', 0.0, 0.02, read_only=False,
-        source='chosen: 19 probes cover 5 mm, 3 std of an unsurveyed node')
+        "upper bound on a search probe's distance from a hole's estimate (0: jams retried in "
+        'place)', 'm', 0.0, 0.029, read_only=False,
+        source='chosen: half the approach region; at most 121 probes, 13.5 mm covered')
     search_sigmas: float = parameter(
         "standard deviations of the node's estimate that a search covers",
         '', 0.0, 10.0, read_only=False, source='chosen: 3, 99 % of a normal placement error')
@@ -110,6 +110,10 @@ class SupervisorParameters:
         'face', 'm', 0.0, 0.02, read_only=False,
         source='chosen: reaches a node 2 mm low; deeper presses bend the estimate off the axis'
         ).metadata)
+    face_height_std: float = dataclasses.field(default=0.0003, metadata=parameter(
+        "standard deviation of a node's height felt by a gripper resting on its face",
+        'm', 0.0, 0.01, read_only=False,
+        source='chosen: the light press on the face, 0.3 mm below contact').metadata)
 
     def __post_init__(self) -> None:
         check_section(self)

@@ -145,7 +145,8 @@ class WalkRunner:
         #: the truss map and the step targets planned on it
         self.mapped = MapPlanning(self.kinematics, self.truss, settings,
                                   params.gripper.insertion_position_tolerance,
-                                  params.gripper.approach_height)
+                                  params.gripper.approach_height,
+                                  params.gripper.screw_length)
         self.measured = Measurements()
         timeout = settings.watchdog_timeout
         self.health = HealthMonitor({PLANT_JOINT_STATES: timeout, PLANT_GRIPPER_STATES: timeout,
@@ -454,6 +455,7 @@ class WalkRunner:
             self._execute(self.sequencer.tick(now, measured.roles(base),
                                               physical_to_roles(measured.velocities, base),
                                               dict(measured.grippers)), now)
+            self._take_felt_faces()
         walk = self._walk
         if walk is not None:
             if not self.sequencer.busy:
@@ -589,6 +591,15 @@ class WalkRunner:
         (:class:`~walker_supervisor.core.map_planning.MapPlanning`).
         """
         return self.mapped.targets(step, theta_roles)
+
+    def _take_felt_faces(self) -> None:
+        """Take into the map the heights of the target node felt by the step's jams."""
+        step, targets = self.sequencer.step, self.sequencer.targets
+        for theta in self.sequencer.take_felt_faces():
+            if step is not None and targets is not None:
+                self.mapped.felt_face(step, targets.frame, theta)
+                self.sequencer.move_mouth(
+                    float(targets.frame.to_base(self.mapped.map.position(step.to_node))[2]))
 
     def _survey_screw_in(self, outcome: StepOutcome) -> None:
         """Survey the node a step screwed into from the joints, in its base's role order."""

@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from walker_core.kinematics import WalkerKinematics
+from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core import approach, extraction, insertion, recovery, transitions
 from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.transitions import MAX_FINE_LINES
@@ -34,7 +34,7 @@ from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, SequencerError, Stage, StepOutcome
 from walker_supervisor.core.progress import PhaseProgress
 from walker_supervisor.core.route import PlannedStep
-from walker_supervisor.core.step_geometry import StepTargets
+from walker_supervisor.core.step_geometry import StepTargets, probe_targets
 from walker_supervisor.core.step_run import StepRun
 
 __all__ = ['StepSequencer', 'MAX_FINE_LINES', 'STANCE_MARGIN']
@@ -137,6 +137,34 @@ class StepSequencer:
         the sim-time clock while this is True, so it must not stay True on a frozen clock.
         """
         return extraction.awaiting_plan(self._run)
+
+    def take_felt_faces(self) -> list[np.ndarray]:
+        """Return, once, the joints [rad] of the jams that rested on the node's face.
+
+        Role order of the step's base; each a jam since the last call whose descent had felt
+        the face (the gripper resting on it).
+        """
+        felt, self._run.felt_faces = self._run.felt_faces, []
+        return felt
+
+    def move_mouth(self, height: float) -> None:
+        """Take the target mouth's height [m] (base frame) felt since the step began.
+
+        The search's next probes descend there; the probe the gripper is lifting back to after
+        a jam (the map takes the height that jam felt) moves there at once, before FINE brings
+        the tip over it. Without a search nothing changes: a retry is made where the last was.
+        """
+        run = self._run
+        if run.search is None or run.targets is None:
+            return
+        estimate = run.estimate if run.estimate is not None else run.targets
+        run.height_shift = float(height) - float(estimate.point_to[2])
+        if run.stage == Stage.RETRY_LIFT and run.estimate is not None:
+            try:
+                run.targets = probe_targets(run.kinematics, run.estimate, run.search.offset,
+                                            run.height_shift)
+            except KinematicsError:
+                pass  # out of reach there: the probe keeps its height
 
     def take_outcome(self) -> StepOutcome | None:
         """Return the outcome of the step that ended since the last call, once; else None.

@@ -227,10 +227,11 @@ def recovery_targets(kinematics: WalkerKinematics, frame: BaseFrame, step: Plann
 
 
 def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
-                  offset: np.ndarray) -> StepTargets:
+                  offset: np.ndarray, height_shift: float = 0.0) -> StepTargets:
     """Return the step's targets moved to a search probe ``offset`` [m] (x, y, truss frame).
 
-    The points above the hole and at its mouth move by the offset (turned into the base frame);
+    The points above the hole and at its mouth move by the offset (turned into the base frame)
+    and up by ``height_shift`` [m] (a node's height felt on its face since the step began);
     the joint targets there are the IK solutions nearest the step's own
     (:mod:`~walker_supervisor.core.hole_search`).
 
@@ -241,7 +242,7 @@ def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
     """
     c, s = math.cos(targets.frame.heading), math.sin(targets.frame.heading)
     dx, dy = float(offset[0]), float(offset[1])
-    shift = np.array([c * dx + s * dy, -s * dx + c * dy, 0.0])
+    shift = np.array([c * dx + s * dy, -s * dx + c * dy, float(height_shift)])
     point_above_to = targets.point_above_to + shift
     point_to = targets.point_to + shift
     yaw = float(kinematics.forward(targets.above_to)[4])

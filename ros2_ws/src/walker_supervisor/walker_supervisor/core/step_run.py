@@ -142,6 +142,12 @@ class StepRun:
         # targets at the map's estimate, which the probes are offsets from
         self.search: HoleSearch | None = None
         self.estimate: StepTargets | None = None
+        # joints [rad] (role order) of each jam with the gripper resting on the node's face,
+        # until the map takes them (StepSequencer.take_felt_faces)
+        self.felt_faces: list[np.ndarray] = []
+        # [m] how far the probes' mouth is moved in height from the estimate's: the height the
+        # map took from a jam on the node's face (StepSequencer.move_mouth)
+        self.height_shift = 0.0
 
     # ------------------------------------------------------------------ where the tip is
     @property

@@ -7,8 +7,12 @@ eq (1) of the measured joints from the base gripper's node says where the other 
 is. :class:`TrussMap` keeps, for each node, its estimated position in the *truss frame* with a
 covariance:
 
-* a node never surveyed is at its nominal place with a prior uncertainty (``node_prior_std``
-  along x, y and z);
+* a node never surveyed is predicted from the surveyed node that knows it best, along the
+  nominal vector between them, with that node's covariance plus ``node_prior_std`` squared per
+  bay of distance squared (:meth:`TrussMap.predicted`: a neighbour is known relative to a
+  surveyed node to the truss's placement, and the first stance's heading error turns far
+  nodes off their drawn places); in a map with nothing surveyed it is at its nominal place
+  with ``node_prior_std`` along x, y and z;
 * the node the walk starts from (the base of the first stance) anchors the frame: it is taken
   at its nominal place with no uncertainty, so every other estimate is relative to it;
 * a survey measures a node at the base frame's image of the forward kinematics
@@ -20,8 +24,9 @@ covariance:
 * a surveyed node's estimate is that measurement fused with what the map knew of the node
   before (:meth:`TrussMap.survey`, :func:`fuse`: the least-squares update of two estimates
   weighted by their covariances): the nominal place with the prior, or an earlier walk's
-  estimate. A survey taken through a long chain (a large covariance) barely moves a node known
-  well, and the nominal place bounds the drift that the joints' constant calibration offsets
+  estimate (not the prediction, which is taken through the same base node as the survey). A
+  survey taken through a long chain (a large covariance) barely moves a node known well, and
+  the nominal place bounds the drift that the joints' constant calibration offsets
   would otherwise add step after step. A node surveyed again from the same base (the relaxed
   stance after a screw-in) takes the new reading in place of the old one, fused with the same
   prior: the two readings share their offsets and are not two measurements.
@@ -29,7 +34,9 @@ covariance:
 The base frame's heading is taken again from each stance (both grippers attached) through the
 two nodes' estimates, so it follows the map; its own error is that of the two estimates and is
 not carried as a separate term. A node's height is carried like x and y: the descent goes to the
-estimated mouth.
+estimated mouth. A height felt with the gripper resting on the node's face
+(:meth:`TrussMap.measure_height`) updates the estimate's height alone (:func:`fuse_height`)
+until a survey of the node takes its place.
 
 A map is written to and read from a plain dictionary (:meth:`TrussMap.to_dict`,
 :meth:`TrussMap.from_dict`), the survey file's content (docs/walking.md).
@@ -47,7 +54,7 @@ from walker_core.truss import Truss
 from walker_supervisor.core.step_geometry import BaseFrame
 
 __all__ = ['NodeEstimate', 'TrussMap', 'SurveyFileError', 'SURVEY_FORMAT', 'survey_covariance',
-           'fuse', 'node_frame_name', 'TRUSS_FRAME']
+           'fuse', 'fuse_height', 'node_frame_name', 'TRUSS_FRAME']
 
 #: The frame the map's positions are in (the viz's world frame).
 TRUSS_FRAME = 'truss'
@@ -130,6 +137,38 @@ def fuse(prior: NodeEstimate, measured: NodeEstimate) -> NodeEstimate:
     return NodeEstimate(position, (covariance + covariance.T) / 2.0, True)
 
 
+def fuse_height(estimate: NodeEstimate, height: float, variance: float) -> NodeEstimate:
+    """Update an estimate by a measurement of its height alone (a scalar Kalman update).
+
+    With ``h = (0, 0, 1)``: ``K = P h^T / (h P h^T + r)``, ``x = x + K (z - x_z)``, covariance
+    ``(I - K h) P (I - K h)^T + K r K^T`` (Joseph's form).
+
+    Parameters
+    ----------
+    estimate : NodeEstimate
+        Position [m] and covariance [m^2] in the truss frame.
+    height : float
+        [m] The measured height ``z``.
+    variance : float
+        [m^2] Its variance ``r``.
+
+    Returns
+    -------
+    NodeEstimate
+        The updated estimate, its ``surveyed`` flag unchanged.
+    """
+    p = estimate.covariance
+    total = float(p[2, 2] + variance)
+    if total <= 0.0:
+        return estimate  # both exact: nothing to weigh
+    gain = p[:, 2] / total
+    rest = np.eye(3)
+    rest[:, 2] -= gain
+    position = estimate.position + gain * (height - estimate.position[2])
+    covariance = rest @ p @ rest.T + np.outer(gain, gain) * variance
+    return NodeEstimate(position, (covariance + covariance.T) / 2.0, estimate.surveyed)
+
+
 class TrussMap:
     """Every node's estimated place, nominal until the joints survey it.
 
@@ -155,15 +194,58 @@ class TrussMap:
         self._surveyed: dict[str, NodeEstimate] = {}
         # per node, the base it was last surveyed from and the estimate before that survey
         self._prior: dict[str, tuple[str, NodeEstimate]] = {}
+        # per node, its height felt by a descent: the base it was felt from, height [m] and
+        # variance [m^2] (until a survey of the node takes its place)
+        self._heights: dict[str, tuple[str, float, float]] = {}
         self.anchor: str = ''
         self.version = 0  # grows with every change: a publisher re-latches on it
 
     # ------------------------------------------------------------------ queries
     def estimate(self, node: str) -> NodeEstimate:
-        """Return the node's estimate: surveyed, or nominal with the prior (UnknownNodeError)."""
-        if node in self._surveyed:
-            return self._surveyed[node]
+        """Return the node's estimate: surveyed, or predicted from the map (UnknownNodeError).
+
+        A node not surveyed is predicted from the surveyed node that knows it best
+        (:meth:`predicted`); in a map with no surveyed node it is nominal with the prior.
+        """
+        known = self._surveyed.get(node) or self.predicted(node)
+        felt = self._heights.get(node)
+        if felt is None:
+            return known
+        return fuse_height(known, felt[1], felt[2])
+
+    def nominal(self, node: str) -> NodeEstimate:
+        """Return the node's nominal place with the prior ``prior_std`` (the truss's drawing)."""
         return NodeEstimate(self.truss.position(node), np.eye(3) * self.prior_std ** 2, False)
+
+    def predicted(self, node: str) -> NodeEstimate:
+        """Predict a node from the surveyed node that knows it best (its nominal place if none).
+
+        From a surveyed node ``s`` the nominal vector between the two: ``x = x_s + (p_k -
+        p_s)``, ``C = C_s + (d / spacing)^2 prior_std^2 I`` with ``d`` [m] the nominal distance
+        between them (a neighbour is known relative to ``s`` to ``prior_std``; farther, the
+        truss's own placement and the frame's heading error grow with the distance). Of the
+        surveyed nodes, the one whose prediction has the smallest horizontal variance (the
+        search's direction) is taken.
+
+        Returns
+        -------
+        NodeEstimate
+            Position [m] and covariance [m^2] in the truss frame, not surveyed.
+        """
+        nominal = self.truss.position(node)
+        best = None
+        for source, known in self._surveyed.items():
+            if source == node:
+                continue
+            offset = nominal - self.truss.position(source)
+            hops = float(np.linalg.norm(offset)) / self.truss.spacing
+            covariance = known.covariance + np.eye(3) * (hops * self.prior_std) ** 2
+            spread = float(np.linalg.eigvalsh(covariance[:2, :2]).max())
+            if best is None or spread < best[0]:
+                best = (spread, known.position + offset, covariance)
+        if best is None:
+            return self.nominal(node)
+        return NodeEstimate(best[1], (best[2] + best[2].T) / 2.0, False)
 
     def position(self, node: str) -> np.ndarray:
         """[m] the node's estimated position in the truss frame."""
@@ -238,16 +320,56 @@ class TrussMap:
             return self.estimate(node)
         last_base, prior = self._prior.get(node, ('', None))
         if prior is None or last_base != base_node:
-            prior = self.estimate(node)
+            # the nominal place, not the prediction from a surveyed node: the survey is taken
+            # through that node already, and the drawing is what bounds the chain's drift
+            prior = self._surveyed.get(node) or self.nominal(node)
             self._prior[node] = (base_node, prior)
         estimate = fuse(prior, measured)
         self._surveyed[node] = estimate
+        self._heights.pop(node, None)  # the survey measures the height through the same joints
         self.version += 1
         return estimate
 
     def estimates(self) -> list[tuple[str, NodeEstimate]]:
         """Return every node with its estimate (surveyed, or nominal), in the truss's order."""
         return [(n, self.estimate(n)) for n in self.truss.node_names]
+
+    def measure_height(self, node: str, frame: BaseFrame, base_node: str,
+                       kinematics: WalkerKinematics, theta_roles: np.ndarray,
+                       above_mouth: float, contact_std: float) -> NodeEstimate:
+        """Take the height of ``node``'s mouth felt by a descent resting on its face.
+
+        The tip's height (forward kinematics of eq (1) of ``theta_roles`` [rad], role order
+        of the base gripper, from ``frame`` at ``base_node``) less ``above_mouth`` [m] (how far
+        above the mouth the gripper rests: the screw's length when its tip stands on the face
+        beside the hole, 0 when it rests on the mouth) measures the mouth's height with the
+        variance ``C_base,zz + (R J S J^T R^T)_zz + contact_std^2`` [m^2] (``contact_std`` [m]:
+        how deep the gripper may press into the face or stand above it). The node's estimate
+        takes it by the one-dimensional update of :func:`fuse_height`: its height moves, its
+        x and y only as far as they are correlated with it. A later height felt replaces it
+        (felt through the same joints, it is not a second measurement), and a survey of the
+        node takes its place.
+
+        Returns
+        -------
+        NodeEstimate
+            The node's new estimate (the anchor is never moved).
+        """
+        if not (math.isfinite(above_mouth) and contact_std >= 0.0):
+            raise ValueError(f'above_mouth must be finite and contact_std >= 0 m, got '
+                             f'{above_mouth} and {contact_std}')
+        if node == base_node:
+            raise ValueError(f'cannot feel the base node {node} from itself')
+        self.truss.index(node)
+        if node == self.anchor:
+            return self.estimate(node)
+        theta = np.asarray(theta_roles, dtype=float)
+        height = float(frame.to_truss(kinematics.forward(theta)[:3])[2]) - above_mouth
+        variance = float(self.estimate(base_node).covariance[2, 2] + survey_covariance(
+            kinematics, theta, frame.heading, self.joint_std)[2, 2] + contact_std ** 2)
+        self._heights[node] = (base_node, height, variance)
+        self.version += 1
+        return self.estimate(node)
 
     def frames(self) -> list[tuple[str, np.ndarray, bool]]:
         """Return every node's frame: its TF name, position [m] in the truss frame, surveyed."""
@@ -293,6 +415,7 @@ class TrussMap:
             raise SurveyFileError(f'the anchor {anchor!r} has no survey entry')
         self._surveyed = taken
         self._prior = {}
+        self._heights = {}
         self.anchor = anchor
         self.version += 1
 
