@@ -140,7 +140,7 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
 
 
 def _judged_at_mouth(run: StepRun, now: float, grippers: dict[str, str]) -> list:
-    """The tip at rest on the hole's axis at the mouth: align it or screw in."""
+    """Align the tip at rest at the mouth over the hole's axis, or screw it in."""
     parameters = run.parameters
     if run.mouth_offset() > parameters.insertion_alignment \
             and run.tries.mouth_lines < MAX_MOUTH_LINES:
