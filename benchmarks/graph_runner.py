@@ -25,20 +25,6 @@ STOP_TIMEOUT = 20.0  # [s] for the processes to end on their interrupt (the plan
 
 __all__ = ['GraphRun', 'Walking', 'back_and_forth_targets', 'walk_resuming']
 
-@contextlib.contextmanager
-def _environment(**values: str):
-    """Set environment variables for the run (the session's processes and client read them)."""
-    before = {name: os.environ.get(name) for name in values}
-    os.environ.update(values)
-    try:
-        yield
-    finally:
-        for name, value in before.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
-
 #: Safe holds a walk is resumed from before it counts as failed.
 MAX_RESUMES = 3
 #: Longest wait for the supervisor to answer a resume [s] (wall clock, loaded machine).
@@ -109,6 +95,7 @@ class GraphRun:
         sys.path.insert(0, str(REPO / 'tests'))
         from ros_test_support import isolated_domain
         from walker_bringup.core.respawn import RespawnPolicy
+        from walker_bringup.domains import domain_environment
         from walker_bringup.run_arguments import REALTIME_PRIORITY
         from walker_bringup.session import Arrangement, SessionOptions, WalkSession
         from walker_config.core.configuration import load_configuration
@@ -119,9 +106,8 @@ class GraphRun:
         # A ROS home of the run's own: the supervisor keeps the step under way in it, and a
         # window that ends in the middle of a step must not hand that step to the next graph
         # started in the same domain (it would take a step up from another stance).
-        self._stack.enter_context(_environment(
-            ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-            ROS_HOME=str(self.scratch / 'ros_home'), PYTHONUNBUFFERED='1'))
+        self._stack.enter_context(domain_environment(domain, self.scratch / 'ros_home',
+                                                     PYTHONUNBUFFERED='1'))
         arrangement = Arrangement.COMPOSED if self.composed else Arrangement.COMPOSED_LOOP \
             if self.loop else Arrangement.GROUPED if self.grouped else Arrangement.PROCESSES
         options = SessionOptions(

@@ -28,7 +28,6 @@ import contextlib
 import dataclasses
 import importlib
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -186,24 +185,13 @@ def graph_walk(request: WalkRequest) -> dict[str, Any]:
         The graph did not write a summary (it did not come up, a node refused its
         parameters): the message ends with the end of its output.
     """
-    from walker_bringup.domains import isolated_domain
+    from walker_bringup.domains import domain_environment, isolated_domain
     from walker_bringup.session import Arrangement
 
     out = Path(request.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    with isolated_domain() as domain:
-        names = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_HOME')
-        before = {name: os.environ.get(name) for name in names}
-        os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-                          ROS_HOME=str(out / 'ros_home'))
-        try:
-            return _walk_in_session(request, Arrangement.COMPOSED_LOOP)
-        finally:
-            for name, value in before.items():
-                if value is None:
-                    os.environ.pop(name, None)
-                else:
-                    os.environ[name] = value
+    with isolated_domain() as domain, domain_environment(domain, out / 'ros_home'):
+        return _walk_in_session(request, Arrangement.COMPOSED_LOOP)
 
 
 #: The walk functions a campaign can name (the default ``headless``; ``--graph``: ``graph``).

@@ -40,6 +40,7 @@ from walker_control.core.channel import ControllerChannel
 from walker_control.core.inputs import Setpoint
 from walker_control.core.joint_controller import Measurement
 from walker_control.core.modes import Mode
+from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 from walker_core.stamps import stamp_seconds
 from walker_planner.core.streamer import TrajectoryStreamer
@@ -185,10 +186,10 @@ class RobotLoop:
         counts['refused'] += int(np.count_nonzero(state.refused))
         counts['saturated'] += int(np.count_nonzero(state.saturated))
 
-    def gripper_readings(self) -> dict[str, tuple[str, str]]:
+    def gripper_readings(self) -> dict[str, tuple[GripperState, str]]:
         """Return gripper -> (state, node) as the plant's ``gripper_states`` says now."""
         statuses = self.state.statuses
-        return {g: (statuses[g].mode.name.lower(), statuses[g].node) for g in GRIPPERS}
+        return {g: (statuses[g].mode, statuses[g].node) for g in GRIPPERS}
 
     def take_reports(self) -> dict[str, ControllerReport]:
         """Return each controller's newest state report since the last call (joint -> report)."""

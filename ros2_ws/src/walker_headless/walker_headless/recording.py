@@ -197,7 +197,7 @@ class WalkRecording:
             report = state.grippers[gripper]
             status, alignment = report.status, report.alignment
             grippers.append(t['walker_msgs/msg/GripperState'](
-                name=status.name, state=int(status.mode), node=status.node,
+                name=status.name, state=status.mode.code, node=status.node,
                 position_error=float(alignment.position_error),
                 axis_error=float(alignment.axis_error), message=status.message))
         self.serialize('gripper_states', t['walker_msgs/msg/GripperStates'](

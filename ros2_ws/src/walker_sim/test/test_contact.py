@@ -7,7 +7,7 @@ from walker_core.robot_parameters import load_walker_parameters
 from walker_sim.core.config import StartConfiguration
 from walker_sim.core.contact import (
     CONTACT_STIFFNESS, NodeGeometry, Seat, contact_forces, where_the_screw_is)
-from walker_sim.core.grippers import GripperMode
+from walker_core.gripper_state import GripperState
 from walker_sim.core.imperfections import NodePlacement
 
 NODE = (1.8, 0.9, 0.0)
@@ -111,7 +111,7 @@ def test_a_gripper_lowered_off_the_hole_rests_on_the_face_and_jams_saying_so(
     assert shoulder[2] == pytest.approx(SCREW_LENGTH, abs=3e-4)
     assert plant.contacts and plant.contacts[0].force[2] > 0.0
     outcome = plant.screw_in('b')
-    assert not outcome.success and outcome.status.mode == GripperMode.JAMMED
+    assert not outcome.success and outcome.status.mode == GripperState.JAMMED
     assert f'resting on the face of node {sim.start.other_node}' in outcome.status.message
     assert f'{shoulder[2] * 1e3:.2f} mm above its mouth' in outcome.status.message
 
@@ -127,7 +127,7 @@ def test_a_gripper_lowered_within_the_chamfer_is_guided_into_the_hole_and_screws
     outcome = plant.screw_in('b')
     assert outcome.success, outcome.status.message
     plant.step(np.zeros(5), plant.params.gripper.screw_time + PERIOD)
-    assert plant.gripper_status('b').mode == GripperMode.ATTACHED
+    assert plant.gripper_status('b').mode == GripperState.ATTACHED
 
 
 @pytest.mark.parametrize('height_error', [-0.0015, 0.0015])

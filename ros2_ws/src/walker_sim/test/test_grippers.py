@@ -5,8 +5,9 @@ import math
 import pytest
 
 from walker_core.truss import Truss
+from walker_core.gripper_state import GripperState
 from walker_sim.core.grippers import (
-    GripperCommandError, GripperLogic, GripperMode, HoleAlignment, InterlockError,
+    GripperCommandError, GripperLogic, HoleAlignment, InterlockError,
     hole_alignment)
 
 TRUSS = Truss(spacing=0.9, columns=5, rows=4)
@@ -44,11 +45,11 @@ def test_screw_in_within_tolerance_screws_then_attaches_after_the_screw_time():
     grippers = logic({'a': 'n1_1'})
     outcome = grippers.request_screw_in('b', aligned(0.9 * POSITION_TOLERANCE,
                                                      0.9 * AXIS_TOLERANCE))
-    assert outcome.success and outcome.status.mode == GripperMode.SCREWING
+    assert outcome.success and outcome.status.mode == GripperState.SCREWING
     assert grippers.advance(0.5 * SCREW_TIME) == []
     assert grippers.status('b').progress == pytest.approx(0.5)
     changed = grippers.advance(0.5 * SCREW_TIME)
-    assert [s.mode for s in changed] == [GripperMode.ATTACHED]
+    assert [s.mode for s in changed] == [GripperState.ATTACHED]
     assert grippers.status('b').node == 'n2_1'
 
 
@@ -61,7 +62,7 @@ def test_screw_in_outside_tolerance_jams_and_says_by_how_much(position_error, ax
     grippers = logic({'a': 'n1_1'})
     outcome = grippers.request_screw_in('b', aligned(position_error, axis_error))
     assert not outcome.success
-    assert outcome.status.mode == GripperMode.JAMMED
+    assert outcome.status.mode == GripperState.JAMMED
     assert words in outcome.status.message and 'n2_1' in outcome.status.message
     assert not grippers.holds('b')
     # a jammed gripper may retry once aligned
@@ -72,7 +73,7 @@ def test_releasing_the_only_attached_gripper_is_refused_and_changes_nothing():
     grippers = logic({'a': 'n1_1'})
     with pytest.raises(InterlockError, match='interlock: gripper a holds the walker'):
         grippers.request_unscrew('a')
-    assert grippers.status('a').mode == GripperMode.ATTACHED
+    assert grippers.status('a').mode == GripperState.ATTACHED
     assert grippers.base == 'a'
 
 
@@ -91,10 +92,10 @@ def test_the_base_passes_to_the_other_gripper_when_the_base_is_released():
     grippers = logic()
     assert grippers.base == 'a'
     status = grippers.request_unscrew('a')
-    assert status.mode == GripperMode.UNSCREWING and grippers.base == 'b'
+    assert status.mode == GripperState.UNSCREWING and grippers.base == 'b'
     assert grippers.holds('a')  # still held until the unscrew completes
     changed = grippers.advance(SCREW_TIME)
-    assert [(s.name, s.mode) for s in changed] == [('a', GripperMode.FREE)]
+    assert [(s.name, s.mode) for s in changed] == [('a', GripperState.FREE)]
 
 
 @pytest.mark.parametrize('base', ['a', 'b'])
@@ -109,10 +110,10 @@ def test_the_tip_is_the_gripper_that_moves_or_moves_next_never_the_one_just_scre
     grippers.request_unscrew(base)
     assert grippers.tip == base
     grippers.advance(SCREW_TIME)
-    assert grippers.tip == base and grippers.status(base).mode == GripperMode.FREE
+    assert grippers.tip == base and grippers.status(base).mode == GripperState.FREE
     grippers.request_screw_in(base, aligned())
     grippers.advance(SCREW_TIME)
-    assert grippers.status(base).mode == GripperMode.ATTACHED
+    assert grippers.status(base).mode == GripperState.ATTACHED
     assert grippers.tip == other  # idle, both attached: the gripper the next step releases
 
 
@@ -143,12 +144,12 @@ def test_a_fouled_thread_jams_the_next_screw_ins_however_well_aligned_then_clear
     grippers.fouled_screw_ins = 2
     for remaining in (1, 0):
         outcome = grippers.request_screw_in('b', aligned())
-        assert not outcome.success and outcome.status.mode == GripperMode.JAMMED
+        assert not outcome.success and outcome.status.mode == GripperState.JAMMED
         assert 'thread is fouled' in outcome.status.message
         assert f'{remaining} more screw-ins will jam' in outcome.status.message
         assert grippers.fouled_screw_ins == remaining
     outcome = grippers.request_screw_in('b', aligned())  # retried from JAMMED: clear now
-    assert outcome.success and outcome.status.mode == GripperMode.SCREWING
+    assert outcome.success and outcome.status.mode == GripperState.SCREWING
 
 
 def test_a_fouled_thread_does_not_count_down_on_a_refused_screw_in():
@@ -162,7 +163,7 @@ def test_a_fouled_thread_does_not_count_down_on_a_refused_screw_in():
 def test_a_jammed_gripper_backs_out_at_once():
     grippers = logic({'a': 'n1_1'})
     grippers.request_screw_in('b', aligned(1.0))
-    assert grippers.request_unscrew('b').mode == GripperMode.FREE
+    assert grippers.request_unscrew('b').mode == GripperState.FREE
 
 
 def test_unknown_grippers_are_named():

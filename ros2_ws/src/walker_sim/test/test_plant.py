@@ -7,7 +7,8 @@ import pytest
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics, invert_transform
-from walker_sim.core.grippers import GripperCommandError, GripperMode, InterlockError
+from walker_core.gripper_state import GripperState
+from walker_sim.core.grippers import GripperCommandError, InterlockError
 from walker_sim.core.plant import PlantError
 
 PITCH = PHYSICAL_JOINT_NAMES.index('a_pitch_joint')
@@ -25,7 +26,7 @@ def test_the_start_stance_puts_each_gripper_in_its_node(make_plant, params, sim)
     plant = make_plant()
     state = plant.state()
     for gripper, node in (('a', sim.start.base_node), ('b', sim.start.other_node)):
-        assert state.grippers[gripper].status.mode == GripperMode.ATTACHED
+        assert state.grippers[gripper].status.mode == GripperState.ATTACHED
         assert state.grippers[gripper].alignment.node == node
         assert state.grippers[gripper].alignment.position_error < 1e-6
         assert state.grippers[gripper].alignment.axis_error < 1e-6
@@ -38,8 +39,8 @@ def test_either_gripper_can_be_the_base(make_plant, one_attached, sim, base):
     state = plant.state()
     other = 'b' if base == 'a' else 'a'
     assert state.base == base and state.tip == other
-    assert state.grippers[base].status.mode == GripperMode.ATTACHED
-    assert state.grippers[other].status.mode == GripperMode.FREE
+    assert state.grippers[base].status.mode == GripperState.ATTACHED
+    assert state.grippers[other].status.mode == GripperState.FREE
     assert state.grippers[other].alignment.node == sim.start.other_node
     assert state.grippers[other].alignment.position_error < 1e-6
     # the tip pose relative to the base is the kinematics of the joints in role order
@@ -110,9 +111,9 @@ def test_insertion_within_tolerance_attaches_the_gripper_rigidly(make_plant, one
                                                                params):
     plant = make_plant(one_attached(height=0.5 * params.gripper.insertion_position_tolerance))
     outcome = plant.screw_in('b')
-    assert outcome.success and outcome.status.mode == GripperMode.SCREWING
+    assert outcome.success and outcome.status.mode == GripperState.SCREWING
     state = run(plant, np.zeros(5), params.gripper.screw_time + 0.01)
-    assert state.grippers['b'].status.mode == GripperMode.ATTACHED
+    assert state.grippers['b'].status.mode == GripperState.ATTACHED
     # drawn into the seat by the thread
     assert state.grippers['b'].alignment.position_error < 1e-4
     held = state.poses['b'].position
@@ -126,12 +127,12 @@ def test_insertion_outside_tolerance_jams_and_leaves_the_gripper_free(make_plant
     height = 2.5 * params.gripper.insertion_position_tolerance
     plant = make_plant(one_attached(height=height))
     outcome = plant.screw_in('b')
-    assert not outcome.success and outcome.status.mode == GripperMode.JAMMED
+    assert not outcome.success and outcome.status.mode == GripperState.JAMMED
     assert f'position error {height * 1e3:.2f} mm exceeds' in outcome.status.message
     before = plant.state().poses['b'].position
     state = run(plant, 0.5 * plant.drive.torque_limit * np.array([0, 1, 1, 0, 0]), 0.3)
     assert np.linalg.norm(state.poses['b'].position - before) > 1e-3  # free, not held
-    assert state.grippers['b'].status.mode == GripperMode.JAMMED
+    assert state.grippers['b'].status.mode == GripperState.JAMMED
 
 
 def test_releasing_the_only_attached_gripper_is_refused(make_plant, one_attached):
@@ -139,16 +140,16 @@ def test_releasing_the_only_attached_gripper_is_refused(make_plant, one_attached
     with pytest.raises(InterlockError, match='interlock'):
         plant.unscrew('a')
     state = run(plant, np.zeros(5), 1.0)
-    assert state.grippers['a'].status.mode == GripperMode.ATTACHED
+    assert state.grippers['a'].status.mode == GripperState.ATTACHED
 
 
 def test_a_released_gripper_lets_go_after_the_screw_time(make_plant, params):
     plant = make_plant()
-    assert plant.unscrew('b').mode == GripperMode.UNSCREWING
+    assert plant.unscrew('b').mode == GripperState.UNSCREWING
     with pytest.raises(InterlockError):
         plant.unscrew('a')
     state = run(plant, np.zeros(5), params.gripper.screw_time + 0.01)
-    assert state.grippers['b'].status.mode == GripperMode.FREE and state.base == 'a'
+    assert state.grippers['b'].status.mode == GripperState.FREE and state.base == 'a'
     before = state.poses['b'].position
     # lifted off its node (pushed down, the node's face would hold it)
     state = run(plant, -0.5 * plant.drive.torque_limit * np.array([0, 1, 1, 0, 0]), 0.3)
@@ -249,8 +250,8 @@ def test_make_plant_builds_the_file_plant_with_a_free_tip():
 
     with make_plant(other_attached=False, other_height=0.03) as plant:
         state = plant.reset()
-        assert state.statuses['a'].mode == GripperMode.ATTACHED
-        assert state.statuses['b'].mode == GripperMode.FREE
+        assert state.statuses['a'].mode == GripperState.ATTACHED
+        assert state.statuses['b'].mode == GripperState.FREE
         assert state.tip_position[2] == pytest.approx(0.03, abs=1e-6)
     with pytest.raises(ParameterError, match='other_height'):
         make_plant(other_attached=False, other_height=-0.1)
@@ -264,10 +265,10 @@ def test_gripper_commands_are_answered_as_the_gripper_command_service_answers(ma
     assert not success and 'interlock' in message
     success, message = plant.command_gripper('b', 'screw_in')  # out of tolerance: jams
     assert not success and 'exceeds' in message
-    assert plant.gripper_status('b').mode == GripperMode.JAMMED
+    assert plant.gripper_status('b').mode == GripperState.JAMMED
     assert plant.command_gripper('b', 'twist') == (
         False, "unknown gripper command 'twist': expected 'screw_in' or 'unscrew'")
-    assert plant.gripper_status('a').mode == GripperMode.ATTACHED
+    assert plant.gripper_status('a').mode == GripperState.ATTACHED
     both = make_plant()
     assert both.command_gripper('b', 'unscrew') == (True, '')
-    assert both.gripper_status('b').mode == GripperMode.UNSCREWING
+    assert both.gripper_status('b').mode == GripperState.UNSCREWING

@@ -7,7 +7,7 @@ import pytest
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import flex_joints
 from walker_sim.core.flexibility import tune_flexibility
-from walker_sim.core.grippers import GripperMode
+from walker_core.gripper_state import GripperState
 from walker_sim.core.rooted import carry_state, load_rooted_body
 
 PERIOD = 0.002
@@ -129,7 +129,7 @@ def test_a_carried_walker_keeps_every_part_where_it_was_and_as_it_was_moving(bod
 def test_the_plant_reroots_at_the_other_gripper_when_its_base_lets_go(make_plant, params):
     plant = make_plant()
     state = plant.state()
-    assert state.base == 'a' and plant.gripper_status('b').mode == GripperMode.ATTACHED
+    assert state.base == 'a' and plant.gripper_status('b').mode == GripperState.ATTACHED
     before = plant.client
     resting_b = state.poses['b'].position.copy()
     plant.unscrew('a')
@@ -139,7 +139,7 @@ def test_the_plant_reroots_at_the_other_gripper_when_its_base_lets_go(make_plant
         # no jump at the instant the walker changes bodies
         assert np.abs(state.position - previous).max() < 1e-4
         previous = state.position
-    assert plant.gripper_status('a').mode == GripperMode.FREE and state.base == 'b'
+    assert plant.gripper_status('a').mode == GripperState.FREE and state.base == 'b'
     assert plant.client != before
     # the new base stays where it was screwed in, the freed gripper moves under a torque
     torque = np.zeros(5)

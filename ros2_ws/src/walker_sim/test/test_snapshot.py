@@ -5,7 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from walker_sim.core.grippers import GripperMode
+from walker_core.gripper_state import GripperState
 from walker_sim.core.plant import PlantError
 from walker_sim.core.snapshot import (
     PlantSnapshot, SnapshotError, SnapshotSchedule, read_snapshot, write_snapshot)
@@ -37,10 +37,10 @@ def test_a_restored_plant_has_the_state_of_the_old_one_mid_unscrew_and_moves_on_
     original = make_plant()
     state = _run(original, 0.2)
     tip = state.tip
-    assert state.statuses[tip].mode == GripperMode.ATTACHED
+    assert state.statuses[tip].mode == GripperState.ATTACHED
     original.unscrew(tip)
     state = _run(original, 0.1, np.zeros(5))
-    assert state.statuses[tip].mode == GripperMode.UNSCREWING
+    assert state.statuses[tip].mode == GripperState.UNSCREWING
     write_snapshot(tmp_path / 'plant.json', original.snapshot())
 
     restarted = make_plant()
@@ -51,7 +51,7 @@ def test_a_restored_plant_has_the_state_of_the_old_one_mid_unscrew_and_moves_on_
     # the unscrew goes on where it was; the free tip then moves as the old plant's would
     screw_time = original.params.gripper.screw_time
     later, later_restored = (_run(p, screw_time) for p in (original, restarted))
-    assert later.statuses[tip].mode == GripperMode.FREE
+    assert later.statuses[tip].mode == GripperState.FREE
     _assert_same(later_restored, later, tolerance=1e-6)
 
 
@@ -63,14 +63,14 @@ def test_a_plant_restored_after_the_base_changed_grippers_holds_where_the_old_on
     base, tip = first.base, first.tip
     original.unscrew(base)
     state = _run(original, original.params.gripper.screw_time + 0.1, np.zeros(5))
-    assert state.base == tip and state.statuses[base].mode == GripperMode.FREE
+    assert state.base == tip and state.statuses[base].mode == GripperState.FREE
     _run(original, 0.1)
     state = original.state()
     path = tmp_path / 'plant.json'
     write_snapshot(path, original.snapshot())
     restored = make_plant().restore(read_snapshot(path))
     _assert_same(restored, state)
-    assert restored.statuses[base].mode == GripperMode.FREE and restored.base == tip
+    assert restored.statuses[base].mode == GripperState.FREE and restored.base == tip
 
 
 def test_a_snapshot_of_another_model_or_truss_is_refused_and_changes_nothing(make_plant):

@@ -90,7 +90,7 @@ def pose_msg(pose: Pose, stamp: int) -> PoseStamped:
 def gripper_state_msg(report: GripperReport) -> GripperState:
     """``walker_msgs/GripperState`` of one gripper."""
     status, alignment = report.status, report.alignment
-    return GripperState(name=status.name, state=int(status.mode),
+    return GripperState(name=status.name, state=status.mode.code,
                         node=status.node, position_error=alignment.position_error,
                         axis_error=alignment.axis_error, message=status.message)
 

@@ -50,7 +50,7 @@ from walker_msgs.srv import GripperCommand
 from walker_sim.core.commands import (
     CommandError, DecisionGate, EffortCommands, LockStep, seconds_to_ns)
 from walker_sim.core.config import SimParameters
-from walker_sim.core.grippers import GripperMode
+from walker_core.gripper_state import TURNING
 from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_sim.core.snapshot import SnapshotKeeper
@@ -381,7 +381,7 @@ class PlantNode(Node):
             response.state = gripper_state_msg(state.grippers[gripper])
         if not response.success:
             self.get_logger().warning(f'gripper command refused: {response.message}')
-        elif state.statuses[gripper].mode in (GripperMode.SCREWING, GripperMode.UNSCREWING):
+        elif state.statuses[gripper].mode in TURNING:
             self.get_logger().info(f'gripper {gripper}: {state.statuses[gripper].mode.name}')
         self._publish_grippers(state, force=True)
         return response

@@ -13,9 +13,10 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from walker_msgs.action import Step, WalkTo
 from walker_msgs.msg import (
-    ControllerState, ControlMode, GripperState, GripperStates, StepPhase, StepReport)
+    ControllerState, ControlMode, GripperStates, StepPhase, StepReport)
 from walker_msgs.srv import PlanTrajectory
 
+from walker_core.gripper_state import GripperState, reported_state
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_planner.conversions import chained_message
 from walker_supervisor.core.commands import (
@@ -24,14 +25,11 @@ from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.prepared_motions import PlanAnswer, stream_lead
 from walker_supervisor.core.reports import phase_fields, report_fields
 
-__all__ = ['GRIPPER_STATE_NAMES', 'MODES', 'joint_arrays', 'gripper_readings',
+__all__ = ['MODES', 'joint_arrays', 'gripper_readings', 'gripper_state_code',
            'controller_report', 'seconds', 'mode_message', 'phase_message', 'report_message',
            'feedback_message', 'result_message', 'plan_request_message', 'plan_answer',
            'join_answers', 'diagnostics_message']
 
-GRIPPER_STATE_NAMES = {GripperState.FREE: 'free', GripperState.SCREWING: 'screwing',
-                       GripperState.ATTACHED: 'attached', GripperState.UNSCREWING: 'unscrewing',
-                       GripperState.JAMMED: 'jammed'}
 MODES = {'off': ControlMode.OFF, 'hold': ControlMode.HOLD, 'coarse': ControlMode.COARSE,
          'fine': ControlMode.FINE}
 
@@ -61,9 +59,20 @@ def joint_arrays(msg: JointState) -> tuple[np.ndarray | None, np.ndarray | None]
 
 
 def gripper_readings(msg: GripperStates) -> dict[str, tuple[str, str]]:
-    """Return gripper -> (state name, node) of a ``GripperStates`` message."""
-    return {state.name: (GRIPPER_STATE_NAMES.get(state.state, 'unknown'), state.node)
-            for state in msg.grippers}
+    """Return gripper -> (state, node) of a ``GripperStates`` message.
+
+    The state is a :class:`~walker_core.gripper_state.GripperState`, or
+    ``walker_core.gripper_state.UNKNOWN`` for a code the message does not define.
+    """
+    return {state.name: (reported_state(state.state), state.node) for state in msg.grippers}
+
+
+def gripper_state_code(state: str) -> int:
+    """Return the ``walker_msgs/GripperState`` constant of ``state`` (FREE for an unknown one)."""
+    try:
+        return GripperState(state).code
+    except ValueError:
+        return GripperState.FREE.code
 
 
 #: ``walker_msgs/ControllerState`` mode constants -> the supervisor's mode names

@@ -34,9 +34,10 @@ import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
 from walker_msgs.action import FollowTrajectory
-from walker_msgs.msg import GripperState
+from walker_msgs.msg import GripperState as GripperStateMessage
 from walker_msgs.srv import GripperCommand, JogJoint, JogTip
 
+from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_runtime.node_parameters import declare_section, guard_section_updates
 from walker_core.text import unknown_choice
@@ -49,7 +50,7 @@ from walker_supervisor.core.teleop import (
     GripperOperation, JointJog, SettleDetector, TeleopParameters, TeleopRefusedError,
     TeleopRules, TipJog)
 from walker_supervisor.links import SupervisorLinks
-from walker_supervisor.messages import GRIPPER_STATE_NAMES, plan_request_message
+from walker_supervisor.messages import gripper_state_code, plan_request_message
 from walker_supervisor.teleop_waits import TeleopWaits
 
 __all__ = ['TeleopServer']
@@ -57,7 +58,6 @@ __all__ = ['TeleopServer']
 #: The commands of operate_gripper, by name (how an unknown one is refused)
 _GRIPPER_COMMANDS = {'SCREW_IN': GripperCommand.Request.SCREW_IN,
                      'UNSCREW': GripperCommand.Request.UNSCREW}
-_STATE_NUMBERS = {name: number for number, name in GRIPPER_STATE_NAMES.items()}
 _ZERO = np.zeros(3)
 
 
@@ -86,13 +86,13 @@ class TeleopServer:
     clocks : Clocks
     execute : callable
         Carries out the runner's commands (``execute(commands)``).
-    gripper_messages : mapping of str to GripperState
+    gripper_messages : mapping of str to GripperStateMessage
         The newest state message of each gripper, for the answers.
     """
 
     def __init__(self, node: Node, runner: WalkRunner, links: SupervisorLinks, clocks: Clocks,
                  execute: Callable[[list], None],
-                 gripper_messages: Mapping[str, GripperState]) -> None:
+                 gripper_messages: Mapping[str, GripperStateMessage]) -> None:
         self._node, self._runner, self._links, self._clocks = node, runner, links, clocks
         self._execute, self._gripper_messages = execute, gripper_messages
         self.settings = declare_section(node, TeleopParameters, 'teleop.')
@@ -328,7 +328,8 @@ class TeleopServer:
         measured = runner.measured
         gripper, what = operation.gripper, operation.describe()
         timeout = runner.params.gripper.screw_time + runner.settings.phase_timeout
-        if operation.action == 'unscrew' and measured.grippers.get(gripper) == 'attached':
+        attached = measured.grippers.get(gripper) == GripperState.ATTACHED
+        if operation.action == 'unscrew' and attached:
             refusal = runner.release_refusal(gripper, self._clocks.steady())  # as for a step
             if refusal:
                 return _Outcome(False, f'{what} refused: {refusal}')
@@ -355,7 +356,7 @@ class TeleopServer:
             return _Outcome(False, f'{what}: gripper {gripper} did not become '
                                    f'{" or ".join(operation.expected)} within {timeout:g} s '
                                    f'(it reports {state})')
-        if state == 'attached':
+        if state == GripperState.ATTACHED:
             return _Outcome(True, f'gripper {gripper} is attached at '
                                   f'{measured.nodes.get(gripper, "?")}; gripper {base} is the '
                                   f'base')
@@ -367,9 +368,9 @@ class TeleopServer:
         if state is not None:
             response.state = state
         elif gripper in measured.grippers:
-            response.state = GripperState(name=gripper,
-                                          state=_STATE_NUMBERS.get(measured.grippers[gripper], 0),
-                                          node=measured.nodes.get(gripper, ''))
+            response.state = GripperStateMessage(
+                name=gripper, state=gripper_state_code(measured.grippers[gripper]),
+                node=measured.nodes.get(gripper, ''))
 
     # ------------------------------------------------------------------ answers
     def _answer(self, response, outcome: _Outcome, service: str):

@@ -36,6 +36,7 @@ from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
+from walker_core.gripper_state import reported_state
 from walker_core.joint_roles import GRIPPERS
 from walker_core.robot_parameters import WalkerParameters
 from walker_runtime.core.resubscription import clock_ran_past
@@ -45,7 +46,7 @@ from walker_runtime.qos import LATCHED_QOS, MODE_QOS, TF_QOS, TF_STATIC_QOS, lat
 from walker_runtime.listened import ListenedPublisher
 from walker_runtime.spinning import TopicSampler
 from walker_runtime.watched_subscription import SampledSubscription
-from walker_msgs.msg import ControlMode, GripperState, GripperStates, StepPhase
+from walker_msgs.msg import ControlMode, GripperStates, StepPhase
 from walker_viz.core.measured_poses import MeasuredPoses
 from walker_viz.core.parameters import VIZ_PREFIX, VizParameters
 from walker_viz.core.robot_tree import WORLD_FRAME
@@ -54,8 +55,6 @@ from walker_viz.messages import marker_array, pose_matrix, tf_message
 
 __all__ = ['VizNode', 'main']
 
-#: The gripper states the scene tells apart (the others: not in a hole).
-_STATES = {GripperState.ATTACHED: 'attached', GripperState.UNSCREWING: 'unscrewing'}
 #: The supervisor's phase topic keeps a history; the newest is all this node needs.
 _PHASE_QOS = latched_qos(1)
 #: Flexible joint states wait to be drawn: many periods of the pose rate, while the plant
@@ -151,7 +150,7 @@ class VizNode(Node):
 
     # ------------------------------------------------------------------ inputs
     def _on_grippers(self, message: GripperStates) -> None:
-        self.scene.grippers({g.name: (_STATES.get(g.state, 'other'), g.node)
+        self.scene.grippers({g.name: (reported_state(g.state), g.node)
                              for g in message.grippers})
 
     def _take_base(self, gripper: str) -> None:

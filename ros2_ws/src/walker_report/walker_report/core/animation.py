@@ -26,13 +26,16 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from walker_core.gripper_state import GripperState
 from walker_report.core.analysis import PhaseInterval, phase_name
 from walker_report.core.walk_data import GripperEvent, WalkData
 
 __all__ = ['AnimationOptions', 'FramePlan', 'AnimationResult', 'plan_frames', 'sample_states',
            'frame_captions', 'walk_camera', 'walk_nodes', 'project', 'render_animation']
 
-_GRIPPER_STATES = {0: 'free', 1: 'screwing in', 2: 'attached', 3: 'unscrewing', 4: 'jammed'}
+#: Each ``walker_msgs/GripperState`` code's caption
+_GRIPPER_STATES = {state.code: 'screwing in' if state == GripperState.SCREWING else str(state)
+                   for state in GripperState}
 #: Shortest frame delay GIF viewers honour [s]; GIF delays count hundredths of a second.
 _MIN_DELAY = 0.02
 

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
+from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.truss import Truss, UnknownNodeError
 from walker_report.core.analysis import (
@@ -33,8 +34,11 @@ DPI = 100
 #: Colour of each phase, by ``walker_msgs/StepPhase`` constant.
 PHASE_COLORS = {IDLE: '#d9d9d9', EXTRACTION: '#8c6bb1', COARSE: '#e6550d', FINE: '#3182bd',
                 INSERTION: '#31a354', SAFE_HOLD: '#d62728'}
-_GRIPPER_STATES = {0: ('free', '#f0f0f0'), 1: ('screwing', '#fdd49e'), 2: ('attached', '#74c476'),
-                   3: ('unscrewing', '#fdd49e'), 4: ('jammed', '#d62728')}
+_GRIPPER_COLORS = {GripperState.FREE: '#f0f0f0', GripperState.SCREWING: '#fdd49e',
+                   GripperState.ATTACHED: '#74c476', GripperState.UNSCREWING: '#fdd49e',
+                   GripperState.JAMMED: '#d62728'}
+#: Each ``walker_msgs/GripperState`` code's label and color
+_GRIPPER_STATES = {state.code: (str(state), color) for state, color in _GRIPPER_COLORS.items()}
 _MODES = {0: ('off', '#bdbdbd'), 1: ('hold', '#969696'), 2: ('coarse', PHASE_COLORS[COARSE]),
           3: ('fine', PHASE_COLORS[FINE])}
 _STEP_COLORS = matplotlib.colormaps['tab10'].colors

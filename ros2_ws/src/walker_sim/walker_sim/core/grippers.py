@@ -24,30 +24,16 @@ abort: :attr:`GripperLogic.fouled_screw_ins` coming screw-ins jam whatever the a
 from __future__ import annotations
 
 import dataclasses
-import enum
 import math
 
+from walker_core.gripper_state import TURNING, GripperState
 from walker_core.joint_roles import GRIPPERS, other_gripper, validate_gripper
 
-__all__ = ['GripperMode', 'HoleAlignment', 'GripperStatus', 'GripperCommandError',
+__all__ = ['HoleAlignment', 'GripperStatus', 'GripperCommandError',
            'InterlockError', 'ScrewOutcome', 'GripperLogic', 'hole_alignment']
 
 # [s] a screw timer within this of its end has ended (sums of float steps are not exact)
 _TIME_EPSILON = 1e-9
-
-
-class GripperMode(enum.IntEnum):
-    """Gripper states, numbered as the constants of ``walker_msgs/GripperState``."""
-
-    FREE = 0
-    SCREWING = 1
-    ATTACHED = 2
-    UNSCREWING = 3
-    JAMMED = 4
-
-
-#: The modes in which a gripper turns in its hole (the plant advances it every physics step)
-_TURNING = frozenset((GripperMode.SCREWING, GripperMode.UNSCREWING))
 
 
 class GripperCommandError(ValueError):
@@ -127,7 +113,7 @@ class GripperStatus:
     ----------
     name : str
         ``'a'`` or ``'b'``.
-    mode : GripperMode
+    mode : GripperState
         FREE, SCREWING, ATTACHED, UNSCREWING or JAMMED.
     node : str
         Node the gripper is attached to, screwing into or jammed at (``''`` when free).
@@ -138,7 +124,7 @@ class GripperStatus:
     """
 
     name: str
-    mode: GripperMode
+    mode: GripperState
     node: str = ''
     message: str = ''
     progress: float = 0.0
@@ -178,7 +164,7 @@ class GripperLogic:
         self.position_tolerance = position_tolerance
         self.axis_tolerance = axis_tolerance
         self.screw_time = screw_time
-        self._status = {g: GripperStatus(g, GripperMode.FREE) for g in GRIPPERS}
+        self._status = {g: GripperStatus(g, GripperState.FREE) for g in GRIPPERS}
         self._elapsed = dict.fromkeys(GRIPPERS, 0.0)
         self._base = 'a'
         self._tip = 'b'
@@ -206,7 +192,7 @@ class GripperLogic:
             raise GripperCommandError(f'the base gripper {base!r} must start attached')
         for gripper in GRIPPERS:
             node = attached.get(gripper)
-            mode = GripperMode.ATTACHED if node else GripperMode.FREE
+            mode = GripperState.ATTACHED if node else GripperState.FREE
             self._status[gripper] = GripperStatus(gripper, mode, node or '')
             self._elapsed[gripper] = 0.0
         self._base = base
@@ -216,7 +202,7 @@ class GripperLogic:
         """Each gripper's status and the seconds [s] its screw-in or unscrew has run."""
         return {g: (self._status[g], self._elapsed[g]) for g in GRIPPERS}
 
-    def restore(self, timers: dict[str, tuple[GripperMode, str, float]], base: str,
+    def restore(self, timers: dict[str, tuple[GripperState, str, float]], base: str,
                 tip: str = '') -> None:
         """Put every gripper back in a recorded state: gripper -> ``(mode, node, elapsed)``.
 
@@ -233,14 +219,14 @@ class GripperLogic:
         if set(timers) != set(GRIPPERS):
             raise GripperCommandError(f'a gripper state for each of {GRIPPERS} is needed, got '
                                       f'{sorted(timers)}')
-        if timers[base][0] not in (GripperMode.ATTACHED, GripperMode.SCREWING,
-                                   GripperMode.UNSCREWING):
+        if timers[base][0] not in (GripperState.ATTACHED, GripperState.SCREWING,
+                                   GripperState.UNSCREWING):
             raise GripperCommandError(f'the base gripper {base!r} must be held by the truss')
         tip = validate_gripper(tip) if tip else other_gripper(base)
         for gripper, (mode, node, elapsed) in timers.items():
-            busy = mode in (GripperMode.SCREWING, GripperMode.UNSCREWING)
+            busy = mode in TURNING
             progress = min(1.0, elapsed / self.screw_time) if busy else 0.0
-            self._status[gripper] = GripperStatus(gripper, GripperMode(mode), node,
+            self._status[gripper] = GripperStatus(gripper, GripperState(mode), node,
                                                   progress=progress)
             self._elapsed[gripper] = float(elapsed)
         self._base = base
@@ -267,12 +253,12 @@ class GripperLogic:
     @property
     def busy(self) -> bool:
         """True while a screw-in or an unscrew is under way."""
-        return not _TURNING.isdisjoint([status.mode for status in self._status.values()])
+        return not TURNING.isdisjoint([status.mode for status in self._status.values()])
 
     def holds(self, gripper: str) -> bool:
         """Return True while the gripper is held by its node (screwing, attached, unscrewing)."""
-        return self.status(gripper).mode in (GripperMode.SCREWING, GripperMode.ATTACHED,
-                                             GripperMode.UNSCREWING)
+        return self.status(gripper).mode in (GripperState.SCREWING, GripperState.ATTACHED,
+                                             GripperState.UNSCREWING)
 
     # --------------------------------------------------------------- commands
     def request_screw_in(self, gripper: str, alignment: HoleAlignment, where: str = ''
@@ -288,8 +274,8 @@ class GripperLogic:
             If the gripper is already attached, screwing or unscrewing (nothing changes).
         """
         current = self.status(gripper)
-        if current.mode in (GripperMode.ATTACHED, GripperMode.SCREWING,
-                            GripperMode.UNSCREWING):
+        if current.mode in (GripperState.ATTACHED, GripperState.SCREWING,
+                            GripperState.UNSCREWING):
             raise GripperCommandError(
                 f'gripper {gripper} is {current.mode.name} at node {current.node}: screw-in '
                 f'needs a free gripper')
@@ -308,10 +294,10 @@ class GripperLogic:
             message = (f'jammed at node {alignment.node}: ' + '; '.join(misses))
             if where:
                 message += f'; {where}'
-            self._status[gripper] = GripperStatus(gripper, GripperMode.JAMMED, alignment.node,
+            self._status[gripper] = GripperStatus(gripper, GripperState.JAMMED, alignment.node,
                                                   message)
             return ScrewOutcome(False, self._status[gripper])
-        self._status[gripper] = GripperStatus(gripper, GripperMode.SCREWING, alignment.node)
+        self._status[gripper] = GripperStatus(gripper, GripperState.SCREWING, alignment.node)
         self._elapsed[gripper] = 0.0
         return ScrewOutcome(True, self._status[gripper])
 
@@ -327,19 +313,19 @@ class GripperLogic:
         """
         current = self.status(gripper)
         other = self.status(other_gripper(gripper))
-        if current.mode == GripperMode.JAMMED:
-            self._status[gripper] = GripperStatus(gripper, GripperMode.FREE)
+        if current.mode == GripperState.JAMMED:
+            self._status[gripper] = GripperStatus(gripper, GripperState.FREE)
             return self._status[gripper]
-        if current.mode != GripperMode.ATTACHED:
+        if current.mode != GripperState.ATTACHED:
             raise GripperCommandError(
                 f'gripper {gripper} is {current.mode.name}: only an attached gripper can be '
                 f'unscrewed')
-        if other.mode != GripperMode.ATTACHED:
+        if other.mode != GripperState.ATTACHED:
             raise InterlockError(
                 f'interlock: gripper {gripper} holds the walker and gripper {other.name} is '
                 f'{other.mode.name}, not ATTACHED; releasing {gripper} would let go of the '
                 f'truss')
-        self._status[gripper] = GripperStatus(gripper, GripperMode.UNSCREWING, current.node)
+        self._status[gripper] = GripperStatus(gripper, GripperState.UNSCREWING, current.node)
         self._elapsed[gripper] = 0.0
         self._tip = gripper
         if self._base == gripper:
@@ -354,7 +340,7 @@ class GripperLogic:
         changed = []
         for gripper in GRIPPERS:
             status = self._status[gripper]
-            if status.mode not in (GripperMode.SCREWING, GripperMode.UNSCREWING):
+            if status.mode not in TURNING:
                 continue
             self._elapsed[gripper] += dt
             done = self._elapsed[gripper] >= self.screw_time - _TIME_EPSILON
@@ -362,10 +348,10 @@ class GripperLogic:
             if not done:
                 self._status[gripper] = dataclasses.replace(status, progress=progress)
                 continue
-            if status.mode == GripperMode.SCREWING:
-                self._status[gripper] = GripperStatus(gripper, GripperMode.ATTACHED, status.node)
+            if status.mode == GripperState.SCREWING:
+                self._status[gripper] = GripperStatus(gripper, GripperState.ATTACHED, status.node)
                 self._tip = other_gripper(gripper)
             else:
-                self._status[gripper] = GripperStatus(gripper, GripperMode.FREE)
+                self._status[gripper] = GripperStatus(gripper, GripperState.FREE)
             changed.append(self._status[gripper])
         return changed

@@ -37,12 +37,13 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.rotations import quaternion_from_matrix
 from walker_core.truss import Truss
 from walker_core.urdf import flex_joints
+from walker_core.gripper_state import GripperState
 from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
 from walker_sim.core.contact import (
     ContactForce, NodeGeometry, Seat, contact_forces, where_the_screw_is)
 from walker_sim.core.flexibility import FlexTuning, tune_flexibility
 from walker_sim.core.grippers import (
-    GripperCommandError, GripperLogic, GripperMode, GripperStatus, HoleAlignment,
+    GripperCommandError, GripperLogic, GripperStatus, HoleAlignment,
     ScrewOutcome, hole_alignment)
 from walker_sim.core.imperfections import JointSensors, NodePlacement
 from walker_sim.core.motor import DriveCommand, DriveModel
@@ -410,7 +411,7 @@ class WalkerPlant:
                                       snapshot.velocities, strict=True):
             pybullet.resetJointState(rooted.body, joint, angle, rate,
                                      physicsClientId=rooted.client)
-        self._grippers.restore({g: (GripperMode[s['mode']], s['node'], s['elapsed'])
+        self._grippers.restore({g: (GripperState[s['mode']], s['node'], s['elapsed'])
                                 for g, s in snapshot.grippers.items()}, snapshot.base,
                                 snapshot.tip)
         self._grippers.fouled_screw_ins = snapshot.fouled_screw_ins
@@ -438,7 +439,7 @@ class WalkerPlant:
         if set(snapshot.grippers) != set(GRIPPERS):
             raise PlantError(f'snapshot: gripper states for {sorted(snapshot.grippers)}')
         for gripper, status in snapshot.grippers.items():
-            if status['mode'] not in GripperMode.__members__:
+            if status['mode'] not in GripperState.__members__:
                 raise PlantError(f'snapshot: gripper {gripper} in an unknown mode '
                                  f'{status["mode"]!r}')
             if status['node']:
@@ -515,7 +516,7 @@ class WalkerPlant:
             return None
         tip = other_gripper(self._active.root)
         mode = self._grippers.status(tip).mode
-        return tip if mode in (GripperMode.FREE, GripperMode.JAMMED) else None
+        return tip if mode in (GripperState.FREE, GripperState.JAMMED) else None
 
     def _nearest_mouth(self, x: float, y: float) -> tuple[str, tuple[float, float, float]]:
         """Return the node nearest a point of the truss plane and where its mouth really is [m]."""
@@ -762,10 +763,10 @@ class WalkerPlant:
             progress = self._grippers.status(gripper).progress
             self._move_attachment(gripper, start, seat, progress)
         for status in self._grippers.advance(self.physics_step):
-            if status.mode == GripperMode.ATTACHED:
+            if status.mode == GripperState.ATTACHED:
                 start, seat = self._pull.pop(status.name)
                 self._move_attachment(status.name, start, seat, 1.0)
-            elif status.mode == GripperMode.FREE:
+            elif status.mode == GripperState.FREE:
                 if status.name == self._active.root:
                     self._reroot(other_gripper(status.name))
                 else:

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import other_gripper, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.truss import Truss
@@ -73,8 +74,8 @@ def adopt_step(record: RecordedStep, grippers: Mapping[str, str], nodes: Mapping
         The record describes the walker, but its step cannot be completed from here.
     """
     base = record.base_gripper
-    if base not in ('a', 'b') or grippers.get(base) != 'attached' \
-            or grippers.get(other_gripper(base)) == 'attached' \
+    if base not in ('a', 'b') or grippers.get(base) != GripperState.ATTACHED \
+            or grippers.get(other_gripper(base)) == GripperState.ATTACHED \
             or nodes.get(base) != record.base_node:
         return None
     try:

@@ -20,6 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.kinematics import KinematicsError
 from walker_supervisor.core import transitions
 from walker_supervisor.core.commands import (
@@ -45,7 +46,7 @@ def start(run: StepRun, step: PlannedStep, targets: StepTargets, now: float,
     if step.base_gripper != run.base_gripper:
         raise SequencerError(f'the step pivots on gripper {step.base_gripper} but the base '
                              f'is gripper {run.base_gripper}')
-    detached = sorted(g for g in ('a', 'b') if grippers.get(g) != 'attached')
+    detached = sorted(g for g in ('a', 'b') if grippers.get(g) != GripperState.ATTACHED)
     if detached:
         raise SequencerError(f'a step starts only with both grippers attached; gripper '
                              f'{", ".join(detached)} is not')
@@ -79,7 +80,7 @@ def awaiting_plan(run: StepRun) -> bool:
 def follow_unscrewing(run: StepRun, now: float, state: str) -> list:
     """Take the moving gripper's reported state while it unscrews."""
     commands = _measure_stance_again(run, state, now)
-    if state == 'free':
+    if state == GripperState.FREE:
         return commands + _unscrewed(run, now)
     if now > run.gripper.deadline:
         return commands + run.abort(f'gripper {run.step.moving_gripper} did not unscrew in '
@@ -172,7 +173,7 @@ def _lift_with_sweep(run: StepRun, extraction: TrajectoryRequest) -> TrajectoryR
 
 def _measure_stance_again(run: StepRun, state: str, now: float) -> list:
     """Once relaxed, with the chain still closed: the targets from the joints now."""
-    if run.remeasure is None or state == 'free' or now < run.relaxed_at:
+    if run.remeasure is None or state == GripperState.FREE or now < run.relaxed_at:
         return []
     remeasure, run.remeasure = run.remeasure, None
     try:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import other_gripper
 from walker_core.truss import Truss, UnknownNodeError
 from walker_supervisor.core.route import (
@@ -58,7 +59,7 @@ def stance_now(base: str, grippers: Mapping[str, str], nodes: Mapping[str, str],
         have screwed one in elsewhere).
     """
     other = other_gripper(base)
-    if grippers.get(base) != 'attached' or grippers.get(other) != 'attached':
+    if any(grippers.get(g) != GripperState.ATTACHED for g in (base, other)):
         raise GoalRefusedError('a walk starts only with both grippers attached (now: '
                                + ', '.join(f'{g}: {grippers.get(g, "unknown")}'
                                            for g in ('a', 'b')) + ')')

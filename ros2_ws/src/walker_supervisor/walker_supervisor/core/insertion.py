@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.kinematics import KinematicsError
 from walker_supervisor.core import transitions
 from walker_supervisor.core.commands import (
@@ -283,9 +284,9 @@ def follow_screwing(run: StepRun, now: float, state: str) -> list:
     watch = run.gripper
     if state != watch.state_before_screwing:
         watch.state_before_screwing = None  # the gripper has reported on this attempt
-    if state == 'attached':
+    if state == GripperState.ATTACHED:
         return _finish(run, now)
-    if state == 'jammed' and watch.state_before_screwing is None:
+    if state == GripperState.JAMMED and watch.state_before_screwing is None:
         return jammed(run, 'the screw-in jammed', now)
     if now > watch.deadline:
         return run.abort(f'gripper {run.step.moving_gripper} did not screw in in time (it '
@@ -304,7 +305,7 @@ def _finish(run: StepRun, now: float) -> list:
     """
     run.relaxed_at = now + run.parameters.relaxation_wait
     run.enter(Phase.IDLE, now, Stage.NONE)
-    run.grippers[run.step.moving_gripper] = 'attached'
+    run.grippers[run.step.moving_gripper] = GripperState.ATTACHED
     run.base_gripper = run.step.moving_gripper
     search = run.search
     run.outcome = StepOutcome(True, '', dict(run.durations), now - run.step_started,

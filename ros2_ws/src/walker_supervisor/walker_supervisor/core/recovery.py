@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from walker_core.gripper_state import TURNING, GripperState
 from walker_supervisor.core.commands import SetControlMode, TrajectoryRequest
 from walker_supervisor.core.phases import Phase, SequencerError, Stage
 from walker_supervisor.core.step_run import StepRun
@@ -30,11 +31,11 @@ def resume(run: StepRun, now: float, theta_roles: np.ndarray, grippers: dict[str
         raise SequencerError(f'not in SAFE_HOLD (phase {run.phase.name})')
     run.theta = np.asarray(theta_roles, dtype=float)
     run.grippers = dict(grippers)
-    busy = sorted(g for g, s in grippers.items() if s in ('screwing', 'unscrewing'))
+    busy = sorted(g for g, s in grippers.items() if s in TURNING)
     if busy:
         raise SequencerError(f'gripper {", ".join(busy)} is still {grippers[busy[0]]}: resume '
                              f'once it has finished')
-    if all(grippers.get(g) == 'attached' for g in ('a', 'b')):
+    if all(grippers.get(g) == GripperState.ATTACHED for g in ('a', 'b')):
         step = run.step
         if step is not None and nodes.get(step.moving_gripper) == step.to_node \
                 and run.base_gripper != step.moving_gripper:
@@ -43,7 +44,7 @@ def resume(run: StepRun, now: float, theta_roles: np.ndarray, grippers: dict[str
             run.relaxed_at = now + run.parameters.relaxation_wait
         run.phase, run.stage, run.reason = Phase.IDLE, Stage.NONE, ''
         return [SetControlMode('hold', run.base_gripper)]
-    if grippers.get(run.base_gripper) != 'attached':
+    if grippers.get(run.base_gripper) != GripperState.ATTACHED:
         raise SequencerError(f'the base gripper {run.base_gripper} is not attached: nothing '
                              f'can move safely')
     if run.step is None or run.targets is None:

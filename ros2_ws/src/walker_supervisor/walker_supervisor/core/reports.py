@@ -16,6 +16,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_supervisor.core.commands import Feedback, GoalEnded, Notice, PhaseRecord, StepRecord
 from walker_supervisor.core.phases import Phase, StepOutcome
 from walker_supervisor.core.route import PlannedStep
@@ -64,7 +65,7 @@ class PhaseAnnouncer:
             out.append(Notice(text, 'warning' if sequencer.phase == Phase.SAFE_HOLD else 'info'))
         self._last, self._published_progress = key, progress
         held = sequencer.phase == Phase.SAFE_HOLD and step is not None \
-            and grippers.get(step.moving_gripper) != 'attached'
+            and grippers.get(step.moving_gripper) != GripperState.ATTACHED
         shown = step if sequencer.busy or held else None
         out.append(PhaseRecord(
             sequencer.phase, sequencer.base_gripper, sequencer.reason, progress,

@@ -57,6 +57,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.truss import Truss
@@ -107,7 +108,7 @@ class Measurements:
     def __init__(self) -> None:
         self.positions: np.ndarray | None = None  # [rad]; None before the first
         self.velocities = np.zeros(5)  # [rad/s]
-        self.grippers: dict[str, str] = {}  # 'free', 'screwing', 'attached', ...
+        self.grippers: dict[str, str] = {}  # gripper -> its GripperState
         self.nodes: dict[str, str] = {}  # node of each gripper ('' when free)
 
     def roles(self, base: str) -> np.ndarray:
@@ -226,7 +227,7 @@ class WalkRunner:
         first, before = not grippers, dict(grippers)
         for name, (state, node) in states.items():
             grippers[name], self.measured.nodes[name] = state, node
-        free = sorted(g for g in ('a', 'b') if grippers.get(g) != 'attached')
+        free = sorted(g for g in ('a', 'b') if grippers.get(g) != GripperState.ATTACHED)
         if first and free and self.sequencer.phase == Phase.IDLE:
             # a supervisor restarted in the middle of a step: nothing may move by itself, and
             # a motion an earlier incarnation started may still be streaming: stop it
@@ -417,7 +418,7 @@ class WalkRunner:
                for f in self.health.faults(steady, include_trouble=False)):
             return 'interlock: the gripper states are not fresh'
         state = self.measured.grippers.get(other)
-        if state != 'attached':
+        if state != GripperState.ATTACHED:
             return f'interlock: gripper {other} is {state or "unknown"}, not attached'
         return ''
 

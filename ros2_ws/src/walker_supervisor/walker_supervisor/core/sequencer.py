@@ -26,6 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core import approach, extraction, insertion, recovery, transitions
 from walker_supervisor.core.hole_search import HoleSearch
@@ -384,7 +385,7 @@ class StepSequencer:
         """Stop the step for a base that lets go, a phase overrun, or a motion never started."""
         run = self._run
         base = run.step.base_gripper
-        if grippers.get(base) != 'attached':
+        if grippers.get(base) != GripperState.ATTACHED:
             return run.abort(f'the base gripper {base} reports {grippers.get(base, "nothing")}',
                              now)
         if now > run.deadline:
@@ -418,7 +419,7 @@ class StepSequencer:
         theta_roles : ndarray, shape (5,)
             Joint angles now, role order of the base before the hold [rad].
         grippers, nodes : dict of str to str
-            Each gripper's state ('free', 'attached', ...) and node ('' when free).
+            Each gripper's state (a ``GripperState``) and node ('' when free).
 
         Raises
         ------

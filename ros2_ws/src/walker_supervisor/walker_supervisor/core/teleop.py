@@ -46,6 +46,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from walker_core.gripper_state import TURNING, GripperState
 from walker_core.joint_roles import (
     GRIPPERS, PHYSICAL_JOINT_NAMES, joint_of_role, other_gripper, physical_to_roles,
     role_of_joint)
@@ -131,8 +132,8 @@ class Situation:
         ``''`` when nothing is under way, else why no command may start now (see
         :func:`busy_reason`).
     grippers : mapping of str to str
-        Reported state of each gripper: 'free', 'screwing', 'attached', 'unscrewing',
-        'jammed' (missing: no report yet).
+        Reported state of each gripper, a :class:`~walker_core.gripper_state.GripperState`
+        (missing: no report yet).
     gripper_nodes : mapping of str to str
         Node each gripper is attached to, screwing into or jammed at ('' when free).
     base_gripper : str
@@ -249,8 +250,8 @@ class GripperOperation:
         ``'screw_in'`` or ``'unscrew'``.
     base_after : str
         The base once the command is accepted: the other gripper when the base is unscrewed.
-    expected : tuple of str
-        Reported states that end the command: 'attached' for a screw-in, 'free' for an unscrew.
+    expected : tuple of GripperState
+        Reported states that end the command: ATTACHED for a screw-in, FREE for an unscrew.
     """
 
     gripper: str
@@ -348,10 +349,10 @@ class TeleopRules:
         missing = [g for g in GRIPPERS if g not in situation.grippers]
         if missing:
             raise TeleopRefusedError('no gripper states received from the plant yet')
-        changing = [g for g in GRIPPERS if situation.grippers[g] in ('screwing', 'unscrewing')]
+        changing = [g for g in GRIPPERS if situation.grippers[g] in TURNING]
         if changing:
             g, state = changing[0], situation.grippers[changing[0]]
-            until = 'attached' if state == 'screwing' else 'free'
+            until = GripperState.ATTACHED if state == GripperState.SCREWING else GripperState.FREE
             raise TeleopRefusedError(f'gripper {g} is {state}: wait until it is {until}')
         return {g: situation.grippers[g] for g in GRIPPERS}
 
@@ -366,7 +367,7 @@ class TeleopRules:
         """
         self.check_free(situation)
         states = self._states(situation)
-        attached = [g for g in GRIPPERS if states[g] == 'attached']
+        attached = [g for g in GRIPPERS if states[g] == GripperState.ATTACHED]
         if len(attached) == 2:
             raise TeleopRefusedError('both grippers are screwed in: unscrew one first')
         if not attached:
@@ -581,21 +582,22 @@ class TeleopRules:
         other = other_gripper(gripper)
         state, node = states[gripper], situation.gripper_nodes.get(gripper, '')
         if action == 'unscrew':
-            if state == 'jammed':  # not holding anything: it backs out at once
-                return GripperOperation(gripper, action, situation.base_gripper, ('free',))
-            if state != 'attached':
+            if state == GripperState.JAMMED:  # not holding anything: it backs out at once
+                return GripperOperation(gripper, action, situation.base_gripper,
+                                        (GripperState.FREE,))
+            if state != GripperState.ATTACHED:
                 raise TeleopRefusedError(f'gripper {gripper} is {state}: only an attached (or '
                                          f'jammed) gripper can be unscrewed')
-            if states[other] != 'attached':
+            if states[other] != GripperState.ATTACHED:
                 raise TeleopRefusedError(
                     f'gripper {gripper} is the only gripper attached (gripper {other} is '
                     f'{states[other]}): unscrewing it would let go of the truss')
             base = other if gripper == situation.base_gripper else situation.base_gripper
-            return GripperOperation(gripper, action, base, ('free',))
-        if state == 'attached':
+            return GripperOperation(gripper, action, base, (GripperState.FREE,))
+        if state == GripperState.ATTACHED:
             raise TeleopRefusedError(f'gripper {gripper} is already attached at {node}')
-        base = other if states[other] == 'attached' else situation.base_gripper
-        return GripperOperation(gripper, action, base, ('attached',))
+        base = other if states[other] == GripperState.ATTACHED else situation.base_gripper
+        return GripperOperation(gripper, action, base, (GripperState.ATTACHED,))
 
     # ------------------------------------------------------------------ helpers
     @staticmethod

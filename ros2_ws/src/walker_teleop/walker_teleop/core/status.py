@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.progress import PHASE_NAMES, name_of
 from walker_core.rotations import rotation_from_quaternion
 from walker_core.text import millimetres
@@ -23,8 +24,8 @@ __all__ = ['PHASE_NAMES', 'MODE_NAMES', 'GRIPPER_STATE_NAMES', 'GripperView', 'S
 
 #: Names of the ``walker_msgs/ControlMode`` constants, by value.
 MODE_NAMES = ('OFF', 'HOLD', 'COARSE', 'FINE')
-#: Names of the ``walker_msgs/GripperState`` constants, by value.
-GRIPPER_STATE_NAMES = ('free', 'screwing', 'attached', 'unscrewing', 'jammed')
+#: The gripper states, by their ``walker_msgs/GripperState`` constant.
+GRIPPER_STATE_NAMES = tuple(GripperState)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,7 +37,7 @@ class GripperView:
     name : str
         ``'a'`` or ``'b'``.
     state : str
-        One of :data:`GRIPPER_STATE_NAMES`.
+        One of :data:`GRIPPER_STATE_NAMES`, or ``'unknown (<code>)'``.
     node : str
         Node it is attached to, screwing into or jammed at (``''`` when free).
     position : ndarray, shape (3,), or None
@@ -113,7 +114,7 @@ def _gripper_line(gripper: GripperView, truss: Truss | None) -> str:
     text = f'{gripper.state}'
     if gripper.node:
         text += f' at {gripper.node}'
-    if gripper.state in ('free', 'jammed') and gripper.position is not None \
+    if gripper.state in (GripperState.FREE, GripperState.JAMMED) and gripper.position is not None \
             and gripper.orientation is not None and truss is not None:
         node, _ = truss.nearest_node(gripper.position)
         offset = hole_offset(gripper.position, gripper.orientation, truss.position(node))

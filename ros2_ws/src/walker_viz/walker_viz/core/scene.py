@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from walker_core.gripper_state import GripperState
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.truss import Truss, UnknownNodeError
 from walker_core.urdf import GRIPPER_LINKS, robot_urdf
@@ -24,8 +25,8 @@ from walker_viz.core.robot_tree import WORLD_FRAME, JointTransform, RobotTree
 
 __all__ = ['WalkerScene', 'HOLDING']
 
-#: Gripper states (``walker_msgs/GripperState`` names) in which a gripper is in its hole.
-HOLDING = ('attached', 'unscrewing')
+#: Gripper states in which a gripper is in its hole.
+HOLDING = (GripperState.ATTACHED, GripperState.UNSCREWING)
 
 
 class WalkerScene:
