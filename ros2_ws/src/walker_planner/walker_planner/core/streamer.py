@@ -293,7 +293,7 @@ class TrajectoryStreamer:
 
     # ------------------------------------------------------------------ internals
     def _grid_stamp(self, now: int | None) -> int:
-        """The newest state's stamp [ns], or the latest of its grid not after ``now`` [ns].
+        """Return the newest state's stamp [ns], or the latest of its grid not after ``now``.
 
         Needs a state. The states come every period (``stamp + k * period``), so a time on
         that grid is one a state has or will have.

@@ -275,10 +275,10 @@ class SetpointStream:
 
     @property
     def end_stamp(self) -> int:
-        """Clock time [ns] of the final setpoint: the first of the stream's stamps
-        (``start + k * period``, k >= 1) at which the trajectory's time reaches its duration.
+        """Clock time [ns] of the final setpoint: the trajectory's end on the clock.
 
-        The trajectory's end on the clock, as :meth:`setpoint_at` marks it ``final``.
+        The first of the stream's stamps (``start + k * period``, k >= 1) at which the
+        trajectory's time reaches its duration, as :meth:`setpoint_at` marks it ``final``.
         """
         duration = self.trajectory.duration
         periods = max(0, math.ceil(duration * _NANOSECONDS / self.period))
