@@ -57,7 +57,7 @@ from walker_planner.core.planning import PlanningContext, plan
 from walker_planner.core.streamer import ActiveStream, TrajectoryStreamer
 from walker_planner.core.streaming import SampledTrajectory
 from walker_planner.setpoints import SetpointPublishers, TrajectoryPublisher
-from walker_planner.stream_goal import StreamGoal
+from walker_planner.stream_goal import StreamGoal, goal_result
 
 __all__ = ['PlannerNode', 'main']
 
@@ -104,6 +104,7 @@ class PlannerNode(Node):
                                             stream.start_tolerance, self._send,
                                             None if whole is None else whole.send)
         self._reserved = False
+        self._begun: tuple[ActiveStream | None, str] | None = None  # started at goal time
         self._lock = threading.Lock()  # the state shared by the stream thread and this one
         self._stream_node = helper_node(f'{self.get_name()}_stream', self.get_namespace(),
                                         self.context, use_global_arguments=False)
@@ -306,6 +307,10 @@ class PlannerNode(Node):
                                       'already running (cancel it first)')
             return GoalResponse.REJECT
         self._reserved = True
+        if self._planner.send_whole_trajectories:
+            # sent before the acceptance, which a sim-time supervisor holds the clock for: the
+            # controllers have it before the plant steps on (started in execute, it came late)
+            self._begun = self._begin(goal.trajectory, None)
         return GoalResponse.ACCEPT
 
     def _on_cancel(self, goal_handle) -> CancelResponse:
@@ -318,42 +323,31 @@ class PlannerNode(Node):
 
     async def _on_execute(self, goal_handle):
         result = FollowTrajectory.Result()
-        self._streamer.wait_for_state(_STREAM_START_WAIT)
         try:
-            trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
+            begun, self._begun = self._begun, None
+            active, error = begun or self._begin(goal_handle.request.trajectory, goal_handle)
             with self._lock:
-                active, error = self._start_stream(trajectory, goal_handle.request.trajectory,
-                                                   goal_handle)
-        except PlanningError as refusal:
-            error = str(refusal)
+                if active is not None:
+                    active.owner.goal_handle = goal_handle
         finally:
             self._reserved = False
         if error:
             result.message = error
             goal_handle.abort()
             return result
-        return await self._wait_for_stream(goal_handle, result, active)
-
-    async def _wait_for_stream(self, goal_handle, result, active: ActiveStream):
-        await active.owner.done
-        if not active.owner.done.done():
-            result.message = 'the planner is shutting down'
-            goal_handle.abort()
-            return result
-        with self._lock:
-            result.duration = active.duration
-            result.final_position_error = self._streamer.tracking_error(active.stream)
-        result.message = active.message
-        result.success = not active.cancelled
-        if active.cancelled and goal_handle.is_cancel_requested:
-            goal_handle.canceled()
-        elif active.cancelled:
-            goal_handle.abort()
-        else:
-            goal_handle.succeed()
-        return result
+        return await goal_result(goal_handle, result, active, self._lock, self._streamer)
 
     # ------------------------------------------------------------------ streaming
+    def _begin(self, message: JointTrajectory, goal_handle) -> tuple[ActiveStream | None, str]:
+        """Check a goal's trajectory and start it; return the stream and '' or None and why."""
+        self._streamer.wait_for_state(_STREAM_START_WAIT)
+        try:
+            trajectory = sampled_trajectory(message, self._robot)
+        except PlanningError as refusal:
+            return None, str(refusal)
+        with self._lock:
+            return self._start_stream(trajectory, message, goal_handle)
+
     def _start_stream(self, trajectory: SampledTrajectory, message: JointTrajectory,
                       goal_handle) -> tuple[ActiveStream | None, str]:
         """Start streaming (lock held); return the stream and '' or None and the refusal."""

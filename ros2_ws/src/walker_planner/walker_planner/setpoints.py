@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+from rclpy.duration import Duration
 from rclpy.node import Node
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from walker_msgs.msg import JointCommand
@@ -18,7 +19,10 @@ from walker_planner.conversions import to_duration, to_time
 from walker_planner.core.streaming import SampledTrajectory
 from walker_runtime.qos import COMMAND_QOS
 
-__all__ = ['SetpointPublishers', 'TrajectoryPublisher']
+__all__ = ['SetpointPublishers', 'TrajectoryPublisher', 'ACK_WAIT']
+
+#: [s] wall time a whole trajectory waits to be acknowledged by every subscriber
+ACK_WAIT = 1.0
 
 
 class SetpointPublishers:
@@ -57,12 +61,17 @@ class TrajectoryPublisher:
     Reliable, keep last 10 (``COMMAND_QOS``, the controllers' subscription): a trajectory is
     sent once and followed to its end, so it must not be dropped as a setpoint could be; the
     controllers sample even a late one at its own time (joint_trajectory_controller's
-    contract, ``walker_control.core.trajectory_follower``).
+    contract, ``walker_control.core.trajectory_follower``). Each is waited for until every
+    matched subscriber has acknowledged it (:data:`ACK_WAIT` at most, and a warning after
+    that): sent before the goal's acceptance, which a sim-time supervisor holds the clock for,
+    it is then in the controllers' readers before their next state. A controller not matched
+    yet (just started) does not get it: volatile, as joint_trajectory_controller's topic.
     """
 
     def __init__(self, node: Node) -> None:
         self._publisher = node.create_publisher(JointTrajectory, 'controllers/joint_trajectory',
                                                 COMMAND_QOS)
+        self._logger = node.get_logger()
 
     def send(self, start: int, trajectory: SampledTrajectory) -> None:
         """Publish ``trajectory`` (physical order) whose time 0 applies at ``start`` [ns].
@@ -85,3 +94,6 @@ class TrajectoryPublisher:
             for t, p, v, a in zip(trajectory.times, trajectory.positions, velocities,
                                   accelerations, strict=True)]
         self._publisher.publish(message)
+        if not self._publisher.wait_for_all_acked(Duration(seconds=ACK_WAIT)):
+            self._logger.warning(f'a trajectory was not acknowledged by every subscriber of '
+                                 f'controllers/joint_trajectory within {ACK_WAIT:g} s')
