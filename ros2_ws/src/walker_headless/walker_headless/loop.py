@@ -66,10 +66,10 @@ class RobotLoop:
         The walker's configuration (:func:`~walker_config.core.configuration.load_configuration`).
     recording : WalkRecording, optional
         Where the loop's messages go (none recorded without it).
-    whole_trajectories : bool
+    whole_trajectories : bool, optional
         The planner's streamer sends each trajectory once, whole, and the controllers hold
         and sample it (``TrajectoryStreamer``'s ``send_trajectory``), instead of one setpoint
-        per period; False (the graph's planner streams) by default.
+        per period; by default as the graph's planner does (``planner.send_whole_trajectories``).
 
     Raises
     ------
@@ -78,7 +78,7 @@ class RobotLoop:
     """
 
     def __init__(self, configuration: WalkerConfiguration, recording=None,
-                 whole_trajectories: bool = False) -> None:
+                 whole_trajectories: bool | None = None) -> None:
         self.configuration = configuration
         self.plant = WalkerPlant(*configuration.plant)
         self.period = configuration.controllers.sample_time
@@ -86,6 +86,8 @@ class RobotLoop:
         self.channels = [ControllerChannel(configuration.controllers, joint)
                          for joint in PHYSICAL_JOINT_NAMES]
         stream = configuration.planner.stream
+        if whole_trajectories is None:
+            whole_trajectories = configuration.planner.send_whole_trajectories
         self.streamer = TrajectoryStreamer(
             self.period_ns, stream.lookahead, stream.start_tolerance, self._take_setpoints,
             self._take_trajectory if whole_trajectories else None)

@@ -94,7 +94,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
          wall_timeout: float = math.inf, goal: str = 'walk_to', survey: dict | None = None,
-         whole_trajectories: bool = False) -> WalkResult:
+         whole_trajectories: bool | None = None) -> WalkResult:
     """Walk from the plant's start (``sim.start``) to ``target``, headless.
 
     Parameters
@@ -117,9 +117,10 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
     survey : dict, optional
         A truss survey to start from (a survey file's content); raises
         :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit.
-    whole_trajectories : bool
+    whole_trajectories : bool, optional
         The controllers hold whole trajectories instead of following a setpoint stream
-        (:class:`~walker_headless.loop.RobotLoop`).
+        (:class:`~walker_headless.loop.RobotLoop`); by default as the graph's planner does
+        (``planner.send_whole_trajectories``).
 
     Raises
     ------

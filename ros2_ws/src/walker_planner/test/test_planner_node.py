@@ -3,7 +3,9 @@
 The node runs with ``use_sim_time``; the test owns ``/clock`` and advances it one control
 period at a time, waiting for the five setpoints of each tick, as the plant does in sim-time
 mode. That makes the stream deterministic: every setpoint is checked against the core's plan,
-and its stamp against the clock, with no timing in the assertions.
+and its stamp against the clock, with no timing in the assertions. The node streams setpoints
+here (``planner.send_whole_trajectories`` false); whole trajectories:
+``test_planner_node_whole_trajectories.py``.
 """
 
 import contextlib
@@ -132,7 +134,8 @@ class Probe:
 def graph(planner_parameters):
     with isolated_domain() as domain:
         env = ros_environment(domain)
-        args = [str(NODE), '--ros-args', '-r', '__ns:=/walker', '-p', 'use_sim_time:=true']
+        args = [str(NODE), '--ros-args', '-r', '__ns:=/walker', '-p', 'use_sim_time:=true',
+                '-p', 'planner.send_whole_trajectories:=false']
         with NodeProcess(args, env, 'planner') as planner:
             probe = Probe(domain)
             probe.lookahead = planner_parameters.stream.lookahead

@@ -201,3 +201,68 @@ def test_a_cancelled_whole_trajectory_is_replaced_by_a_hold_where_its_setpoints_
     assert start == held_stamp
     assert len(hold.times) == 1 and hold.positions[0] == pytest.approx(held_position)
     assert np.all(hold.velocities == 0.0) and held_velocity == pytest.approx([0.0] * 5)
+
+
+def _whole(sent):
+    whole = []
+    streamer = TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, sent,
+                                  lambda start, trajectory: whole.append((start, trajectory)))
+    return streamer, whole
+
+
+def test_a_whole_trajectory_ends_by_the_clock_when_the_states_would_end_it(sent):
+    """Its end is a time on the clock: reached with no state heard since the start."""
+    streamer, whole = _whole(sent)
+    twin = TrajectoryStreamer(PERIOD, LOOKAHEAD, 0.01, Sent())
+    for each in (streamer, twin):
+        each.on_state(10 * PERIOD, START)
+    active, streamed = streamer.start(ramp(0.013)), twin.start(ramp(0.013))
+    stamp = 10 * PERIOD
+    while twin.active is not None:
+        stamp += PERIOD
+        twin.on_state(stamp, START)
+    assert active.stream.end_stamp == streamed.last.stamp  # the end the stream reached
+    streamer.on_clock(stamp - 1)  # the clock between the states: not yet
+    assert streamer.active is active and streamer.take_ended() == []
+    streamer.on_clock(stamp)
+    assert streamer.active is None and streamer.take_ended() == [active]
+    assert not active.cancelled and active.last.final and active.ticks == streamed.ticks
+    assert active.duration == pytest.approx(streamed.duration)
+    assert len(whole) == 1 and sent == []
+
+
+def test_the_clock_ends_nothing_that_streams_setpoints(streamer, sent):
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(0.01))
+    streamer.on_clock(10**9)
+    assert streamer.active is active
+
+
+def test_a_whole_trajectory_starts_from_the_clock_when_it_ran_past_the_states(sent):
+    """Nothing waits for the planner: the plant's clock may be periods past its newest state."""
+    streamer, whole = _whole(sent)
+    streamer.on_state(10 * PERIOD, START)
+    active = streamer.start(ramp(), now=13 * PERIOD + PERIOD // 2)
+    assert [start for start, _ in whole] == [14 * PERIOD] == [active.stream.origin]
+    early, _ = _whole(Sent())
+    early.on_state(10 * PERIOD, START)  # a clock behind the newest state changes nothing
+    assert early.start(ramp(), now=9 * PERIOD).stream.origin == 11 * PERIOD
+
+
+def test_a_cancel_holds_where_the_whole_trajectory_is_on_the_clock(sent):
+    streamer, whole = _whole(sent)
+    streamer.on_state(0, START)
+    active = streamer.start(ramp(duration=0.2))  # computed up to 4 periods ahead
+    streamer.end_now(active, 'cancelled', now=20 * PERIOD + 1)
+    start, hold = whole[-1]
+    assert start == 21 * PERIOD and len(hold.times) == 1
+    expected = active.stream.trajectory.sample(active.stream.trajectory_time(20 * PERIOD))
+    assert hold.positions[0] == pytest.approx(expected.position)
+    assert np.all(hold.velocities == 0.0) and streamer.take_ended() == [active]
+    # with the clock behind what was computed ahead, where that ends, as a stream's hold
+    streamer.on_state(0, START)
+    again = streamer.start(ramp(duration=0.2))
+    streamer.stop(now=PERIOD)
+    start, hold = whole[-1]
+    assert start == again.last.stamp and hold.positions[0] == pytest.approx(
+        again.stream.trajectory.sample(again.stream.trajectory_time(4 * PERIOD)).position)

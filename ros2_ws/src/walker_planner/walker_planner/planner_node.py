@@ -9,7 +9,10 @@ Interfaces (relative to the node's namespace, ``/walker`` by default; docs/archi
   the stream at once (no joint state needed) with a hold setpoint at the last position; a goal
   is rejected while a stream runs;
 * service ``stop_trajectory`` (``std_srvs/srv/Trigger``): stop whatever stream runs, at once;
-* ``controllers/<joint>/setpoint`` (``walker_msgs/msg/JointCommand``), published;
+* ``controllers/joint_trajectory`` (``trajectory_msgs/msg/JointTrajectory``), published once
+  per trajectory and once per cancel or stop (a hold) with ``planner.send_whole_trajectories``:
+  the goal then succeeds when the clock (or a joint state) reaches the trajectory's end; else
+  ``controllers/<joint>/setpoint`` (``walker_msgs/msg/JointCommand``) every period;
 * ``planned_trajectory`` (``trajectory_msgs/msg/JointTrajectory``), latched;
 * ``joint_states`` (``sensor_msgs/msg/JointState``), subscribed for the start check and errors
   (handed over by call in a composed sim-time graph: :meth:`PlannerNode.stream_by_call`).
@@ -28,7 +31,6 @@ import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.task import Future
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -54,7 +56,8 @@ from walker_planner.core.parameters import PREFIX, PlannerParameters
 from walker_planner.core.planning import PlanningContext, plan
 from walker_planner.core.streamer import ActiveStream, TrajectoryStreamer
 from walker_planner.core.streaming import SampledTrajectory
-from walker_planner.setpoints import SetpointPublishers
+from walker_planner.setpoints import SetpointPublishers, TrajectoryPublisher
+from walker_planner.stream_goal import StreamGoal, goal_result
 
 __all__ = ['PlannerNode', 'main']
 
@@ -74,19 +77,6 @@ _CLOCK_AHEAD_PERIODS = 10
 
 #: [s] wall time to wait for the stream executor's first timer, or a stream for the first state
 _STREAM_START_WAIT = 5.0
-
-
-class _StreamGoal:
-    """What the node ties to a stream: its action goal, and the future the goal awaits.
-
-    The goal handle is None for a stream of ``plan_trajectory`` with ``execute``. The stream
-    thread ends the stream; the main thread's relay completes ``done`` (rclpy
-    futures are completed in the thread of their executor).
-    """
-
-    def __init__(self, goal_handle) -> None:
-        self.goal_handle = goal_handle
-        self.done = Future()
 
 
 class PlannerNode(Node):
@@ -109,9 +99,12 @@ class PlannerNode(Node):
         self._planning = PlanningContext.from_parameters(self._robot, self._planner)
         self._period_ns = int(round(1e9 / self._robot.timing.control_rate))
         stream = self._planner.stream
+        whole = TrajectoryPublisher(self) if self._planner.send_whole_trajectories else None
         self._streamer = TrajectoryStreamer(self._period_ns, stream.lookahead,
-                                            stream.start_tolerance, self._send)
+                                            stream.start_tolerance, self._send,
+                                            None if whole is None else whole.send)
         self._reserved = False
+        self._begun: tuple[ActiveStream | None, str] | None = None  # started at goal time
         self._lock = threading.Lock()  # the state shared by the stream thread and this one
         self._stream_node = helper_node(f'{self.get_name()}_stream', self.get_namespace(),
                                         self.context, use_global_arguments=False)
@@ -208,8 +201,10 @@ class PlannerNode(Node):
         self._on_joint_state(message)
 
     def _relay(self) -> None:
-        """Complete the goals of ended streams and send feedback (this node's thread)."""
+        """End whole trajectories by the clock, complete ended goals, send feedback."""
+        now = self.get_clock().now().nanoseconds
         with self._lock:
+            self._streamer.on_clock(now)
             ended = self._streamer.take_ended()
             active = self._streamer.active
             feedback = None
@@ -296,8 +291,9 @@ class PlannerNode(Node):
         return response
 
     def _on_stop(self, request, response):
+        now = self.get_clock().now().nanoseconds
         with self._lock:
-            stopped = self._streamer.stop()
+            stopped = self._streamer.stop(now)
         response.success = stopped
         response.message = 'stopping the stream' if stopped else 'no stream is running'
         return response
@@ -311,58 +307,53 @@ class PlannerNode(Node):
                                       'already running (cancel it first)')
             return GoalResponse.REJECT
         self._reserved = True
+        if self._planner.send_whole_trajectories:
+            # sent before the acceptance, which a sim-time supervisor holds the clock for: the
+            # controllers have it before the plant steps on (started in execute, it came late)
+            self._begun = self._begin(goal.trajectory, None)
         return GoalResponse.ACCEPT
 
     def _on_cancel(self, goal_handle) -> CancelResponse:
+        now = self.get_clock().now().nanoseconds
         with self._lock:
             active = self._streamer.active
             if active is not None and active.owner.goal_handle is goal_handle:
-                self._streamer.end_now(active, 'cancelled')
+                self._streamer.end_now(active, 'cancelled', now)
         return CancelResponse.ACCEPT
 
     async def _on_execute(self, goal_handle):
         result = FollowTrajectory.Result()
-        self._streamer.wait_for_state(_STREAM_START_WAIT)
         try:
-            trajectory = sampled_trajectory(goal_handle.request.trajectory, self._robot)
+            begun, self._begun = self._begun, None
+            active, error = begun or self._begin(goal_handle.request.trajectory, goal_handle)
             with self._lock:
-                active, error = self._start_stream(trajectory, goal_handle.request.trajectory,
-                                                   goal_handle)
-        except PlanningError as refusal:
-            error = str(refusal)
+                if active is not None:
+                    active.owner.goal_handle = goal_handle
         finally:
             self._reserved = False
         if error:
             result.message = error
             goal_handle.abort()
             return result
-        return await self._wait_for_stream(goal_handle, result, active)
-
-    async def _wait_for_stream(self, goal_handle, result, active: ActiveStream):
-        await active.owner.done
-        if not active.owner.done.done():
-            result.message = 'the planner is shutting down'
-            goal_handle.abort()
-            return result
-        with self._lock:
-            result.duration = active.duration
-            result.final_position_error = self._streamer.tracking_error(active.stream)
-        result.message = active.message
-        result.success = not active.cancelled
-        if active.cancelled and goal_handle.is_cancel_requested:
-            goal_handle.canceled()
-        elif active.cancelled:
-            goal_handle.abort()
-        else:
-            goal_handle.succeed()
-        return result
+        return await goal_result(goal_handle, result, active, self._lock, self._streamer)
 
     # ------------------------------------------------------------------ streaming
+    def _begin(self, message: JointTrajectory, goal_handle) -> tuple[ActiveStream | None, str]:
+        """Check a goal's trajectory and start it; return the stream and '' or None and why."""
+        self._streamer.wait_for_state(_STREAM_START_WAIT)
+        try:
+            trajectory = sampled_trajectory(message, self._robot)
+        except PlanningError as refusal:
+            return None, str(refusal)
+        with self._lock:
+            return self._start_stream(trajectory, message, goal_handle)
+
     def _start_stream(self, trajectory: SampledTrajectory, message: JointTrajectory,
                       goal_handle) -> tuple[ActiveStream | None, str]:
         """Start streaming (lock held); return the stream and '' or None and the refusal."""
         try:
-            active = self._streamer.start(trajectory, _StreamGoal(goal_handle))
+            active = self._streamer.start(trajectory, StreamGoal(goal_handle),
+                                          self.get_clock().now().nanoseconds)
         except PlanningError as error:
             return None, str(error)
         message.header.stamp = to_time(active.stream.origin)

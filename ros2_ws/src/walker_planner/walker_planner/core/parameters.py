@@ -2,8 +2,9 @@
 
 They live in ``walker_core/config/walker.yaml`` (section ``/**``) beside the robot's, each value
 with its source; this frozen section checks them (``ParameterError`` naming the parameter) and
-the planner node declares them with :func:`walker_runtime.node_parameters.declare_section`. All may
-change at run time (``ros2 param set``); an invalid update is refused and changes nothing.
+the planner node declares them with :func:`walker_runtime.node_parameters.declare_section`. All but
+``planner.send_whole_trajectories`` (read once, at start) may change at run time (``ros2 param
+set``); an invalid update is refused and changes nothing.
 """
 
 from __future__ import annotations
@@ -126,3 +127,6 @@ class PlannerParameters:
     cartesian: CartesianPlanning
     bang_bang: BangBangPlanning
     stream: StreamParameters
+    send_whole_trajectories: bool = parameter(
+        'send each followed trajectory once, whole, on controllers/joint_trajectory (else stream)',
+        source='chosen: false, the setpoint stream the fault tests are built on')

@@ -22,7 +22,13 @@ instead, as to controllers that hold them (joint_trajectory_controller's contrac
 rest, from the stamp its hold setpoint would have had, where its setpoints would have ended;
 nothing per period, and no hold after a stream (the controllers hold the last point, and
 start from where the joints are when they track again after it). Its timing, its end and its
-feedback are the stream's, to the period.
+feedback are the stream's, to the period. Since the controllers then follow without the
+planner, nothing in the loop waits for the planner's states: the clock may have run on past
+the newest state heard here. Given the clock (``now`` of :meth:`TrajectoryStreamer.start`,
+:meth:`~TrajectoryStreamer.end_now`, :meth:`~TrajectoryStreamer.on_clock`), a trajectory
+starts, holds and ends by it, on the states' grid of stamps: it starts one period after the
+clock's stamp, a cancel holds where the trajectory is then, and the stream ends (its end on
+the clock reached) even when no state comes.
 """
 
 from __future__ import annotations
@@ -150,6 +156,26 @@ class TrajectoryStreamer:
         if active.last.final and stamp + self.period >= active.last.stamp:
             self._finish(active, None)
 
+    def on_clock(self, now: int) -> None:
+        """Take the clock's time ``now`` [ns]: end a whole trajectory whose end it reached.
+
+        With whole trajectories only (a stream of setpoints ends with its setpoints): the
+        stream ends, complete, once the latest stamp of the states' grid not after ``now`` is
+        one period before the trajectory's end on the clock (:attr:`SetpointStream.end_stamp`),
+        as :meth:`on_state` ends it at that state. Nothing without a stream or a state yet.
+        """
+        active = self.active
+        if active is None or active.cancelled or self._send_trajectory is None \
+                or self.measured is None:
+            return
+        end = active.stream.end_stamp
+        if self._grid_stamp(now) + self.period < end:
+            return
+        sent = active.stream.origin - self.period if active.last is None else active.last.stamp
+        active.ticks += max(0, (end - sent) // self.period)
+        active.last = active.stream.setpoint_at(end)
+        self._finish(active, None)
+
     def on_control_mode(self, tracking: bool) -> None:
         """Take a mode command: ``tracking`` True for COARSE or FINE.
 
@@ -174,11 +200,14 @@ class TrajectoryStreamer:
         return self._heard.wait(timeout)
 
     # ------------------------------------------------------------------ streams
-    def start(self, trajectory: SampledTrajectory, owner: object = None) -> ActiveStream:
+    def start(self, trajectory: SampledTrajectory, owner: object = None,
+              now: int | None = None) -> ActiveStream:
         """Start streaming ``trajectory`` from the newest joint state; return the stream.
 
         The trajectory's time 0 applies one period after that state's stamp; the setpoints
-        due are sent at once.
+        due are sent at once. With whole trajectories and the clock's time ``now`` [ns] given,
+        one period after the latest stamp of the states' grid not after ``now`` when that is
+        later (see the module docstring); the start is checked against the newest state.
 
         Raises
         ------
@@ -191,28 +220,40 @@ class TrajectoryStreamer:
         if self.active is not None:
             raise PlanningError('a stream is already running (cancel it or call '
                                 'stop_trajectory)')
-        now = self.measured[0]
+        now = self._grid_stamp(now) if self._send_trajectory is not None \
+            else self.measured[0]
         self.active = ActiveStream(SetpointStream(trajectory, now, self.period), owner)
         if self._send_trajectory is not None:
             self._send_trajectory(self.active.stream.origin, trajectory)
         self._send_due(self.active, now)
         return self.active
 
-    def end_now(self, active: ActiveStream, message: str) -> None:
+    def end_now(self, active: ActiveStream, message: str, now: int | None = None) -> None:
         """End a stream at once, holding where its sent setpoints end (a cancel, a stop).
 
         It does not wait for a joint state: a plant that stopped sending them (frozen, gone)
-        would otherwise keep a cancelled stream running, and the next one refused.
+        would otherwise keep a cancelled stream running, and the next one refused. With whole
+        trajectories and the clock's time ``now`` [ns] given, the hold starts one period after
+        the latest stamp of the states' grid not after ``now`` when that is later, where the
+        trajectory is then.
         """
         active.cancelled, active.message = True, message
-        now = self.measured[0] if self.measured is not None else active.stream.origin
-        self._finish(active, active.stream.hold(now, active.last))
+        if self.measured is None:
+            stamp = active.stream.origin
+        elif self._send_trajectory is not None:
+            stamp = self._grid_stamp(now)
+        else:
+            stamp = self.measured[0]
+        self._finish(active, active.stream.hold(stamp, active.last))
 
-    def stop(self) -> bool:
-        """End whatever stream runs (``stop_trajectory``); return False when none ran."""
+    def stop(self, now: int | None = None) -> bool:
+        """End whatever stream runs (``stop_trajectory``); return False when none ran.
+
+        ``now``: the clock's time [ns], as for :meth:`end_now`.
+        """
         active = self.active
         if active is not None:
-            self.end_now(active, 'stopped by stop_trajectory')
+            self.end_now(active, 'stopped by stop_trajectory', now)
         return active is not None
 
     def take_ended(self) -> list[ActiveStream]:
@@ -251,6 +292,17 @@ class TrajectoryStreamer:
         return active
 
     # ------------------------------------------------------------------ internals
+    def _grid_stamp(self, now: int | None) -> int:
+        """Return the newest state's stamp [ns], or the latest of its grid not after ``now``.
+
+        Needs a state. The states come every period (``stamp + k * period``), so a time on
+        that grid is one a state has or will have.
+        """
+        stamp = self.measured[0]
+        if now is not None and int(now) > stamp:
+            stamp += (int(now) - stamp) // self.period * self.period
+        return stamp
+
     def _send_due(self, active: ActiveStream, now: int) -> None:
         for setpoint in active.stream.due(now, active.last, self.lookahead):
             self._send_setpoint(active, setpoint)

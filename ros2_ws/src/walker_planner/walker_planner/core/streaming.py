@@ -273,6 +273,22 @@ class SetpointStream:
         """Clock time [ns] at which the trajectory's time 0 applies."""
         return self.start + self.period
 
+    @property
+    def end_stamp(self) -> int:
+        """Clock time [ns] of the final setpoint: the trajectory's end on the clock.
+
+        The first of the stream's stamps (``start + k * period``, k >= 1) at which the
+        trajectory's time reaches its duration, as :meth:`setpoint_at` marks it ``final``.
+        """
+        duration = self.trajectory.duration
+        periods = max(0, math.ceil(duration * _NANOSECONDS / self.period))
+        stamp = self.origin + periods * self.period
+        while stamp > self.origin and self.trajectory_time(stamp - self.period) >= duration:
+            stamp -= self.period
+        while self.trajectory_time(stamp) < duration:
+            stamp += self.period
+        return stamp
+
     def trajectory_time(self, stamp: int) -> float:
         """Trajectory time [s] of a clock time [ns]."""
         return (int(stamp) - self.origin) / _NANOSECONDS
@@ -318,10 +334,12 @@ class SetpointStream:
 
         It applies one period after ``now`` [ns], or after ``last`` when that was sent further
         ahead: the setpoints already sent are followed first (at most the lookahead), so the
-        stop is where they end, not a jump back.
+        stop is where they end, not a jump back. With ``now`` past ``last`` (the clock of
+        controllers that hold the whole trajectory ran on past the states heard here), it stops
+        where the trajectory is at ``now``, not back where ``last`` was.
         """
-        if last is None:
-            last = self.setpoint_at(self.origin)
+        if last is None or int(now) > last.stamp:
+            last = self.setpoint_at(max(int(now), self.origin))
         zeros = np.zeros(5)
         stamp = max(int(now), last.stamp) + self.period
         return Setpoint(stamp, last.time_from_start, last.position, zeros, zeros, True)
