@@ -94,18 +94,24 @@ def test_no_overtravel_descends_to_the_nominal_mouth_as_before():
     np.testing.assert_array_equal(request.goal_point, run.targets.point_to)
 
 
+def stream_down_to_the_face(run, face):
+    """Stream a descent down the axis to a face ``face`` [m] off the mouth; return the commands."""
+    mouth = run.targets.point_to
+    said = []
+    for tick, height in enumerate(stopped_at(face, start=0.01, ticks=60)):
+        point = np.array([mouth[0], mouth[1], mouth[2] + height])
+        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
+                                         reference=run.targets.at_to))
+        said += insertion.feel_the_face(run, tick * TICK)
+    return said
+
+
 def test_a_descent_stopped_by_the_face_says_where_once_and_stops_pressing_on_the_axis():
     run = run_at_insertion(OVERTRAVEL)
     transitions.enter_insertion(run, 0.0)
     run.motions.running = True
     mouth = run.targets.point_to
-    said = []
-    for tick, height in enumerate(stopped_at(-0.001, start=0.01, ticks=60)):
-        point = np.array([mouth[0], mouth[1], mouth[2] + height])
-        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
-                                         reference=run.targets.at_to))
-        said += insertion.feel_the_face(run, tick * TICK)
-    notice, cancel, line = said
+    notice, cancel, line = stream_down_to_the_face(run, -0.001)
     assert notice.message == "the descent met the node's face 1.00 mm below the nominal mouth"
     assert isinstance(cancel, CancelTrajectory)
     # the rest of the descent (2 mm deeper) would push the tip sideways: a line to a light
@@ -146,11 +152,5 @@ def test_without_overtravel_the_face_is_only_said():
     run = run_at_insertion(0.0)
     transitions.enter_insertion(run, 0.0)
     run.motions.running = True
-    mouth = run.targets.point_to
-    said = []
-    for tick, height in enumerate(stopped_at(-0.0002, start=0.01, ticks=60)):
-        point = np.array([mouth[0], mouth[1], mouth[2] + height])
-        run.theta = np.array(KIN.inverse([*point, 0.0, run.targets.at_to[4]],
-                                         reference=run.targets.at_to))
-        said += insertion.feel_the_face(run, tick * TICK)
+    said = stream_down_to_the_face(run, -0.0002)
     assert [type(command) for command in said] == [Notice]

@@ -66,10 +66,9 @@ from scipy import signal
 from walker_core.dynamics import RigidModel, diagonal_inertia
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.kinematics import WalkerKinematics
-from walker_core.urdf import GRIPPER_LINKS, plant_urdf, rotor_joint_name
-from walker_sim.core.bullet import direct_client, index_body, load_urdf_text
+from walker_core.urdf import GRIPPER_LINKS
 from walker_sim.core.flexibility import (
-    IDENTIFIED_JOINTS, VISIBLE_RESIDUE, FlexTuning, LinearModel, linear_model)
+    IDENTIFIED_JOINTS, VISIBLE_RESIDUE, FlexTuning, LinearModel, linear_model, posed_plant)
 from walker_sim.core.identification import MAX_DAMPING, NYQUIST_MARGIN
 
 __all__ = ['Plane', 'JointLoop', 'ExcitedMode', 'StanceModel', 'stance_at', 'stance_model',
@@ -214,25 +213,13 @@ def stance_model(params, stance) -> StanceModel:
     stance = np.asarray(stance, dtype=float)
     model = linear_model(params, stance)
     gear = params.robot.drive.role_array('gear_ratio')
-    with direct_client() as client:
-        body = load_urdf_text(client, plant_urdf(params), fixed_base=True)
-        index = index_body(client, body)
-        name_of = {joint: name for name, joint in index.joints.items()}
-        dof_of = {name_of[joint]: dof for dof, joint in enumerate(index.movable)}
-        positions = np.zeros(len(index.movable))
-        for name, angle in zip(PHYSICAL_JOINT_NAMES, stance, strict=True):
-            positions[dof_of[name]] = angle
-        zero = [0.0] * len(positions)
+    with posed_plant(params, stance) as plant:
+        zero = [0.0] * len(plant.positions)
         linear, _ = pybullet.calculateJacobian(
-            body, index.links[GRIPPER_LINKS['b']], [0.0, 0.0, 0.0], positions.tolist(), zero,
-            zero, physicsClientId=client)
+            plant.body, plant.index.links[GRIPPER_LINKS['b']], [0.0, 0.0, 0.0],
+            plant.positions.tolist(), zero, zero, physicsClientId=plant.client)
     full = np.asarray(linear, dtype=float)
-    transform = np.zeros((len(positions), len(model.names)))
-    for column, name in enumerate(model.names):
-        transform[dof_of[name], column] = 1.0
-        if name in PHYSICAL_JOINT_NAMES:
-            transform[dof_of[rotor_joint_name(name)], column] = \
-                gear[PHYSICAL_JOINT_NAMES.index(name)]
+    transform = plant.reduced(model.names, gear)
     inertia = diagonal_inertia(stance, RigidModel.from_parameters(params))
     return StanceModel(model=model, tip_jacobian=full @ transform, inertia=inertia)
 

@@ -47,8 +47,10 @@ default stance.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+from collections.abc import Iterator
 
 import numpy as np
 import pybullet
@@ -223,6 +225,57 @@ def first_visible_mode(frequencies, residues) -> float:
     return float(frequencies[visible].min())
 
 
+@dataclasses.dataclass(frozen=True)
+class PosedPlant:
+    """The plant's URDF loaded in a headless pybullet client, posed at a stance.
+
+    Attributes
+    ----------
+    client, body : int
+        The pybullet client and the body in it.
+    index : object
+        The body's joints and links by name (:func:`~walker_sim.core.bullet.index_body`).
+    positions : numpy.ndarray
+        [rad] Every movable joint's position (the stance's joints; rotors and bends at 0).
+    dof_of : dict
+        Joint name -> its index in ``positions``.
+    """
+
+    client: int
+    body: int
+    index: object
+    positions: np.ndarray
+    dof_of: dict
+
+    def reduced(self, names, gear: np.ndarray) -> np.ndarray:
+        """Return ``T`` with ``qdot_full = T qdot_reduced`` for the reduced coordinates ``names``.
+
+        A rotor turns ``gear`` [-] times its joint (role order of
+        :data:`~walker_core.joint_roles.PHYSICAL_JOINT_NAMES`); a bend is its own coordinate.
+        """
+        transform = np.zeros((len(self.positions), len(names)))
+        for column, name in enumerate(names):
+            transform[self.dof_of[name], column] = 1.0
+            if name in PHYSICAL_JOINT_NAMES:
+                transform[self.dof_of[rotor_joint_name(name)], column] = \
+                    gear[PHYSICAL_JOINT_NAMES.index(name)]
+        return transform
+
+
+@contextlib.contextmanager
+def posed_plant(params, stance) -> Iterator[PosedPlant]:
+    """Load the URDF the plant loads in a throwaway headless client, posed at ``stance`` [rad]."""
+    with direct_client() as client:
+        body = load_urdf_text(client, plant_urdf(params), fixed_base=True)
+        index = index_body(client, body)
+        name_of = {joint: name for name, joint in index.joints.items()}
+        dof_of = {name_of[joint]: dof for dof, joint in enumerate(index.movable)}
+        positions = np.zeros(len(index.movable))
+        for name, angle in zip(PHYSICAL_JOINT_NAMES, stance, strict=True):
+            positions[dof_of[name]] = angle
+        yield PosedPlant(client, body, index, positions, dof_of)
+
+
 def linear_model(params, stance=None) -> LinearModel:
     """Linearise the plant model about a stance (default: :func:`default_stance`).
 
@@ -232,24 +285,12 @@ def linear_model(params, stance=None) -> LinearModel:
     stance = default_stance(params) if stance is None else np.asarray(stance, dtype=float)
     gear = params.robot.drive.role_array('gear_ratio')
     bends = flex_joints(params.robot.flexibility.segments_per_link)
-    with direct_client() as client:
-        body = load_urdf_text(client, plant_urdf(params), fixed_base=True)
-        index = index_body(client, body)
-        name_of = {joint: name for name, joint in index.joints.items()}
-        dof_of = {name_of[joint]: dof for dof, joint in enumerate(index.movable)}
-        positions = np.zeros(len(index.movable))
-        for name, angle in zip(PHYSICAL_JOINT_NAMES, stance, strict=True):
-            positions[dof_of[name]] = angle
-        full = np.array(pybullet.calculateMassMatrix(body, positions.tolist(),
-                                                     physicsClientId=client))
+    with posed_plant(params, stance) as plant:
+        full = np.array(pybullet.calculateMassMatrix(plant.body, plant.positions.tolist(),
+                                                     physicsClientId=plant.client))
     names = (*PHYSICAL_JOINT_NAMES, *(bend.name for bend in bends))
     # Reduced coordinates: the rotor turns n times its joint, so qdot_full = T qdot_reduced.
-    transform = np.zeros((len(positions), len(names)))
-    for column, name in enumerate(names):
-        transform[dof_of[name], column] = 1.0
-        if name in PHYSICAL_JOINT_NAMES:
-            ratio = gear[PHYSICAL_JOINT_NAMES.index(name)]
-            transform[dof_of[rotor_joint_name(name)], column] = ratio
+    transform = plant.reduced(names, gear)
     mass = transform.T @ full @ transform
     return LinearModel(names=names, mass=0.5 * (mass + mass.T),
                        planes={bend.name: bend.plane for bend in bends}, stance=stance)
