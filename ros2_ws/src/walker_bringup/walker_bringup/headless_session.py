@@ -11,6 +11,7 @@ and target.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from walker_bag.core.errors import BagError
@@ -19,18 +20,19 @@ from walker_core.parameter_schema import ParameterError
 from walker_core.progress import ProgressLine, walk_progress
 from walker_core.truss import Truss
 from walker_headless.recording import WalkRecording
-from walker_headless.runner import WalkResult, walk
+from walker_core.walk_summary import Runner, WalkSummary
+from walker_headless.runner import walk
 from walker_report.core.steps import format_table, rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
 from walker_supervisor.core.survey_file import SURVEY_FILE_NAME, read_survey, write_survey
 from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
 
-from walker_bringup.session_options import SessionError, SessionOptions, WalkSummary
+from walker_bringup.session_options import SessionError, SessionOptions
 
 __all__ = ['HeadlessBackend', 'loop_record']
 
 
-def loop_record(result: WalkResult) -> dict:
+def loop_record(result: WalkSummary) -> dict:
     """Return the ``loop`` entry of ``summary.json``: lock-stepped by calls, never late."""
     return {'clock_mode': 'sim_time', 'plant_time': result.sim_time, 'late_periods': 0,
             'late_efforts': dict.fromkeys(PHYSICAL_JOINT_NAMES, 0), 'lockstep_timeouts': 0,
@@ -40,7 +42,7 @@ def loop_record(result: WalkResult) -> dict:
 class HeadlessBackend:
     """Walks in the lock-step loop (:class:`~walker_bringup.session.WalkSession`'s backend)."""
 
-    runner = 'headless'
+    runner = Runner.HEADLESS
 
     def __init__(self, configuration, options: SessionOptions, out: Path,
                  progress: ProgressLine) -> None:
@@ -50,6 +52,7 @@ class HeadlessBackend:
         self.progress = progress
         self.report_failed = False
         self.survey = None
+        self.exit_codes: dict[str, int | None] = {}  # no node processes
 
     def start(self) -> None:
         """Make the output directory; refuse to overwrite a bag or a survey that does not fit.
@@ -119,9 +122,14 @@ class HeadlessBackend:
         return TrussMap.from_dict(Truss.from_parameters(self.configuration.walker),
                                   settings.node_prior_std, settings.joint_reading_std, content)
 
-    def _summarise(self, result: WalkResult) -> WalkSummary:
-        """Print the per-step table and the outcome, write ``summary.json``."""
+    def _summarise(self, result: WalkSummary) -> WalkSummary:
+        """Print the per-step table and the outcome, write ``summary.json``; return it whole.
+
+        The runner's summary, with the per-step table, the loop's record and the namespace.
+        """
         rows = rows_from_reports(result.reports)
+        result = dataclasses.replace(result, rows=tuple(rows), loop=loop_record(result),
+                                     namespace=self.options.namespace)
         print(format_table(rows) if rows else '[walker] no step was taken')
         rate = self.configuration.walker.timing.control_rate
 
@@ -133,21 +141,14 @@ class HeadlessBackend:
               f's of wall time ({speed(result.wall_time):.1f} x real time), the loop '
               f'{result.cpu_time:.1f} s of CPU ({speed(result.cpu_time):.1f} x real time on '
               'one core)')
-        write_json(rows, self.out / 'summary.json',
-                   {'target': result.target, 'reached': result.reached,
-                    'message': result.message, 'path': list(result.path),
-                    'timed_out': result.timed_out,
-                    'wall_time': result.wall_time, 'loop': loop_record(result),
-                    'runner': 'headless'})
+        write_json(rows, self.out / 'summary.json', result.json_fields(
+            'target', 'reached', 'message', 'path', 'timed_out', 'wall_time', 'loop', 'runner'))
         if result.reached:
             print(f'[walker] reached {result.target} in {result.steps_taken} steps, '
                   f'{result.duration:.1f} s of walking; summary in {self.out / "summary.json"}')
         else:
             print(f'[walker] the walk to {result.target} did not reach it: {result.message}')
-        return WalkSummary(result.target, result.reached, result.message, tuple(result.path),
-                           result.steps_taken, result.duration, tuple(rows), result.wall_time,
-                           self.runner, loop_record(result), {}, result.timed_out,
-                           self.options.namespace)
+        return result
 
     def command(self, which: str) -> str:
         """``hold`` or ``resume``: the headless loop has no walker between walks to tell."""

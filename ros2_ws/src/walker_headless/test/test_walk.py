@@ -55,7 +55,7 @@ def messages(bag):
 
 def test_the_step_reaches_its_node_through_the_four_phases(walks):
     result, _ = walks[0]
-    assert result.reached and result.path == [TARGET] and result.message == ''
+    assert result.reached and result.path == (TARGET,) and result.message == ''
     report = result.reports[0]
     assert report.success and report.phase_names == ['extraction', 'coarse', 'fine',
                                                      'insertion']
@@ -200,7 +200,7 @@ def test_an_unknown_target_is_refused_before_anything_moves(configuration, tmp_p
     finally:
         recording.close()
     assert not result.reached and 'not on the truss' in result.message
-    assert result.periods == 0 and result.reports == []
+    assert result.periods == 0 and result.reports == ()
     with BagReader(tmp_path / 'bag') as reader:
         rejections = [r.message for r in reader.messages(topics=['/walker/goal_rejections'])]
     assert [(r.action, r.target_node) for r in rejections] == [('walk_to', 'n9_9')]

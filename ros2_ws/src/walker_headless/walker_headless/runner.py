@@ -23,13 +23,13 @@ from collections.abc import Callable
 from walker_config.core.configuration import WalkerConfiguration
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import description_urdf
+from walker_core.walk_summary import Runner, WalkSummary
 from walker_supervisor.core.commands import Feedback
 
 from walker_headless.loop import RobotLoop
-from walker_headless.records import PhaseRecord, StepReportRecord
 from walker_headless.shell import WalkShell
 
-__all__ = ['WalkResult', 'walk', 'DIAGNOSTICS_PERIOD']
+__all__ = ['walk', 'DIAGNOSTICS_PERIOD']
 
 #: [s] of simulated time between two of the plant's ``/diagnostics`` statuses
 DIAGNOSTICS_PERIOD = 1.0
@@ -37,65 +37,17 @@ DIAGNOSTICS_PERIOD = 1.0
 _WALL_CHECK_PERIODS = 250
 
 
-@dataclasses.dataclass
-class WalkResult:
-    """How a headless walk went (the fields of ``walker_msgs/action/WalkTo``'s result, and more).
-
-    Attributes
-    ----------
-    target : str
-        The node walked to.
-    reached : bool
-        Every planned step succeeded.
-    message : str
-        Why not ('' when reached).
-    path : list of str
-        The nodes the moving grippers were screwed into, in order.
-    steps_taken : int
-        Steps that succeeded.
-    duration : float
-        Time of the steps [s], summed.
-    reports : list of StepReportRecord
-        One per step ended.
-    phases : list of PhaseRecord
-        Every phase message, in order.
-    sim_time : float
-        Simulated time at the end [s].
-    periods : int
-        Control periods simulated.
-    wall_time : float
-        Wall time the walk took, set-up included [s] (not part of the walk's outcome).
-    cpu_time : float
-        CPU time of this process in the loop, from the walk's start to its end [s] (not part
-        of the walk's outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
-    timed_out : bool
-        The walk was stopped at its wall-time limit (``wall_timeout``), unreached.
-    survey : dict or None
-        The truss map at the end (:meth:`~walker_supervisor.core.truss_map.TrussMap.to_dict`).
-    """
-
-    target: str
-    reached: bool
-    message: str
-    path: list[str]
-    steps_taken: int
-    duration: float
-    reports: list[StepReportRecord]
-    phases: list[PhaseRecord]
-    sim_time: float
-    periods: int
-    wall_time: float
-    cpu_time: float = 0.0
-    timed_out: bool = False
-    survey: dict | None = None
-
-
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
          progress: Callable[[Feedback, float], None] | None = None,
          say: Callable[[str, str], None] | None = None,
          wall_timeout: float = math.inf, goal: str = 'walk_to', survey: dict | None = None,
-         whole_trajectories: bool | None = None) -> WalkResult:
-    """Walk from the plant's start (``sim.start``) to ``target``, headless.
+         whole_trajectories: bool | None = None) -> WalkSummary:
+    """Walk from the plant's start (``sim.start``) to ``target``, headless; return how it went.
+
+    The summary (:class:`~walker_core.walk_summary.WalkSummary`, ``runner`` ``'headless'``)
+    holds the runner's own fields too: the step reports and phase messages, the simulated time
+    and periods, the loop's CPU time and the truss map at the end (``survey``). Its ``rows``
+    and ``loop`` are left for the session to make (:mod:`walker_bringup.headless_session`).
 
     Parameters
     ----------
@@ -156,28 +108,28 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
             if periods % _WALL_CHECK_PERIODS == 0 and time.monotonic() - started > wall_timeout:
                 message = f'the walk did not end within {wall_timeout:g} s of wall time'
                 break
-        result = _result(target, shell, loop, started, message)
-        result.cpu_time = time.process_time() - cpu_started
-        result.timed_out = message is not None
-        result.survey = shell.runner.mapped.map.to_dict()
-        return result
+        return dataclasses.replace(
+            _result(target, shell, loop, started, message),
+            cpu_time=time.process_time() - cpu_started, timed_out=message is not None,
+            survey=shell.runner.mapped.map.to_dict())
     finally:
         loop.close()
 
 
 def _result(target: str, shell: WalkShell, loop: RobotLoop, started: float,
-            message: str | None) -> WalkResult:
+            message: str | None) -> WalkSummary:
     ended = shell.ended
     reached = ended is not None and ended.success and message is None
     if message is None:
         message = shell.refusal or ('' if reached else ended.message)
-    return WalkResult(
+    return WalkSummary(
         target=target, reached=reached, message=message,
-        path=list(ended.path) if ended is not None else [],
+        path=tuple(ended.path) if ended is not None else (),
         steps_taken=ended.steps_taken if ended is not None else 0,
-        duration=ended.duration if ended is not None else 0.0, reports=list(shell.reports),
-        phases=list(shell.phases), sim_time=loop.time, periods=loop.stamp // loop.period_ns,
-        wall_time=time.monotonic() - started)
+        duration=ended.duration if ended is not None else 0.0,
+        wall_time=time.monotonic() - started, runner=Runner.HEADLESS,
+        reports=tuple(shell.reports), phases=tuple(shell.phases), sim_time=loop.time,
+        periods=loop.stamp // loop.period_ns)
 
 
 def _plant_diagnostics(recording, loop: RobotLoop) -> None:
