@@ -15,7 +15,8 @@ than the policy's limit in a row is given up: the walk is stopped safely (the su
 to hold, the walk goal cancelled; :class:`SessionError` code 5). SIGINT and SIGTERM do the same
 (code 130). :meth:`GraphBackend.stop` leaves nothing running: each child is interrupted, then
 terminated, then killed; the bags a killed recorder left cut are completed; the walk report is
-made from the bag (the first walker's, with several). See docs/reliability.md.
+made from the bag (the first walker's, with several). See docs/reliability.md. The walks
+themselves are sent, printed and summarised by :mod:`walker_bringup.graph_walk`.
 """
 
 from __future__ import annotations
@@ -26,18 +27,19 @@ import threading
 import time
 from pathlib import Path
 
-from walker_bag.core.losses import loss_lines
-from walker_core.progress import ProgressLine, step_progress, walk_progress
-from walker_report.core.steps import format_table, rows_from_reports, write_json
+from walker_core.progress import ProgressLine
+from walker_core.walk_summary import Runner, WalkSummary
+from walker_report.core.steps import rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
 
 from walker_bringup.graph import walker_targets
 from walker_bringup.graph_client import (
     GoalRejectedError, GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
+from walker_bringup.graph_walk import SUMMARY_FILE, walk_one, walk_several
 from walker_bringup.graph_walkers import (
     GraphWalker, Wrap, bag_paths, describe_walkers, launch, namespaces_in_use, recover_bags)
 from walker_bringup.respawning import RespawningGroup
-from walker_bringup.session_options import SessionError, SessionOptions, WalkSummary
+from walker_bringup.session_options import SessionError, SessionOptions
 from walker_bringup.transport import (
     DEFAULT_TRANSPORT, PROFILES_VARIABLE, STATIC_PEERS_VARIABLE, default_transport,
     graph_environment)
@@ -46,18 +48,25 @@ __all__ = ['GraphBackend', 'SERVE_POLL']
 
 SERVE_POLL = 0.2  # [s] longest wait of serve() before it sees Ctrl-C or a dead node
 _DEATH_REPORT_LEAD = 0.5  # [s] between a death's report on /diagnostics and the hold it asks
-_OUTPUT = threading.Lock()
 
 
 class GraphBackend:
-    """Runs the walker's ROS graph (:class:`~walker_bringup.session.WalkSession`'s backend)."""
+    """Runs the walker's ROS graph (:class:`~walker_bringup.session.WalkSession`'s backend).
 
-    runner = 'graph'
+    ``wrap`` and ``on_client`` are :class:`~walker_bringup.session.WalkSession`'s. After
+    :meth:`stop`, ``exit_codes`` holds the exit code of each node's last process (``walker/node``
+    with several walkers; ``None``: still running).
+    """
+
+    runner = Runner.GRAPH
 
     def __init__(self, configuration, options: SessionOptions, out: Path,
-                 progress: ProgressLine, wrap: Wrap | None = None) -> None:
+                 progress: ProgressLine, wrap: Wrap | None = None, on_client=None) -> None:
         self.configuration = configuration
         self.wrap = wrap
+        self.on_client = on_client
+        self.exit_codes: dict[str, int | None] = {}
+        self._profile_before: tuple[str | None] | None = None  # this process's, to give back
         self.options = options
         self.out = out
         self.progress = progress
@@ -91,9 +100,6 @@ class GraphBackend:
         except ValueError as error:
             raise SessionError(f'--transport {transport}: {error} (--transport shm leaves the '
                                'rmw default)') from None
-        # this process's own participant (the walk's client) is reached as the nodes are
-        if PROFILES_VARIABLE in self.env:
-            os.environ[PROFILES_VARIABLE] = self.env[PROFILES_VARIABLE]
         if options.walkers > 1 and options.namespace != '/walker':
             raise SessionError('--walkers names the namespaces itself (/walker, /walker_2, '
                                '...): leave --namespace out')
@@ -140,6 +146,11 @@ class GraphBackend:
         out.mkdir(parents=True, exist_ok=True)
         for stale in out.glob('plant_state*.json'):  # an earlier run's robot is not this one's
             stale.unlink()
+        # this process's own participant (the walk's client) is reached as the nodes are;
+        # stop() gives the variable back as it was
+        if PROFILES_VARIABLE in self.env and self._profile_before is None:
+            self._profile_before = (os.environ.get(PROFILES_VARIABLE),)
+            os.environ[PROFILES_VARIABLE] = self.env[PROFILES_VARIABLE]
         context = init_context()
         busy = namespaces_in_use(walkers, context)
         if busy:
@@ -160,7 +171,8 @@ class GraphBackend:
         def on_signal(signum, _frame):
             self.signalled = signum
 
-        if threading.current_thread() is threading.main_thread():  # (a worker's thread: none)
+        # a worker's thread cannot take signals; a caller may keep its own (handle_signals)
+        if options.handle_signals and threading.current_thread() is threading.main_thread():
             self._previous_handlers = {s: signal.signal(s, on_signal)
                                        for s in (signal.SIGINT, signal.SIGTERM)}
         for walker in walkers:
@@ -175,6 +187,8 @@ class GraphBackend:
             started = time.monotonic()
             for walker in walkers:
                 walker.client = GraphClient(walker.namespace, context)
+                if self.on_client is not None:
+                    self.on_client(walker.client)
                 prefix = f'{walker.label}: ' if len(walkers) > 1 else ''
                 walker.client.wait_until_ready(
                     [n.full_name for n in walker.nodes], options.startup_timeout,
@@ -216,8 +230,8 @@ class GraphBackend:
             walker.target = moved
         try:
             if len(walkers) == 1:
-                return [self._walk(walkers[0], target, goal, self.should_stop)]
-            return self._walk_several(goal)
+                return [walk_one(self, walkers[0], target, goal, self.should_stop)]
+            return walk_several(self, goal)
         except GoalRejectedError as error:  # the supervisor's reason: nothing moved
             raise SessionError(str(error), 1) from None
         except WalkInterruptedError:
@@ -239,7 +253,7 @@ class GraphBackend:
             while not self.should_stop():
                 client.spin_for(SERVE_POLL)
         finally:
-            write_json(rows_from_reports(client.reports), self.out / 'summary.json',
+            write_json(rows_from_reports(client.reports), self.out / SUMMARY_FILE,
                        {'serve': True, 'processes': walker.processes()})
         if self.deaths:
             raise SessionError('a node died', self._report_interruption())
@@ -259,6 +273,9 @@ class GraphBackend:
         """Shut every graph down, complete cut bags, make the report; return 0, 4 or 6.
 
         4: a process was still running after the shutdown; 6: the report could not be made.
+        Each node's exit code is kept in ``exit_codes``; the profiles variable this process
+        was given for its client (:data:`~walker_bringup.transport.PROFILES_VARIABLE`) is
+        given back as it was.
         """
         code = 0
         progress, walkers = self.progress, self.walkers
@@ -268,7 +285,7 @@ class GraphBackend:
         if self.context is not None:
             self.context.try_shutdown()
             progress.say('[walker] shutting the graph down')
-            codes: dict[str, int | None] = {}
+            codes = self.exit_codes = {}
             left = []
             for walker in walkers:
                 prefix = f'{walker.label}/' if len(walkers) > 1 else ''
@@ -287,6 +304,12 @@ class GraphBackend:
         for sig, handler in self._previous_handlers.items():
             signal.signal(sig, handler)
         self._previous_handlers = {}
+        if self._profile_before is not None:
+            (before,), self._profile_before = self._profile_before, None
+            if before is None:
+                os.environ.pop(PROFILES_VARIABLE, None)
+            else:
+                os.environ[PROFILES_VARIABLE] = before
         for line in recover_bags(bag_paths(walkers)):
             progress.error(line)
         options = self.options
@@ -295,85 +318,6 @@ class GraphBackend:
                                      self.configuration.path, options.quiet):
                 code = code or 6
         return code
-
-    # ------------------------------------------------------------------ walks
-    def _walk(self, walker: GraphWalker, target: str, goal: str, should_stop,
-              label: str = '', summary_name: str = 'summary.json') -> WalkSummary:
-        client, progress, out = walker.client, self.progress, self.out
-        started = time.monotonic()
-        prefix = f'{label}: ' if label else ''
-
-        def on_feedback(feedback) -> None:
-            elapsed = time.monotonic() - started
-            text = walk_progress(feedback.step_index, feedback.step_count, feedback.phase,
-                                 feedback.from_node, feedback.to_node,
-                                 feedback.tip_position_error, elapsed) \
-                if goal == 'walk_to' else step_progress(target, feedback.phase,
-                                                        feedback.tip_position_error, elapsed)
-            progress.update(f'[walker] {prefix}{text}',
-                            key=(label, getattr(feedback, 'step_index', 0), feedback.phase))
-
-        progress.say(f'[walker] {prefix}walking to {target}')
-        send = client.walk_to if goal == 'walk_to' else client.step
-        _status, result = send(target, self.options.walk_timeout, on_feedback, should_stop)
-        client.spin_for(0.5)  # the last step report
-        rows = rows_from_reports(client.reports)
-        wall_time = time.monotonic() - started
-        path = tuple(result.path) if goal == 'walk_to' else \
-            ((result.base_node,) if result.success else ())
-        loop = None if client.loop is None else client.loop.as_dict()
-        with _OUTPUT:
-            progress.say('')
-            if label:
-                print(f'[walker] {label}:')
-            print(format_table(rows) if rows else '[walker] no step was taken')
-            if client.loop is not None:
-                print(f'[walker] {prefix}'
-                      f'{client.loop.summary(self.configuration.walker.timing.control_rate)}')
-            recording = walker.recording()
-            for line in loss_lines(recording) if recording else []:
-                print(f'[walker] {prefix}the bag lacks messages: {line}')
-            write_json(rows, out / summary_name,
-                       {'target': target, 'reached': bool(result.success),
-                        'message': result.message, 'path': list(path),
-                        'wall_time': wall_time, 'loop': loop,
-                        'processes': walker.processes(), 'recording': recording,
-                        **({'namespace': client.namespace} if label else {})})
-            steps = getattr(result, 'steps_taken', int(bool(result.success)))
-            duration = getattr(result, 'duration', 0.0)
-            if result.success:
-                print(f'[walker] {prefix}reached {target} in {steps} steps, '
-                      f'{duration:.1f} s of walking; summary in {out / summary_name}')
-            else:
-                print(f'[walker] {prefix}the walk to {target} did not reach it: '
-                      f'{result.message}')
-        return WalkSummary(target, bool(result.success), result.message, path, steps,
-                           duration, tuple(rows), wall_time, self.runner, loop,
-                           walker.processes(), False, walker.namespace)
-
-    def _walk_several(self, goal: str) -> list[WalkSummary]:
-        """Walk every walker to its target at once, one thread each; the first error stops all."""
-        errors: list[BaseException] = []
-        summaries: dict[str, WalkSummary] = {}
-
-        def walk(walker: GraphWalker) -> None:
-            name = 'summary.json' if walker.namespace == '/walker' else \
-                f'summary_{walker.label}.json'
-            try:
-                summaries[walker.namespace] = self._walk(
-                    walker, walker.target, goal, lambda: bool(errors) or self.should_stop(),
-                    walker.label, name)
-            except BaseException as error:  # re-raised in the main thread
-                errors.append(error)
-
-        threads = [threading.Thread(target=walk, args=(w,), name=w.label) for w in self.walkers]
-        for thread in threads:
-            thread.start()
-        for thread in threads:
-            thread.join()
-        if errors:
-            raise next((e for e in errors if not isinstance(e, WalkInterruptedError)), errors[0])
-        return [summaries[w.namespace] for w in self.walkers]
 
     def _report_interruption(self) -> int:
         """Say why the walk stopped, ask every supervisor to hold; return 5 or 130."""

@@ -9,6 +9,7 @@ the bags a killed recorder left cut (:func:`recover_bags`).
 from __future__ import annotations
 
 import dataclasses
+import fnmatch
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -25,8 +26,9 @@ from walker_bringup.processes import ProcessGroup
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.session_options import SessionOptions
 
-__all__ = ['GraphWalker', 'describe_walkers', 'plant_file', 'bag_paths', 'graph_parameters',
-           'launch', 'recover_bags', 'namespaces_in_use', 'PLANT_STATE_FILE', 'Wrap']
+__all__ = ['GraphWalker', 'describe_walkers', 'with_node_settings', 'plant_file', 'bag_paths',
+           'graph_parameters', 'launch', 'recover_bags', 'namespaces_in_use',
+           'PLANT_STATE_FILE', 'Wrap']
 
 #: What a process's command is replaced with: ``wrap(spec, command or None) -> command or None``.
 Wrap = Callable[[NodeSpec, list[str] | None], list[str] | None]
@@ -80,10 +82,13 @@ def describe_walkers(options: SessionOptions, configuration, out: Path,
                      env: dict) -> list[GraphWalker]:
     """Each walker's graph and process group (nothing started yet).
 
+    Each graph has the options' extra nodes, remaps and per-node parameters
+    (:func:`with_node_settings`).
+
     Raises
     ------
     ValueError
-        If the truss has no room for that many walkers.
+        If the truss has no room for that many walkers, or a node setting names no node.
     """
     if options.walkers == 1:
         nodes = walker_graph(configuration.path, options.namespace, sim_time=options.sim_time,
@@ -93,6 +98,7 @@ def describe_walkers(options: SessionOptions, configuration, out: Path,
                              foxglove_port=options.foxglove_port,
                              plant_state_file=out / PLANT_STATE_FILE,
                              plant_params_file=plant_file(options))
+        nodes = with_node_settings(nodes, options)
         stance = start_stances(configuration, 1)[0]  # the parameter file's own start
         return [GraphWalker(options.namespace, None, nodes, ProcessGroup(out / 'logs', env),
                             stance=stance)]
@@ -102,9 +108,44 @@ def describe_walkers(options: SessionOptions, configuration, out: Path,
     walkers = []
     for index, (namespace, start, nodes) in enumerate(graphs):
         logs = out / 'logs' if index == 0 else out / 'logs' / namespace.strip('/')
-        walkers.append(GraphWalker(namespace, start if index else None, nodes,
+        walkers.append(GraphWalker(namespace, start if index else None,
+                                   with_node_settings(nodes, options),
                                    ProcessGroup(logs, env), stance=start))
     return walkers
+
+
+def with_node_settings(nodes: list[NodeSpec], options: SessionOptions) -> list[NodeSpec]:
+    """Return a walker's nodes with the options' extra nodes, remaps and node parameters.
+
+    The extra nodes come last; each remap and parameter goes to every node whose name matches
+    its pattern, after the node's own (a later ``-p`` wins).
+
+    Raises
+    ------
+    ValueError
+        If a pattern matches no node of the graph, or an extra node takes a name in use.
+    """
+    names = [spec.name for spec in nodes]
+    for spec in options.extra_nodes:
+        if spec.name in names:
+            raise ValueError(f'extra node {spec.name!r}: the graph has a node of that name')
+        names.append(spec.name)
+    for field in ('node_parameters', 'remaps'):
+        for pattern, *_ in getattr(options, field):
+            if not any(fnmatch.fnmatchcase(name, pattern) for name in names):
+                raise ValueError(f'{field}: {pattern!r} names no node of the graph (its nodes: '
+                                 f'{", ".join(names)})')
+    customised = []
+    for spec in [*nodes, *options.extra_nodes]:
+        parameters = tuple((name, value) for pattern, name, value in options.node_parameters
+                           if fnmatch.fnmatchcase(spec.name, pattern))
+        remaps = tuple((source, target) for pattern, source, target in options.remaps
+                       if fnmatch.fnmatchcase(spec.name, pattern))
+        if parameters or remaps:
+            spec = dataclasses.replace(spec, parameters=(*spec.parameters, *parameters),
+                                       remaps=(*spec.remaps, *remaps))
+        customised.append(spec)
+    return customised
 
 
 def plant_file(options: SessionOptions) -> Path | None:
@@ -169,11 +210,11 @@ def launch(walker: GraphWalker, options: SessionOptions, params_file: Path,
     composed = NodeSpec('walker_bringup', 'composed_graph', 'graph' if loop is None else 'loop',
                         walker.namespace, str(params_file))
     walker.group.start(composed, wrap(composed, command))
-    for spec in walker.nodes:  # beside the composed process: the bridge serves any graph
-        if (spec.name not in loop) if loop is not None else spec.name == FOXGLOVE_NODE:
+    # beside the composed process: the bridge serves any graph; the extra nodes are the caller's
+    beside = {FOXGLOVE_NODE, *(spec.name for spec in options.extra_nodes)}
+    for spec in walker.nodes:
+        if (spec.name not in loop) if loop is not None else spec.name in beside:
             walker.group.start(spec, wrap(spec, None))
-
-
 
 
 def recover_bags(bags: list[Path]) -> list[str]:

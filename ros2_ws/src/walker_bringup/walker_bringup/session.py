@@ -17,7 +17,7 @@ The verbs: :meth:`~WalkSession.start` (bring the graph up; the context manager d
 :meth:`~WalkSession.hold` and :meth:`~WalkSession.resume` (the supervisor's), :meth:`~WalkSession.
 serve` (keep the graph up for an operator until Ctrl-C) and :meth:`~WalkSession.stop` (shut
 down, complete the bags, make the report). Every walk returns a
-:class:`~walker_bringup.session_options.WalkSummary`, from either backend
+:class:`~walker_core.walk_summary.WalkSummary`, from either backend
 (:mod:`walker_bringup.graph_session`, :mod:`walker_bringup.headless_session`), and writes
 ``<out>/summary.json``. What cannot be done raises
 :class:`~walker_bringup.session_options.SessionError`, whose ``code`` is ``run_all.py``'s exit
@@ -59,10 +59,15 @@ class WalkSession:
     wrap : callable, optional
         The graph's: ``wrap(spec, command)`` returns the command a process starts with instead
         (:func:`walker_bringup.graph_walkers.launch`; a benchmark's loop probe).
+    on_client : callable, optional
+        The graph's: ``on_client(client)`` is called with each walker's
+        :class:`~walker_bringup.graph_client.GraphClient` as soon as it exists, before the
+        graph is waited for, e.g. to subscribe to more of the walker's topics from the start
+        (a test's checks).
     """
 
     def __init__(self, configuration, options: SessionOptions | None = None,
-                 progress: ProgressLine | None = None, wrap=None) -> None:
+                 progress: ProgressLine | None = None, wrap=None, on_client=None) -> None:
         self.configuration = configuration
         options = options or SessionOptions()
         self.options = options
@@ -75,7 +80,8 @@ class WalkSession:
         else:
             from walker_bringup.graph_session import GraphBackend
 
-            self.backend = GraphBackend(configuration, options, self.out, self.progress, wrap)
+            self.backend = GraphBackend(configuration, options, self.out, self.progress, wrap,
+                                        on_client)
         self.started = False
         self._ran = False  # a walk was sent or the graph served: the bag holds one
         self._interrupted = False  # stopped by a signal: no report
@@ -135,6 +141,15 @@ class WalkSession:
             return 0
         self.started = False
         return self.backend.stop(self._ran and not self._interrupted)
+
+    @property
+    def exit_codes(self) -> dict[str, int | None]:
+        """Each node's exit code after :meth:`stop` (the graph's; headless: none).
+
+        The code of the node's last process, by node name (``walker_2/node`` with several
+        walkers); ``None``: still running after the shutdown.
+        """
+        return dict(self.backend.exit_codes)
 
     def __enter__(self) -> WalkSession:
         try:

@@ -4,8 +4,9 @@
 is built with besides the walker's configuration: the arrangement (the graph as processes,
 with the controllers grouped, with the loop or the whole graph composed, or the headless
 runner), sim or real time, recording, the output directory, the respawn policy, and the
-graph's own settings. :class:`WalkSummary` is what a walk returns, from the graph or the
-headless runner alike (``summary.json`` holds the same fields).
+graph's own settings. :class:`~walker_core.walk_summary.WalkSummary` (re-exported here) is
+what a walk returns, from the graph or the headless runner alike (``summary.json`` holds its
+fields).
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ from __future__ import annotations
 import dataclasses
 import enum
 from pathlib import Path
-from typing import Any
+from walker_core.walk_summary import WalkSummary
 
 from walker_bringup.core.respawn import RespawnPolicy
+from walker_bringup.graph import NodeSpec
 
 __all__ = ['Arrangement', 'SessionOptions', 'WalkSummary', 'SessionError', 'NO_SPLIT']
 
@@ -93,6 +95,19 @@ class SessionOptions:
     truss_survey : Path, optional
         A truss survey file (a walk's ``truss_survey.yaml``) the walk starts from (the headless
         runner's; ``None``: the nominal truss).
+    node_parameters : tuple of (str, str, str)
+        ``(node, name, value)``: a parameter value for the nodes whose name matches the
+        pattern ``node`` (:func:`fnmatch.fnmatchcase`, e.g. ``controller*``), over the file's
+        and ``overrides``; a graph with a process per node only (processes, grouped).
+    remaps : tuple of (str, str, str)
+        ``(node, from, to)``: a topic remapping (``-r FROM:=TO``) for the nodes whose name
+        matches ``node``; processes and grouped only.
+    extra_nodes : tuple of NodeSpec
+        Nodes started beside the walker's own, each in its own process, under the same
+        supervision (e.g. a lossy link between two nodes, remapped to it); one walker only.
+    handle_signals : bool
+        Take SIGINT and SIGTERM while the graph runs (from the main thread), to stop a walk
+        safely (code 130); ``False`` leaves the caller's handlers (a test runner's) in place.
     """
 
     arrangement: Arrangement = Arrangement.PROCESSES
@@ -114,6 +129,10 @@ class SessionOptions:
     overrides: tuple[tuple[str, str], ...] = ()
     stop_timeout: float = 10.0
     truss_survey: Path | None = None
+    node_parameters: tuple[tuple[str, str, str], ...] = ()
+    remaps: tuple[tuple[str, str, str], ...] = ()
+    extra_nodes: tuple[NodeSpec, ...] = ()
+    handle_signals: bool = True
 
     def __post_init__(self) -> None:
         """Refuse options that contradict each other (:class:`SessionError`, code 2)."""
@@ -121,7 +140,9 @@ class SessionOptions:
         if self.arrangement is Arrangement.HEADLESS:
             graph_only = [name for name, given in (
                 ('walkers', self.walkers > 1), ('foxglove_port', self.foxglove_port is not None),
-                ('realtime', bool(self.realtime))) if given]
+                ('realtime', bool(self.realtime)), ('node_parameters', bool(self.node_parameters)),
+                ('remaps', bool(self.remaps)), ('extra_nodes', bool(self.extra_nodes)))
+                if given]
             if graph_only:
                 raise SessionError(f'the headless runner runs no graph: leave '
                                    f'{", ".join(graph_only)} out')
@@ -134,6 +155,24 @@ class SessionOptions:
             raise SessionError('a plant parameter file is for one walker: leave walkers out')
         if not self.walk_timeout > 0:  # nan too
             raise SessionError(f'walk_timeout must be > 0 s, got {self.walk_timeout}')
+        self._check_node_settings()
+
+    def _check_node_settings(self) -> None:
+        """Refuse per-node settings of the wrong shape or that no process of a node takes."""
+        for field in ('node_parameters', 'remaps'):
+            for entry in getattr(self, field):
+                if not (isinstance(entry, tuple) and len(entry) == 3
+                        and all(isinstance(item, str) and item for item in entry)):
+                    raise SessionError(f'{field} entries are (node, name, value) strings, got '
+                                       f'{entry!r}')
+        if (self.node_parameters or self.remaps) and (self.composed or self.composed_loop):
+            raise SessionError(f'node_parameters and remaps are given to a process per node: '
+                               f'the {self.arrangement} arrangement runs nodes in one process')
+        for spec in self.extra_nodes:
+            if not isinstance(spec, NodeSpec):
+                raise SessionError(f'extra_nodes are NodeSpecs, got {spec!r}')
+        if self.extra_nodes and self.walkers > 1:
+            raise SessionError('extra_nodes are for one walker: leave walkers out')
 
     @property
     def composed(self) -> bool:
@@ -150,55 +189,3 @@ class SessionOptions:
         """The five joint controllers run as one node (composed in sim time: by call)."""
         return self.arrangement in (Arrangement.GROUPED, Arrangement.COMPOSED_LOOP) \
             or (self.composed and self.sim_time)
-
-
-@dataclasses.dataclass(frozen=True)
-class WalkSummary:
-    """How a walk went, from either backend (``summary.json``'s fields).
-
-    Attributes
-    ----------
-    target : str
-        The node walked to.
-    reached : bool
-        Every planned step succeeded.
-    message : str
-        Why not ('' when reached).
-    path : tuple of str
-        The nodes the moving grippers were screwed into, in order.
-    steps_taken : int
-        Steps that succeeded; ``duration`` [s] their time, summed.
-    rows : tuple of StepRow
-        The per-step table (:func:`walker_report.core.steps.rows_from_reports`).
-    wall_time : float
-        Wall time of the walk [s] (not part of its outcome).
-    runner : str
-        ``'graph'`` or ``'headless'``.
-    loop : dict, optional
-        The control loop's record (``summary.json``'s ``loop``).
-    processes : dict
-        Deaths and restarts of each node that died (the graph's).
-    timed_out : bool
-        Stopped at ``walk_timeout``, unreached.
-    namespace : str
-        The walker's namespace.
-    """
-
-    target: str
-    reached: bool
-    message: str
-    path: tuple[str, ...]
-    steps_taken: int
-    duration: float
-    rows: tuple[Any, ...]
-    wall_time: float
-    runner: str
-    loop: dict | None = None
-    processes: dict = dataclasses.field(default_factory=dict)
-    timed_out: bool = False
-    namespace: str = '/walker'
-
-    @property
-    def code(self) -> int:
-        """run_all.py's exit code of the walk: 0 reached, 1 not."""
-        return 0 if self.reached else 1
