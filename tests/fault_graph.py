@@ -1,24 +1,28 @@
 """The fault-injection graph: the whole walker over DDS in sim time, and what the checks need.
 
-Shared by the fault suite (``tests/integration/test_faults.py``) and the fault matrix
-(``tests/fault_matrix/``): the recorder, the plant, five controllers (the vertex one reading its
-setpoints through a ``lossy_link``, lossless until a test degrades it), the planner and the
-supervisor, each a separate process, with timeouts that tolerate a loaded machine; a client
-that keeps every phase, gripper state, step report and supervisor diagnostic seen; and the
-operations a test needs (a step, a kill, a restart, a resume until the step completes).
+The graph is a walk session's (:mod:`walker_bringup.session`); this module holds what is the
+fault tests' own. Shared by the fault suite (``tests/integration/test_faults.py``) and the
+fault matrix (``tests/fault_matrix/``): the recorder, the plant, five controllers (the vertex
+one reading its setpoints through a ``lossy_link``, lossless until a test degrades it), the
+planner and the supervisor, each a separate process, with timeouts that tolerate a loaded
+machine; a client that keeps every phase, gripper state, step report and supervisor
+diagnostic seen; and the operations a test needs (a step, a kill, a restart, a resume until
+the step completes).
 """
 
-import dataclasses
+import contextlib
 import json
 import os
 import signal
+import sys
+import tempfile
 import time
 from pathlib import Path
 
-from ros_test_support import SharedMemoryGuard, log_tails, ros_environment
+from ros_test_support import SharedMemoryGuard, log_tails
 
 __all__ = ['FaultGraph', 'assert_the_bag_holds_the_faults', 'write_outcomes', 'TIMEOUT',
-           'TEST_TIMEOUT',
+           'TEST_TIMEOUT', 'lossy_link_options', 'LOADED_MACHINE_TIMEOUTS', 'STARTUP_TIMEOUT',
            'FAULT_TIMEOUT', 'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LINK_INPUT', 'LINK_OUTPUT']
 
 TIMEOUT = 300.0  # [s] of wall time for a step (or the rest of one) on a loaded 2-core machine
@@ -32,81 +36,96 @@ INPUT_TIMEOUTS = (('control.setpoint_timeout', '2.0'),  # [s] the controllers' (
 STILL = 1e-3  # [rad] joints that moved less than this did not move
 LINK_INPUT = 'controllers/vertex_joint/setpoint'  # the planner's stream to the vertex joint
 LINK_OUTPUT = 'controllers/vertex_joint/setpoint_lossy'  # what the vertex controller reads
+STARTUP_TIMEOUT = 180.0  # [s] of wall time for the graph to come up on a loaded machine
+# Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
+# planner's interpreter, and with it its setpoint stream, for up to a second there): a healthy
+# node is never taken for a dead one, and a dead one is still named within seconds. The
+# shipped values are shorter (docs/faults.md). (node pattern, parameter, value)
+LOADED_MACHINE_TIMEOUTS = (*(('controller*', name, value) for name, value in INPUT_TIMEOUTS),
+                           ('supervisor', 'supervisor.watchdog_timeout', str(WATCHDOG)))
+
+
+def lossy_link_options(params_file: Path) -> dict:
+    """Return the session options of the lossy link the vertex controller reads through.
+
+    A ``lossy_link`` node between the planner's setpoint stream to the vertex joint and the
+    vertex controller (remapped to read its output), lossless until a test sets it to drop,
+    delay or cut.
+    """
+    from walker_bringup.graph import NodeSpec
+
+    link = NodeSpec('walker_bringup', 'lossy_link', 'lossy_link', '/walker', str(params_file),
+                    parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
+                                ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
+    return {'extra_nodes': (link,), 'remaps': (('controller_vertex', LINK_INPUT, LINK_OUTPUT),)}
 
 
 class FaultGraph:
     """The running graph, a client, and everything seen on the topics the checks need.
 
-    With ``grouped``, the five joint controllers run as one node (``controllers``, one
-    process; ``run_all.py --grouped-controllers``) and there is no lossy link. ``parameters``
-    are given to every node (``walker_graph``'s overrides), e.g.
-    ``(('sim.wait_for_decisions', 'true'),)``.
+    A walk session's graph (:mod:`walker_bringup.session`) in the domain ``domain``, output
+    in ``tmp``; what is the fault tests' own is given to it as options: the lossy link and
+    the vertex controller's remap to it, the longer timeouts, no restarts (a test kills and
+    restarts nodes itself), and pytest's signal handlers left in place. With ``grouped``, the
+    five joint controllers run as one node (``controllers``, one process; ``run_all.py
+    --grouped-controllers``) and there is no lossy link. ``parameters`` are given to every node
+    (``-p`` overrides), e.g. ``(('sim.wait_for_decisions', 'true'),)``.
     """
 
     def __init__(self, tmp: Path, domain: int, grouped: bool = False,
                  parameters: tuple[tuple[str, str], ...] = ()) -> None:
-        from walker_bringup.graph import walker_graph
-        from walker_bringup.processes import ProcessGroup
-        from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
+        from walker_bringup.core.respawn import RespawnPolicy
+        from walker_bringup.domains import domain_environment
+        from walker_bringup.processes import STOP_TIMEOUT
+        from walker_bringup.session import Arrangement, SessionOptions, WalkSession
+        from walker_config.core.configuration import load_configuration
+        from walker_core.progress import ProgressLine
 
-        self.params = load_walker_parameters(default_parameter_file())
-        self.bag = tmp / 'bag' / 'faults'
-        from walker_bringup.transport import udp_loopback_environment
-
-        # The graph's nodes are reached over UDP on loopback only: a participant killed with
-        # SIGKILL leaves its Fast DDS shared-memory ports behind, and a node restarted in its
-        # place has been seen deaf to the graph over them (walker_bringup.transport).
-        env = udp_loopback_environment(ros_environment(domain))
-        self.specs = {spec.name: spec for spec in walker_graph(
-            default_parameter_file(), sim_time=True, record=True, bag_path=self.bag,
-            grouped_controllers=grouped, parameters=parameters)}
-        # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
-        # planner's interpreter, and with it its setpoint stream, for up to a second there): a
-        # healthy node is never taken for a dead one, and a dead one is still named within
-        # seconds. The shipped values are shorter (docs/faults.md).
-        for name, spec in list(self.specs.items()):
-            extra = INPUT_TIMEOUTS if name.startswith('controller') else \
-                (('supervisor.watchdog_timeout', str(WATCHDOG)),) if name == 'supervisor' else ()
-            self.specs[name] = dataclasses.replace(spec, parameters=(*spec.parameters, *extra))
-        # The vertex controller reads its setpoints through a lossy link, lossless until a test
-        # sets it to drop, delay or cut
-        vertex = self.specs.get('controller_vertex')
-        if vertex is not None:
-            self._add_lossy_link(vertex)
-        self.group = ProcessGroup(tmp / 'logs', env)
+        configuration = load_configuration()
+        self.params = configuration.walker
+        self.bag = tmp / 'bag'
         self.processes = {}
         self.killed: set[str] = set()  # nodes killed by the test and not restarted since
-        self.context = None
+        self.client = None
+        self._environment = contextlib.ExitStack()
+        # the domain and a ROS home of the graph's own (the supervisor's step file stays apart
+        # from every other graph's), given back when the graph is closed
+        self._environment.enter_context(domain_environment(
+            domain, Path(tempfile.mkdtemp(prefix=f'walker-ros-home-{domain}-')),
+            PYTHONUNBUFFERED='1'))
+        self.session = WalkSession(configuration, SessionOptions(
+            arrangement=Arrangement.GROUPED if grouped else Arrangement.PROCESSES,
+            sim_time=True, record=True, report=False, out=tmp, respawn=RespawnPolicy(limit=0),
+            startup_timeout=STARTUP_TIMEOUT, quiet=True, overrides=tuple(parameters),
+            # The graph's nodes are reached over UDP on loopback only: a participant killed
+            # with SIGKILL leaves its Fast DDS shared-memory ports behind, and a node restarted
+            # in its place has been seen deaf to the graph over them (walker_bringup.transport).
+            transport='udp', node_parameters=LOADED_MACHINE_TIMEOUTS,
+            **({} if grouped else lossy_link_options(configuration.path)),
+            stop_timeout=STOP_TIMEOUT, handle_signals=False),
+            ProgressLine(True, stream=sys.stderr), on_client=self._subscribe)
         self.guard = SharedMemoryGuard(lambda: [os.getpid()] + [
             p.popen.pid for p in self.processes.values() if p.alive], period=0.05).__enter__()
         try:
-            self._bring_up(domain)
+            self._bring_up()
         except BaseException:
             self.close()
             raise
 
-    def _add_lossy_link(self, vertex) -> None:
-        from walker_bringup.graph import NodeSpec
+    @property
+    def group(self):
+        """The graph's :class:`~walker_bringup.processes.ProcessGroup`."""
+        return self.session.backend.walkers[0].group
 
-        self.specs['controller_vertex'] = dataclasses.replace(
-            vertex, remaps=(*vertex.remaps, (LINK_INPUT, LINK_OUTPUT)))
-        self.specs['lossy_link'] = NodeSpec(
-            'walker_bringup', 'lossy_link', 'lossy_link', vertex.namespace, vertex.params_file,
-            parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
-                        ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
-
-    def _bring_up(self, domain: int) -> None:
+    def _subscribe(self, client) -> None:
+        """Keep every message the checks need, from the graph's start on."""
         from diagnostic_msgs.msg import DiagnosticArray
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
         from walker_msgs.msg import GripperStates, StepPhase, StepReport
 
-        from walker_bringup.graph_client import GraphClient, init_context
-
-        self.processes = {name: self.group.start(spec) for name, spec in self.specs.items()}
-        self.context = init_context(domain)
-        self.client = GraphClient('/walker', self.context)
-        node = self.client.node
+        self.client = client
+        node = client.node
         self.gripper_states = []
         self.phases = []  # (monotonic time, StepPhase)
         self.walk_handle = None  # the last walk goal sent, until its result is known
@@ -126,8 +145,11 @@ class FaultGraph:
             JointState, 'joint_states',
             lambda m: self.positions.update(zip(m.name, m.position, strict=True)),
             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
-        self.client.wait_until_ready([s.full_name for s in self.specs.values()], 180.0,
-                                     should_stop=lambda: bool(self.group.poll_deaths()))
+
+    def _bring_up(self) -> None:
+        self.gripper_states = []
+        self.session.start()
+        self.processes = {p.spec.name: p for p in self.group.processes}
         self.wait_until(lambda: self.phase is not None and len(self.positions) == 5, 60.0,
                         'the first phase and joint states')
         if self.phase.phase == 5:  # SAFE_HOLD: the start was slow enough for the watchdog
@@ -141,19 +163,16 @@ class FaultGraph:
                 self.diagnostics.append((time.monotonic(), status))
 
     def close(self) -> dict:
-        if getattr(self, 'client', None) is not None:
-            self.client.close()
-            self.client = None
-        if self.context is not None:
-            self.context.try_shutdown()
-            self.context = None
+        """Stop the graph; return each node's exit code (killed and not restarted: left out)."""
         try:
-            codes = self.group.stop_all()
+            self.session.stop()
         finally:
+            self.client = None
             self.guard.__exit__(None, None, None)
+            self._environment.close()
         # a node the test killed and a failure kept it from restarting is no unclean exit:
         # the failure is reported as itself, not again at teardown
-        return {name: code for name, code in codes.items()
+        return {name: code for name, code in self.session.exit_codes.items()
                 if not (name in self.killed and code == -signal.SIGKILL)}
 
     # ------------------------------------------------------------------ waiting
