@@ -87,12 +87,6 @@ class FaultGraph:
         self.processes = {}
         self.killed: set[str] = set()  # nodes killed by the test and not restarted since
         self.client = None
-        self._environment = contextlib.ExitStack()
-        # the domain and a ROS home of the graph's own (the supervisor's step file stays apart
-        # from every other graph's), given back when the graph is closed
-        self._environment.enter_context(domain_environment(
-            domain, Path(tempfile.mkdtemp(prefix=f'walker-ros-home-{domain}-')),
-            PYTHONUNBUFFERED='1'))
         self.session = WalkSession(configuration, SessionOptions(
             arrangement=Arrangement.GROUPED if grouped else Arrangement.PROCESSES,
             sim_time=True, record=True, report=False, out=tmp, respawn=RespawnPolicy(limit=0),
@@ -104,8 +98,15 @@ class FaultGraph:
             **({} if grouped else lossy_link_options(configuration.path)),
             stop_timeout=STOP_TIMEOUT, handle_signals=False),
             ProgressLine(True, stream=sys.stderr), on_client=self._subscribe)
+        self._environment = contextlib.ExitStack()
+        # the domain and a ROS home of the graph's own (the supervisor's step file stays apart
+        # from every other graph's), given back when the graph is closed
+        self._environment.enter_context(domain_environment(
+            domain, Path(tempfile.mkdtemp(prefix=f'walker-ros-home-{domain}-')),
+            PYTHONUNBUFFERED='1'))
         self.guard = SharedMemoryGuard(lambda: [os.getpid()] + [
-            p.popen.pid for p in self.processes.values() if p.alive], period=0.05).__enter__()
+            p.popen.pid for w in self.session.backend.walkers for p in w.group.processes
+            if p.alive], period=0.05).__enter__()
         try:
             self._bring_up()
         except BaseException:
@@ -147,7 +148,6 @@ class FaultGraph:
             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
 
     def _bring_up(self) -> None:
-        self.gripper_states = []
         self.session.start()
         self.processes = {p.spec.name: p for p in self.group.processes}
         self.wait_until(lambda: self.phase is not None and len(self.positions) == 5, 60.0,
