@@ -71,7 +71,7 @@ def test_extra_nodes_run_beside_a_composed_graph(tmp_path, arrangement):
 
 @pytest.mark.parametrize('changes, named', [
     ({'node_parameters': (('planer', 'x', '1'),)}, "node_parameters: 'planer' names no node"),
-    ({'remaps': (('control*', 'a', 'b'),)}, "remaps: 'control\\*' names no node"),
+    ({'remaps': (('camera*', 'a', 'b'),)}, "remaps: 'camera\\*' names no node"),
     ({'extra_nodes': 'planner'}, "extra node 'planner': the graph has a node of that name")])
 def test_a_node_setting_that_fits_no_node_is_refused_before_anything_starts(tmp_path, changes,
                                                                           named):
