@@ -129,4 +129,5 @@ class PlannerParameters:
     stream: StreamParameters
     send_whole_trajectories: bool = parameter(
         'send each followed trajectory once, whole, on controllers/joint_trajectory (else stream)',
-        source='chosen: false, the setpoint stream the fault tests are built on')
+        source='chosen: true, as joint_trajectory_controller: a late message costs nothing; '
+        'the supervisor notices a motion end never reported (supervisor.motion_end_margin)')
