@@ -391,12 +391,14 @@ def test_a_lossy_late_link_still_walks_and_a_cut_one_holds_or_completes_safely(g
 
 
 # ---------------------------------------------------------------------- a starved planner
-def test_a_starved_planner_slows_the_simulation_and_leaves_the_motion_as_planned(graph):
-    """In sim time the controllers wait for the setpoints a stalled planner owes them.
+def test_a_starved_planner_leaves_the_motion_as_planned(graph):
+    """A planner stalled during the sweep leaves the motion as planned.
 
-    Without the wait, a planner stalled during the sweep made the controllers carry old
-    setpoints on and the stream jump when it came back; a sim-time walk on a busy machine once
-    overshot the node by 42 mrad of joint 1 that way.
+    The controllers hold the sweep's whole trajectory and sample it: the stalled planner owes
+    them nothing. A setpoint stream (``planner.send_whole_trajectories`` false) owes them a
+    setpoint every period, and in sim time they wait for it; without the wait, the controllers
+    carried old setpoints on and the stream jumped when it came back (a sim-time walk on a busy
+    machine once overshot the node by 42 mrad of joint 1 that way).
     """
     from action_msgs.msg import GoalStatus
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
