@@ -190,26 +190,40 @@ def test_a_motion_whose_end_is_never_reported_fails_as_unreported_after_its_marg
     requests = _requests()
     follow = _planned(requests)  # a motion of 1.0 s
     requests.accepted(follow.ticket, True, 10.0)
-    due = 10.0 + 1.0 + MARGIN
-    # the steady clock runs on while the graph's stands still (a held simulation): no fault
-    assert requests.check(1000.0, due) == []
-    notice, cancel, ended = requests.check(1000.0, due + 0.01)
+    end = 10.0 + 1.0
+    assert requests.check(end + 0.01, end + 0.01) == []  # past its end: waited for from now
+    assert requests.check(end + MARGIN, end + MARGIN) == []
+    notice, cancel, ended = requests.check(end + MARGIN + 0.02, end + MARGIN + 0.02)
     assert notice.level == 'error' and cancel == CancelFollow(follow.ticket)
     assert ended == MotionEnded(False, notice.message, unreported=True)
     assert 'the planner did not report the end of the extraction motion (1.00 s planned) ' \
         f'within {MARGIN:g} s of its planned end' in ended.message
-    assert requests.check(1000.0, due + 1.0) == [], 'a motion fails once'
+    assert requests.check(end + 10.0, end + 10.0) == [], 'a motion fails once'
     assert requests.ended(follow.ticket, True, '') == [], 'its end, come at last, is stale'
     assert requests.cancel() == [], 'nothing left to cancel'
+
+
+@pytest.mark.parametrize('clock', ['graph', 'steady'])
+def test_the_margin_must_pass_on_both_clocks(clock):
+    """A held simulation, or one that outruns a slow planner, fails no motion by itself."""
+    requests = _requests()
+    follow = _planned(requests)
+    requests.accepted(follow.ticket, True, 0.0)
+    requests.check(1.01, 1.01)  # past the planned end on both
+    for later in (MARGIN, 10 * MARGIN, 100 * MARGIN):
+        steady, now = (1.01 + later, 1.01) if clock == 'steady' else (1.01, 1.01 + later)
+        assert requests.check(steady, now) == [], f'only the {clock} clock ran'
+    assert requests.check(1.02 + MARGIN, 1.02 + MARGIN)[-1].unreported
 
 
 def test_a_motion_end_reported_within_the_margin_is_its_end():
     requests = _requests()
     follow = _planned(requests)
     requests.accepted(follow.ticket, True, 10.0)
-    assert requests.check(0.0, 10.0 + 1.0 + MARGIN - 0.01) == []
+    for t in (11.0, 11.0 + MARGIN - 0.01):
+        assert requests.check(t, t) == []
     assert requests.ended(follow.ticket, True, '') == [MotionEnded(True, '')]
-    assert requests.check(0.0, 100.0) == []
+    assert requests.check(100.0, 100.0) == []
 
 
 def test_a_changed_margin_applies_to_the_motions_accepted_after_it_and_a_bad_one_is_refused():
@@ -223,8 +237,9 @@ def test_a_changed_margin_applies_to_the_motions_accepted_after_it_and_a_bad_one
     requests.end_margin = 5.0
     follow = _planned(requests)
     requests.accepted(follow.ticket, True, 0.0)
-    assert requests.check(0.0, 1.0 + 5.0) == []
-    assert requests.check(0.0, 1.0 + 5.0 + 0.01)[-1].unreported
+    assert requests.check(1.01, 1.01) == []
+    assert requests.check(1.01 + 5.0, 1.01 + 5.0) == []
+    assert requests.check(1.02 + 5.0, 1.02 + 5.0)[-1].unreported
 
 
 def test_bad_waits_are_refused():

@@ -19,8 +19,11 @@ unanswered ``give_up_after`` after its first sending, its motion fails. Answers 
 of a motion since replaced or cancelled are stale: ignored (a stream accepted that late is
 cancelled).
 
-A motion whose end the planner has not reported ``end_margin`` [s] of the graph's clock after
-its planned end fails as *unreported* (:attr:`MotionEnded.unreported`): the step holds at once.
+A motion whose end the planner has not reported ``end_margin`` [s] after its planned end fails
+as *unreported* (:attr:`MotionEnded.unreported`): the step holds at once. The margin must pass
+on both clocks: on the graph's from the planned end, and on the steady clock from the first
+check that found the graph's clock past that end (a simulation running faster than the wall
+clock does not outrun a planner that is only slow, and a clock held still faults nothing).
 The controllers hold a whole trajectory and execute it to its end without the planner, so a
 planner that died (or lost its goal) mid-motion is noticed by this deadline, not by setpoints
 going stale; the cancel sent with it has a living planner send the controllers a hold.
@@ -97,7 +100,8 @@ class _Motion:
     duration: float = 0.0
     first_duration: float | None = None
     streaming: bool = False
-    end_due: float = math.inf  # [s] graph clock: the planned end and the margin, once streaming
+    end: float = math.inf  # [s] graph clock: the planned end, once streaming
+    past_end_since: float | None = None  # [s] steady clock: the graph's clock first seen past it
     # the request waited for: its sendings (None: not sent yet), and the sendings a request
     # sent again goes on counting from
     sendings: UnansweredRequest | None = None
@@ -245,7 +249,7 @@ class MotionRequests:
             self._motion = None
             return [MotionEnded(False, 'the planner refused to stream the trajectory')]
         motion.streaming = True
-        motion.end_due = now + motion.duration + self._end_margin
+        motion.end = now + motion.duration
         self._stream = ticket
         request = motion.request
         first = '' if motion.first_duration is None else (
@@ -266,14 +270,14 @@ class MotionRequests:
         """Send a request unanswered too long again, or give its motion up.
 
         ``steady`` [s] times the requests' answers; ``now`` [s], on the graph's clock, the end
-        of a motion under way (:attr:`end_margin` after its planned end, it fails as
-        unreported, and its goal is cancelled).
+        of a motion under way (:attr:`end_margin` after its planned end on both clocks, it
+        fails as unreported, and its goal is cancelled).
         """
         motion = self._motion
         if motion is None:
             return []
         if motion.streaming:
-            return self._end_overdue(motion, now)
+            return self._end_overdue(motion, steady, now)
         if motion.sendings is None:
             if motion.following is None and not motion.new_plans:
                 # its plans were all asked ahead: waited for from now
@@ -307,9 +311,14 @@ class MotionRequests:
         return out
 
     # ------------------------------------------------------------------ internals
-    def _end_overdue(self, motion: _Motion, now: float) -> list:
-        """Fail a motion whose end is overdue at ``now`` [s] as unreported, and cancel it."""
-        if not now > motion.end_due:
+    def _end_overdue(self, motion: _Motion, steady: float, now: float) -> list:
+        """Fail a motion whose end is overdue (``steady``, ``now`` [s]); cancel its goal."""
+        if not now > motion.end:
+            return []
+        if motion.past_end_since is None:
+            motion.past_end_since = steady
+        margin = self._end_margin
+        if not (now > motion.end + margin and steady > motion.past_end_since + margin):
             return []
         ticket = motion.following
         self._motion, self._stream = None, None

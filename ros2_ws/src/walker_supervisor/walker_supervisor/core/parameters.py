@@ -51,8 +51,8 @@ class SupervisorParameters:
         's', 0.1, 600.0, read_only=False,
         source="chosen: joint 1's fine loop needs seconds to settle after an overshoot")
     motion_end_margin: float = parameter(
-        "time after a motion's planned end (graph clock) within which the planner must report "
-        'it ended, else the walker holds', 's', 0.1, 60.0, read_only=False,
+        "time after a motion's planned end (graph and steady clock) within which the planner "
+        'must report it ended, else the walker holds', 's', 0.1, 60.0, read_only=False,
         source="chosen: the controllers hold a whole trajectory's end without the planner; a "
         'second above the lateness of a starved planner')
     max_insertion_attempts: int = parameter(
