@@ -129,5 +129,4 @@ class PlannerParameters:
     stream: StreamParameters
     send_whole_trajectories: bool = parameter(
         'send each followed trajectory once, whole, on controllers/joint_trajectory (else stream)',
-        source='chosen: true, as joint_trajectory_controller: a late message costs nothing; '
-        'the supervisor notices a motion end never reported (supervisor.motion_end_margin)')
+        source='chosen: true, as joint_trajectory_controller is fed: a late message costs nothing')

@@ -51,10 +51,9 @@ class SupervisorParameters:
         's', 0.1, 600.0, read_only=False,
         source="chosen: joint 1's fine loop needs seconds to settle after an overshoot")
     motion_end_margin: float = parameter(
-        "time after a motion's planned end (graph and steady clock) within which the planner "
-        'must report it ended, else the walker holds', 's', 0.1, 60.0, read_only=False,
-        source="chosen: the controllers hold a whole trajectory's end without the planner; a "
-        'second above the lateness of a starved planner')
+        "time past a motion's planned end (graph and steady clock) to wait for its end, then hold",
+        's', 0.1, 60.0, read_only=False,
+        source='chosen: controllers finish a whole trajectory without the planner; above its lag')
     max_insertion_attempts: int = parameter(
         'screw-in attempts before a jammed insertion aborts the step', '', 1, 10, read_only=False,
         source='chosen: a bounded retry')
