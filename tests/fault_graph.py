@@ -1,11 +1,13 @@
 """The fault-injection graph: the whole walker over DDS in sim time, and what the checks need.
 
 Shared by the fault suite (``tests/integration/test_faults.py``) and the fault matrix
-(``tests/fault_matrix/``): the recorder, the plant, five controllers (the vertex one reading its
-setpoints through a ``lossy_link``, lossless until a test degrades it), the planner and the
-supervisor, each a separate process, with timeouts that tolerate a loaded machine; a client
-that keeps every phase, gripper state, step report and supervisor diagnostic seen; and the
-operations a test needs (a step, a kill, a restart, a resume until the step completes).
+(``tests/fault_matrix/``): the recorder, the plant, five controllers (the vertex one reading the
+planner's motions through a ``lossy_link``, lossless until a test degrades it: its whole
+trajectories, or with ``planner.send_whole_trajectories`` false its setpoint stream), the
+planner and the supervisor, each a separate process, with timeouts that tolerate a loaded
+machine; a client that keeps every phase, gripper state, step report and supervisor diagnostic
+seen; and the operations a test needs (a step, a kill, a restart, a resume until the step
+completes).
 """
 
 import dataclasses
@@ -19,7 +21,8 @@ from ros_test_support import SharedMemoryGuard, log_tails, ros_environment
 
 __all__ = ['FaultGraph', 'assert_the_bag_holds_the_faults', 'write_outcomes', 'TIMEOUT',
            'TEST_TIMEOUT',
-           'FAULT_TIMEOUT', 'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LINK_INPUT', 'LINK_OUTPUT']
+           'FAULT_TIMEOUT', 'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LossyInput',
+           'TRAJECTORY_LINK', 'SETPOINT_LINK']
 
 TIMEOUT = 300.0  # [s] of wall time for a step (or the rest of one) on a loaded 2-core machine
 #: [s] pytest's limit for a test on this graph: above its waits' own, so that a wait that is
@@ -30,8 +33,24 @@ WATCHDOG = 3.0  # [s] steady clock: the supervisor's watchdog (shipped: 1 s)
 INPUT_TIMEOUTS = (('control.setpoint_timeout', '2.0'),  # [s] the controllers' (shipped: 0.5 s)
                   ('control.state_timeout', '2.0'))
 STILL = 1e-3  # [rad] joints that moved less than this did not move
-LINK_INPUT = 'controllers/vertex_joint/setpoint'  # the planner's stream to the vertex joint
-LINK_OUTPUT = 'controllers/vertex_joint/setpoint_lossy'  # what the vertex controller reads
+
+
+@dataclasses.dataclass(frozen=True)
+class LossyInput:
+    """The vertex controller's input from the planner that the lossy link sits on."""
+
+    topic: str  # what the planner publishes
+    lossy: str  # what the vertex controller reads instead
+    type: str  # the message type of both
+
+
+#: the planner's whole trajectories (to every controller; the vertex one reads them lossy)
+TRAJECTORY_LINK = LossyInput('controllers/joint_trajectory', 'controllers/joint_trajectory_lossy',
+                             'trajectory_msgs/msg/JointTrajectory')
+#: the planner's setpoint stream to the vertex joint (``planner.send_whole_trajectories`` false)
+SETPOINT_LINK = LossyInput('controllers/vertex_joint/setpoint',
+                           'controllers/vertex_joint/setpoint_lossy',
+                           'walker_msgs/msg/JointCommand')
 
 
 class FaultGraph:
@@ -47,9 +66,15 @@ class FaultGraph:
                  parameters: tuple[tuple[str, str], ...] = ()) -> None:
         from walker_bringup.graph import walker_graph
         from walker_bringup.processes import ProcessGroup
+        from walker_core.parameter_schema import load_parameter_file
         from walker_core.robot_parameters import default_parameter_file, load_walker_parameters
 
         self.params = load_walker_parameters(default_parameter_file())
+        whole = dict(parameters).get('planner.send_whole_trajectories', str(load_parameter_file(
+            default_parameter_file())['planner.send_whole_trajectories']))
+        #: the planner sends whole trajectories (else it streams setpoints)
+        self.whole_trajectories = whole.lower() == 'true'
+        self.link = TRAJECTORY_LINK if self.whole_trajectories else SETPOINT_LINK
         self.bag = tmp / 'bag' / 'faults'
         from walker_bringup.transport import udp_loopback_environment
 
@@ -68,8 +93,8 @@ class FaultGraph:
             extra = INPUT_TIMEOUTS if name.startswith('controller') else \
                 (('supervisor.watchdog_timeout', str(WATCHDOG)),) if name == 'supervisor' else ()
             self.specs[name] = dataclasses.replace(spec, parameters=(*spec.parameters, *extra))
-        # The vertex controller reads its setpoints through a lossy link, lossless until a test
-        # sets it to drop, delay or cut
+        # The vertex controller reads the planner's motions through a lossy link, lossless until
+        # a test sets it to drop, delay or cut
         vertex = self.specs.get('controller_vertex')
         if vertex is not None:
             self._add_lossy_link(vertex)
@@ -88,12 +113,13 @@ class FaultGraph:
     def _add_lossy_link(self, vertex) -> None:
         from walker_bringup.graph import NodeSpec
 
+        link = self.link
         self.specs['controller_vertex'] = dataclasses.replace(
-            vertex, remaps=(*vertex.remaps, (LINK_INPUT, LINK_OUTPUT)))
+            vertex, remaps=(*vertex.remaps, (link.topic, link.lossy)))
         self.specs['lossy_link'] = NodeSpec(
             'walker_bringup', 'lossy_link', 'lossy_link', vertex.namespace, vertex.params_file,
-            parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
-                        ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
+            parameters=(('input', link.topic), ('output', link.lossy), ('type', link.type),
+                        ('seed', '5')))
 
     def _bring_up(self, domain: int) -> None:
         from diagnostic_msgs.msg import DiagnosticArray

@@ -50,6 +50,10 @@ class SupervisorParameters:
         'time a phase may overrun its plan before the step is aborted',
         's', 0.1, 600.0, read_only=False,
         source="chosen: joint 1's fine loop needs seconds to settle after an overshoot")
+    motion_end_margin: float = parameter(
+        "time past a motion's planned end (graph and steady clock) to wait for its end, then hold",
+        's', 0.1, 60.0, read_only=False,
+        source='chosen: controllers finish a whole trajectory without the planner; above its lag')
     max_insertion_attempts: int = parameter(
         'screw-in attempts before a jammed insertion aborts the step', '', 1, 10, read_only=False,
         source='chosen: a bounded retry')

@@ -155,7 +155,8 @@ class WalkRunner:
                                     trouble_grace=timeout)
         self.controllers = ControllerWatch()
         self.figures = StepFigures(settings.mouth_settle_time, params.gripper.screw_time)
-        self._motions = MotionRequests(self.kinematics, join, answer_wait, give_up_after)
+        self._motions = MotionRequests(self.kinematics, join, answer_wait, give_up_after,
+                                       settings.motion_end_margin)
         self._announcer = PhaseAnnouncer()
         self._walk: Walk | None = None
         self._goal = ''  # the goal under way: 'walk_to' or 'step' ('' when none)
@@ -203,6 +204,7 @@ class WalkRunner:
         self.figures.set_window(settings.mouth_settle_time)
         self.health.set_timeouts(settings.watchdog_timeout,
                                  trouble_grace=settings.watchdog_timeout)
+        self._motions.end_margin = settings.motion_end_margin
 
     # ------------------------------------------------------------------ measurements
     def joint_states(self, positions, velocities, steady: float) -> None:
@@ -289,7 +291,7 @@ class WalkRunner:
 
     def follow_accepted(self, ticket: int, accepted: bool, now: float) -> list:
         """Take the acceptance (or refusal) of :class:`FollowMotion` ``ticket``."""
-        self._apply(self._motions.accepted(ticket, accepted), now)
+        self._apply(self._motions.accepted(ticket, accepted, now), now)
         return self._flush()
 
     def follow_done(self, ticket: int, success: bool, message: str, now: float) -> list:
@@ -450,7 +452,7 @@ class WalkRunner:
         if self._adoption_due and measured.positions is not None and len(measured.grippers) == 2:
             self._adoption_due = False
             self._adopt()
-        self._apply(self._motions.check(steady), now)
+        self._apply(self._motions.check(steady, now), now)
         if measured.positions is not None:
             base = self.sequencer.base_gripper
             self._execute(self.sequencer.tick(now, measured.roles(base),
@@ -477,7 +479,7 @@ class WalkRunner:
         """
         stalled = self._own_stall(steady)
         self._steady = steady
-        self._apply(self._motions.check(steady), now)
+        self._apply(self._motions.check(steady, now), now)
         if stalled:
             # What the sources sent while this process stood still has not been taken yet:
             # their silence is its own. Each has a whole timeout to be heard again.
@@ -719,6 +721,11 @@ class WalkRunner:
         for item in items:
             if isinstance(item, MotionStarted):
                 self.sequencer.trajectory_started(item.duration, now, item.first_duration)
+            elif isinstance(item, MotionEnded) and item.unreported:
+                # the planner never said the motion ended: hold, as for setpoints gone stale,
+                # rather than plan on with it (the controllers hold their trajectory's end)
+                self._execute(self.sequencer.hold(f'fault: {item.message}', now), now)
+                self._announce(now)
             elif isinstance(item, MotionEnded):
                 self._execute(self.sequencer.trajectory_done(item.success, item.message, now),
                               now)
