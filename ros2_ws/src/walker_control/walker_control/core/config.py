@@ -161,8 +161,8 @@ class FrictionCompensationSettings:
         'rad/s', 0.0, 10.0, read_only=False,
         source='chosen: 1 % of the cruise speed')
     breakaway_limit: tuple[float, ...] = parameter(
-        'most the compensation of roles J1..J5 rises above its level while the joint is stuck '
-        'in FINE (0: never)', '', 0.0, 1.0, read_only=False,
+        'rise of the compensation of roles J1..J5 over its level while stuck in FINE (0: none)',
+        '', 0.0, 1.0, read_only=False,
         source='chosen: J1, whose fine gains break no stiction, up to the 1.35 times the '
                'campaigns draw')
     breakaway_rate: float = parameter(
