@@ -138,6 +138,8 @@ class HeadlessBackend:
                     'message': result.message, 'path': list(result.path),
                     'timed_out': result.timed_out,
                     'wall_time': result.wall_time, 'loop': loop_record(result),
+                    'grip_monitor': {'states': result.grip_states,
+                                     'no_gripper_attached': result.grip_losses},
                     'runner': 'headless'})
         if result.reached:
             print(f'[walker] reached {result.target} in {result.steps_taken} steps, '

@@ -72,6 +72,9 @@ class WalkResult:
         The walk was stopped at its wall-time limit (``wall_timeout``), unreached.
     survey : dict or None
         The truss map at the end (:meth:`~walker_supervisor.core.truss_map.TrussMap.to_dict`).
+    grip_states, grip_losses : int
+        The grip monitor: the plant's gripper-state messages, and those with no gripper
+        attached (a grip loss: the walker let go of the truss).
     """
 
     target: str
@@ -88,6 +91,8 @@ class WalkResult:
     cpu_time: float = 0.0
     timed_out: bool = False
     survey: dict | None = None
+    grip_states: int = 0
+    grip_losses: int = 0
 
 
 def walk(configuration: WalkerConfiguration, target: str, recording=None,
@@ -177,7 +182,8 @@ def _result(target: str, shell: WalkShell, loop: RobotLoop, started: float,
         steps_taken=ended.steps_taken if ended is not None else 0,
         duration=ended.duration if ended is not None else 0.0, reports=list(shell.reports),
         phases=list(shell.phases), sim_time=loop.time, periods=loop.stamp // loop.period_ns,
-        wall_time=time.monotonic() - started)
+        wall_time=time.monotonic() - started, grip_states=loop.grip_states,
+        grip_losses=loop.grip_losses)
 
 
 def _plant_diagnostics(recording, loop: RobotLoop) -> None:

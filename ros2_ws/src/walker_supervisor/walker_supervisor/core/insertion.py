@@ -79,21 +79,23 @@ def _press_lightly(run: StepRun) -> list:
     return [*stop, run.trajectory('insertion', run.theta, joints, run.tip(), point)]
 
 
-def _on_the_face(run: StepRun, contact: DescentContact) -> tuple[np.ndarray, np.ndarray]:
+def _on_the_face(run: StepRun, contact: DescentContact,
+                 press: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Return the joints [rad] and point [m] on the hole's axis :data:`MOUTH_PRESS` below contact.
 
-    The press is a line along the hole's axis, which the planner accepts only from within the
-    insertion tolerance of it: a tip that met the face farther than ``descent_region`` (at most
-    that tolerance) from the axis, as a descent swinging 2-3 mm off it does, is pressed
-    straight down where it is, and the lines at the mouth bring it over the hole. The point at
-    the nominal mouth (and its joints) if the face was not felt or that point is out of reach.
+    The press (``press``) is a line along the hole's axis, which the planner accepts only from
+    within the insertion tolerance of it: a tip that met the face farther than
+    ``descent_region`` (at most that tolerance) from the axis, as a descent swinging 2-3 mm off
+    it does, is pressed straight down where it is, and the lines at the mouth (not a press:
+    a fine line, which goes anywhere) bring it over the hole. The point at the nominal mouth
+    (and its joints) if the face was not felt or that point is out of reach.
     """
     t = run.targets
     if not contact.felt:
         return t.at_to, t.point_to
     point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
     tip = run.tip()
-    if np.linalg.norm(tip[:2] - point[:2]) > run.parameters.descent_region:
+    if press and np.linalg.norm(tip[:2] - point[:2]) > run.parameters.descent_region:
         point[:2] = tip[:2]
     try:
         joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
@@ -175,7 +177,8 @@ def _align(run: StepRun) -> list:
     """Run a fine line at the mouth, from where the tip settled onto the hole's axis.
 
     At the height where the descent felt the face, :data:`MOUTH_PRESS` lower (at the nominal
-    mouth if it felt none).
+    mouth if it felt none), on the axis however far the tip rests from it (within
+    ``descent_axis_tolerance``): a line that stayed where the tip is would align nothing.
     """
     run.tries.mouth_lines += 1
     run.stage = Stage.ALIGNING
@@ -183,7 +186,7 @@ def _align(run: StepRun) -> list:
     if contact is None:
         joints, point = run.targets.at_to, run.targets.point_to
     else:
-        joints, point = _on_the_face(run, contact)
+        joints, point = _on_the_face(run, contact, press=False)
     return [run.trajectory('fine', run.theta, joints, run.tip(), point)]
 
 
