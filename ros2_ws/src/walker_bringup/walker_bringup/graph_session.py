@@ -103,6 +103,8 @@ class GraphBackend:
                                '...): leave --namespace out')
         if options.walkers > 1 and options.foxglove_port is not None:
             raise SessionError('--foxglove serves one walker: leave --walkers out')
+        if options.truss_survey is not None:  # every walker's supervisor starts from it
+            self.survey = checked_survey(self.configuration, options.truss_survey)
         try:
             self.walkers = describe_walkers(options, self.configuration, self.out, self.env)
             timing = self.configuration.walker.timing
@@ -113,8 +115,6 @@ class GraphBackend:
                                  'it runs them at')
         except ValueError as error:
             raise SessionError(str(error)) from None
-        if options.truss_survey is not None:  # every walker's supervisor starts from it
-            self.survey = checked_survey(self.configuration, options.truss_survey)
         taken = [bag for bag in bag_paths(self.walkers) if bag.exists()]
         if taken:
             raise SessionError(f'{", ".join(map(str, taken))} already exists and a recording '
