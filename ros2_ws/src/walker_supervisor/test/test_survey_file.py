@@ -16,8 +16,8 @@ def _map() -> TrussMap:
     return TrussMap(TRUSS, PRIOR, JOINT)
 
 
-def _surveyed(tmp_path) -> TrussMap:
-    """A map that surveyed n2_1 2.5 mm off its nominal place (through a file's content)."""
+def _surveyed() -> TrussMap:
+    """Return a map that surveyed n2_1 2.5 mm off its nominal place (a file's content)."""
     survey = _map()
     content = {'format': 'walker-truss-survey-1', 'frame': 'truss', 'anchor': 'n1_1',
                'nodes': {'n1_1': {'position': TRUSS.position('n1_1').tolist(),
@@ -43,7 +43,7 @@ def test_the_map_is_written_when_it_changes_and_a_new_keeper_starts_from_it(tmp_
     keeper = SurveyKeeper(survey, path)
     assert survey.surveyed_nodes == [] and not path.exists(), 'no file: the nominal truss'
     assert keeper.write_if_changed() is None and not path.exists(), 'unchanged: not written'
-    walked = _surveyed(tmp_path)
+    walked = _surveyed()
     survey.load(walked.to_dict())  # the walk changes the map
     assert keeper.write_if_changed() is None and path.exists()
     assert [p.name for p in tmp_path.iterdir()] == [path.name], 'no partial file is left'
