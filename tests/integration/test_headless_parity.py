@@ -40,11 +40,13 @@ PATH = ['n1_2', 'n2_2']
 RUN_TIMEOUT = 900.0  # [s] wall: the graph walks at a fraction of real time on a loaded machine
 STEP_TIME_TOLERANCE = 0.05  # relative
 TIP_ERROR_TOLERANCE = 0.3e-3  # [m]
-# the truss as built: a placement of 1.2 mm standard deviation whose seed puts the nodes of the
-# step 1.9 to 2.5 mm off their places, n1_2 3.5 mm sideways of n1_1's offset: a search finds it
+# the truss as built: a placement of 1.5 mm standard deviation whose seed puts the nodes of the
+# step 1.7 to 2.8 mm off their places, n1_2 2.9 mm sideways of n1_1's offset: the screw-in at
+# the estimate jams and a search finds the hole well within a probe's reach, so that which
+# probe finds it does not hang on a tenth of a millimetre
 DISPLACED_TARGET = 'n1_2'
 DISPLACED_NODES = ('n1_1', 'n2_1', 'n1_2')  # the start stance and the target
-PLACEMENT, PLACEMENT_SEED = 0.0012, 164  # [m], seed
+PLACEMENT, PLACEMENT_SEED = 0.0015, 191  # [m], seed
 SURVEYED_OFF_ROUTE = 'n4_3'  # the node the given survey knows, off the route
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(2 * RUN_TIMEOUT + 120.0)]
