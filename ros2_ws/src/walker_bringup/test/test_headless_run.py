@@ -66,5 +66,8 @@ def test_a_walks_truss_survey_starts_the_next_walk_and_a_bad_one_is_refused(tmp_
                  '--no-record', '--quiet', '--truss-survey', str(bad)]) == 2
     assert str(bad) in capsys.readouterr().out
     assert not (tmp_path / 'third').exists(), 'a refused survey writes nothing'
-    assert main(['--target', 'n1_2', '--truss-survey', str(survey), '--no-record']) == 2
-    assert 'headless' in capsys.readouterr().out
+    # the graph refuses it as well, before anything starts
+    assert main(['--target', 'n1_2', '--out', str(tmp_path / 'graph'), '--no-record',
+                 '--quiet', '--truss-survey', str(bad)]) == 2
+    assert str(bad) in capsys.readouterr().out
+    assert not (tmp_path / 'graph').exists(), 'a refused survey starts no graph'

@@ -24,6 +24,7 @@ from walker_config.core.configuration import WalkerConfiguration
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import description_urdf
 from walker_supervisor.core.commands import Feedback
+from walker_supervisor.core.survey_file import SurveyKeeper
 
 from walker_headless.loop import RobotLoop
 from walker_headless.records import PhaseRecord, StepReportRecord
@@ -121,7 +122,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         ``'walk_to'`` (any node) or ``'step'`` (one step to a neighbouring node).
     survey : dict, optional
         A truss survey to start from (a survey file's content); raises
-        :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit.
+        :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit. Without
+        it the walk starts from ``supervisor.truss_survey_file`` where that file exists; the
+        walk's survey is written to that file at the end, as the graph's supervisor does.
     whole_trajectories : bool, optional
         The controllers hold whole trajectories instead of following a setpoint stream
         (:class:`~walker_headless.loop.RobotLoop`); by default as the graph's planner does
@@ -138,6 +141,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         if recording is not None:
             recording.robot_description(0, description_urdf(configuration.walker))
         shell = WalkShell(loop, say, progress)
+        # supervisor.truss_survey_file, as the graph's supervisor keeps it; ``survey`` over it
+        keeper = SurveyKeeper(shell.runner.mapped.map,
+                              configuration.supervisor.truss_survey_file)
         if survey is not None:
             shell.runner.mapped.map.load(survey)
         shell.send_goal(goal, target)
@@ -165,6 +171,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         result.cpu_time = time.process_time() - cpu_started
         result.timed_out = message is not None
         result.survey = shell.runner.mapped.map.to_dict()
+        failure = keeper.write_if_changed()
+        if failure is not None and say is not None:
+            say('warning', failure)
         return result
     finally:
         loop.close()

@@ -118,6 +118,9 @@ class SupervisorParameters:
         "standard deviation of a node's height felt by a gripper resting on its face",
         'm', 0.0, 0.01, read_only=False,
         source='chosen: the light press on the face, 0.3 mm below contact').metadata)
+    truss_survey_file: str = dataclasses.field(default='', metadata=parameter(
+        "truss survey file the map starts from where it exists and is kept in ('': none)",
+        source="chosen: none; run_all.py gives the graph's <out>/truss_survey.yaml").metadata)
 
     def __post_init__(self) -> None:
         check_section(self)
