@@ -1,17 +1,22 @@
-"""A supervisor started again in the middle of a step aims where the first one did.
+"""A step's screw-in after a restart, and after a search: never aimed off, never retried forever.
 
 The first supervisor planned the step on its truss map; started again, the supervisor has
 only what is on record. A target taken from the parameter file instead of the map misses a
 hole of a truss as built by the node's placement error, and a screw-in that jams there must
-search as a step started anew does, not jam at one point until an operator gives up.
+search as a step started anew does, not jam at one point until an operator gives up. A search
+that has found nothing ends in a hold that says where the joints put the tip, and resume does not
+try the same places again.
 """
 
+import re
+
 import numpy as np
+import pytest
 
 from runner_world import TRUSS, World
 from walker_supervisor.core.adoption import RecordedStep
-from walker_supervisor.core.commands import GripperRequest, Notice, RecordStep
-from walker_supervisor.core.phases import Phase
+from walker_supervisor.core.commands import GoalEnded, GripperRequest, Notice, RecordStep
+from walker_supervisor.core.phases import Phase, SequencerError
 
 TARGET = 'n1_2'
 HOLE = (0.003, 0.001)  # [m] the target's hole off its nominal place: beyond the 2 mm tolerance
@@ -76,3 +81,26 @@ def test_a_step_taken_up_searches_for_a_hole_the_map_did_not_know():
     assert world.grippers['b'] == ('attached', TARGET)
     assert _screw_ins(world) > 1
     assert any('probe' in n for n in world.notices), 'a jam moved the screw-in to a probe'
+
+
+def test_a_search_that_found_nothing_holds_naming_the_offset_and_is_not_resumed_forever():
+    world = World()
+    world.holes[TARGET] = (0.009, 0.0)  # beyond the search
+    ended = world.goal('step', TARGET)
+    assert ended.status == 'aborted'
+    reason = world.runner.sequencer.reason
+    match = re.search(r'the last jam with the tip \(([-+.\d]+), ([-+.\d]+)\) mm from the '
+                      r'estimate', reason)
+    assert match, reason
+    # the last probe is the estimate again: the joints put the tip there, the hole is not
+    assert np.hypot(float(match[1]), float(match[2])) < 0.5
+    screw_ins = _screw_ins(world)
+    with pytest.raises(SequencerError, match='does not try the same places again'):
+        world.runner.resume(world.now, world.now)
+    world.run_until(lambda: world.now > ended_at(world) + 5.0)
+    assert world.phases[-1] == Phase.SAFE_HOLD and _screw_ins(world) == screw_ins
+    assert world.grippers['a'][0] == 'attached'
+
+
+def ended_at(world: World) -> float:
+    return world.when(GoalEnded)[-1]

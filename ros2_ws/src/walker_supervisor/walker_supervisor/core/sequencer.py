@@ -250,6 +250,7 @@ class StepSequencer:
             raise SequencerError(f'a step is already under way (phase {run.phase.name})')
         run.step, run.targets = step, targets
         run.search, run.estimate, run.height_shift = search, None, 0.0
+        run.search_over = ''
         run.base_gripper = step.base_gripper
         run.phase, run.stage, run.reason = Phase.SAFE_HOLD, Stage.NONE, reason
 
