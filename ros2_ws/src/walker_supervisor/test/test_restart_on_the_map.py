@@ -23,7 +23,7 @@ HOLE = (0.003, 0.001)  # [m] the target's hole off its nominal place: beyond the
 
 
 def _survey_knowing_the_hole() -> dict:
-    """A survey file's content: the start's base node, and the target where its hole is."""
+    """Return a survey file's content: the start's base node, and the target at its hole."""
     anchor, target = TRUSS.position('n1_1'), TRUSS.position(TARGET)
     target[:2] += HOLE
     return {'format': 'walker-truss-survey-1', 'frame': 'truss', 'anchor': 'n1_1',
@@ -34,7 +34,7 @@ def _survey_knowing_the_hole() -> dict:
 
 
 def _restarted_in_coarse_motion(map_knows_the_hole: bool) -> World:
-    """The world of a supervisor started again in the coarse motion of n2_1 -> n1_2."""
+    """Return the world of a supervisor started again in the coarse motion of n2_1 -> n1_2."""
     old = World()
     old.holes[TARGET] = HOLE
     if map_knows_the_hole:

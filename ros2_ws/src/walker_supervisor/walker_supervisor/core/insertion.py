@@ -20,8 +20,9 @@ lift goes straight up from where the gripper jammed), then the step is aborted t
 with a search (:mod:`~walker_supervisor.core.hole_search`), each jam moves the targets to the
 next probe instead (descending at the height a jam on the node's face felt), and the step holds
 once the last probe has jammed, its reason naming where the joints put the tip at the last jam
-from the map's estimate (the search's bound: a resume does not try the same probes again). A step ends when the gripper reports attached, with the
-controllers commanded to HOLD under the new base (which starts their relaxation).
+from the map's estimate (the search's bound: a resume does not try the same probes again). A
+step ends when the gripper reports attached, with the controllers commanded to HOLD under the
+new base (which starts their relaxation).
 """
 
 from __future__ import annotations

@@ -668,7 +668,8 @@ class WalkRunner:
                 survey.load(record.survey)
             except SurveyFileError as error:
                 self._emit(Notice(f'the truss map on record is not usable ({error}): the '
-                                  f'step is taken up on the nodes\' nominal places', 'warning'))
+                                  f'step is taken up on the nominal places of its nodes',
+                                  'warning'))
         try:
             adopted = adopt_step(record, self.measured.grippers, self.measured.nodes,
                                  self.measured.positions, survey, self.kinematics,
