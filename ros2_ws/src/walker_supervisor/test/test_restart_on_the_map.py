@@ -74,8 +74,18 @@ def test_a_step_taken_up_aims_at_the_hole_where_the_map_on_record_has_it():
     assert _screw_ins(world) == 1, 'the first screw-in was over the hole'
 
 
-def test_a_step_taken_up_searches_for_a_hole_the_map_did_not_know():
+def test_a_step_taken_up_searches_for_a_hole_the_map_did_not_know_through_a_hold():
     world = _restarted_in_coarse_motion(map_knows_the_hole=False)
+    answer, commands = world.runner.resume(world.now, world.now)
+    world.execute(commands)
+    # a hold in the search's screw-ins (a planner frozen there, as in the chaos run), resumed
+    world.run_until(lambda: any('probe' in n for n in world.notices)
+                    and world.phases[-1] == Phase.INSERTION, 120.0)
+    world.execute(world.runner.hold('controller a_yaw_joint: holding: its inputs are stale',
+                                    world.now))
+    world.stream = None
+    for _ in range(50):
+        world.period()
     _resume_to_the_end(world)
     assert world.phases[-1] == Phase.IDLE, world.of(Notice)[-3:]
     assert world.grippers['b'] == ('attached', TARGET)
