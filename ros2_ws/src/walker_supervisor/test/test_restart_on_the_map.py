@@ -33,7 +33,7 @@ def _survey_knowing_the_hole() -> dict:
                                'covariance': (np.eye(3) * 2e-4 ** 2).tolist()}}}
 
 
-def _restarted_in_coarse_motion(map_knows_the_hole: bool) -> World:
+def _restarted_in_coarse_motion(map_knows_the_hole: bool, record=None) -> World:
     """Return the world of a supervisor started again in the coarse motion of n2_1 -> n1_2."""
     old = World()
     old.holes[TARGET] = HOLE
@@ -45,8 +45,9 @@ def _restarted_in_coarse_motion(map_knows_the_hole: bool) -> World:
         old.period()
     old.stream = None  # the old supervisor's stream stops with it
     kept = old.of(RecordStep)[-1]
-    record = RecordedStep(kept.step.base_gripper, kept.step.base_node, kept.step.from_node,
-                          kept.step.to_node, kept.heading, kept.survey)
+    record = record or RecordedStep(kept.step.base_gripper, kept.step.base_node,
+                                    kept.step.from_node, kept.step.to_node, kept.heading,
+                                    kept.survey)
     world = World(recorded_step=record, grippers=old.grippers, positions=old.positions,
                   frame=(old.anchor, old.frame))
     world.holes = dict(old.holes)
@@ -114,3 +115,10 @@ def test_a_search_that_found_nothing_holds_naming_the_offset_and_is_not_resumed_
 
 def ended_at(world: World) -> float:
     return world.when(GoalEnded)[-1]
+
+
+def test_the_map_of_a_record_that_does_not_describe_the_walker_is_not_taken():
+    foreign = RecordedStep('a', 'n2_2', 'n2_1', TARGET, 0.0, _survey_knowing_the_hole())
+    world = _restarted_in_coarse_motion(map_knows_the_hole=False, record=foreign)
+    assert any('does not describe the walker now' in n for n in world.notices)
+    assert world.runner.mapped.map.surveyed_nodes == []

@@ -82,7 +82,7 @@ from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.sequencer import StepSequencer
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.teleop import Situation, busy_reason
-from walker_supervisor.core.truss_map import SurveyFileError
+from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
 from walker_supervisor.core.walk import Walk
 
 __all__ = ['WalkRunner', 'Measurements', 'ControllerReport', 'PlanAnswer', 'TICK_PERIOD',
@@ -664,9 +664,13 @@ class WalkRunner:
             return
         survey = self.mapped.map
         if record.survey is not None:
-            try:  # the map the step was planned on: its frame, its target, its search
+            # the map the step was planned on (its frame, its target, its search), kept only
+            # if the record describes the walker
+            survey = TrussMap(self.truss, survey.prior_std, survey.joint_std)
+            try:
                 survey.load(record.survey)
             except SurveyFileError as error:
+                survey = self.mapped.map
                 self._emit(Notice(f'the truss map on record is not usable ({error}): the '
                                   f'step is taken up on the nominal places of its nodes',
                                   'warning'))
@@ -685,6 +689,8 @@ class WalkRunner:
                               f'forgotten', 'info'), ForgetRecordedStep())
             return
         step, targets = adopted
+        if survey is not self.mapped.map:
+            self.mapped.map.load(record.survey)
         self.sequencer.adopt(step, targets, f'restarted in the middle of the step '
                              f'{step.from_node} -> {step.to_node}: resume to complete it',
                              self.mapped.search(step))
