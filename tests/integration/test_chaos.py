@@ -110,7 +110,7 @@ def test_a_step_taken_up_by_a_supervisor_started_again_then_frozen_ends(tmp_path
 @pytest.mark.chaos
 @pytest.mark.timeout(1200)
 def test_a_step_after_a_plant_restore_a_supervisor_restart_and_a_freeze_ends(tmp_path):
-    """The whole sequence after which every screw-in jammed 4 mm off the hole (about 5 min)."""
+    """The whole sequence after which every screw-in jammed 4 mm off the hole (about 4 min)."""
     _survive_on_the_truss_as_built(tmp_path, RESTORED_ADOPTED_FROZEN)
 
 
