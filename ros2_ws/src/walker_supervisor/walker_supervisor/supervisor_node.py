@@ -178,7 +178,8 @@ class SupervisorNode(Node):
                 if ended is not None and not ended.done():
                     ended.set_result(command)
             elif isinstance(command, RecordStep):
-                write_step_state(self._state_file, command.step, command.heading)
+                write_step_state(self._state_file, command.step, command.heading,
+                                 command.survey)
             elif isinstance(command, ForgetRecordedStep):
                 clear_step_state(self._state_file)
             elif isinstance(command, StopJog):

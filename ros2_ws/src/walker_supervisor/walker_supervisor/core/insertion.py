@@ -19,8 +19,10 @@ gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`
 lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD;
 with a search (:mod:`~walker_supervisor.core.hole_search`), each jam moves the targets to the
 next probe instead (descending at the height a jam on the node's face felt), and the step holds
-once the last probe has jammed. A step ends when the gripper reports attached, with the
-controllers commanded to HOLD under the new base (which starts their relaxation).
+once the last probe has jammed, its reason naming where the joints put the tip at the last jam
+from the map's estimate (the search's bound: a resume does not try the same probes again). A
+step ends when the gripper reports attached, with the controllers commanded to HOLD under the
+new base (which starts their relaxation).
 """
 
 from __future__ import annotations
@@ -246,10 +248,14 @@ def jammed(run: StepRun, message: str, now: float) -> list:
         run.felt_faces.append(run.theta.copy())  # resting on the face: the node's height
     notices = []
     if run.search is not None:
+        offset = _offset_from_estimate(run)
         probe = _next_probe(run)
         if isinstance(probe, str):
+            run.search_over = (f'the hole of {run.step.to_node} was not found: {probe}; the '
+                               f'last jam with the tip {offset} from the estimate (measured '
+                               f'by the joints)')
             return run.abort(f'insertion jammed {run.tries.insertions} times: {message}; '
-                             f'{probe}', now)
+                             f'{run.search_over}', now)
         notices.append(probe)
     elif run.tries.insertions >= run.parameters.max_insertion_attempts:
         return run.abort(f'insertion jammed {run.tries.insertions} times: {message}', now)
@@ -259,6 +265,17 @@ def jammed(run: StepRun, message: str, now: float) -> list:
         return run.abort(f'insertion jammed: {message}; and no straight lift out of the hole '
                          f'from here', now)
     return notices + [run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
+
+
+def _offset_from_estimate(run: StepRun) -> str:
+    """Where the tip jammed, measured by the joints, from the map's estimate of the hole.
+
+    ``(+x, +y) mm`` in the truss frame (the frame of the search's probes).
+    """
+    estimate = run.estimate if run.estimate is not None else run.targets
+    c, s = math.cos(estimate.frame.heading), math.sin(estimate.frame.heading)
+    dx, dy = (run.tip() - estimate.point_to)[:2]
+    return f'({(c * dx - s * dy) * 1e3:+.1f}, {(s * dx + c * dy) * 1e3:+.1f}) mm'
 
 
 def _next_probe(run: StepRun) -> Notice | str:

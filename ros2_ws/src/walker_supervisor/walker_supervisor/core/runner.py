@@ -82,6 +82,7 @@ from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.sequencer import StepSequencer
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.teleop import Situation, busy_reason
+from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
 from walker_supervisor.core.walk import Walk
 
 __all__ = ['WalkRunner', 'Measurements', 'ControllerReport', 'PlanAnswer', 'TICK_PERIOD',
@@ -579,7 +580,7 @@ class WalkRunner:
                                              {}, 0.0, math.nan, 0))
             self._emit(Notice(walk.outcomes[-1].message, 'error'))
             return
-        self._emit(RecordStep(step, targets.frame.heading))
+        self._emit(RecordStep(step, targets.frame.heading, self.mapped.map.to_dict()))
         self.figures.start()
         self._emit(Notice(f'step {walk.step_index + 1}/{len(walk.route)}: gripper '
                           f'{step.moving_gripper} {step.from_node} -> {step.to_node} '
@@ -623,7 +624,7 @@ class WalkRunner:
         """Measure the targets from the relaxed stance (the sequencer's remeasure); record."""
         targets = self._measure_targets(step, theta_roles)
         change = math.remainder(targets.frame.heading - first.frame.heading, 2 * math.pi)
-        self._emit(RecordStep(step, targets.frame.heading),
+        self._emit(RecordStep(step, targets.frame.heading, self.mapped.map.to_dict()),
                    Notice(f'stance measured again after the relaxation: the base heading moved '
                           f'by {change * 1e3:+.3f} mrad', 'info'))
         return targets
@@ -663,9 +664,21 @@ class WalkRunner:
         record, self._recorded = self._recorded, None
         if record is None:
             return
+        survey = self.mapped.map
+        if record.survey is not None:
+            # the map the step was planned on (its frame, its target, its search), kept only
+            # if the record describes the walker
+            survey = TrussMap(self.truss, survey.prior_std, survey.joint_std)
+            try:
+                survey.load(record.survey)
+            except SurveyFileError as error:
+                survey = self.mapped.map
+                self._emit(Notice(f'the truss map on record is not usable ({error}): the '
+                                  f'step is taken up on the nominal places of its nodes',
+                                  'warning'))
         try:
             adopted = adopt_step(record, self.measured.grippers, self.measured.nodes,
-                                 self.measured.positions, self.truss, self.kinematics,
+                                 self.measured.positions, survey, self.kinematics,
                                  self.params.gripper.approach_height)
         except AdoptionRefusedError as error:
             self._emit(Notice(f'cannot take up the interrupted step: {error}', 'error'))
@@ -678,8 +691,11 @@ class WalkRunner:
                               f'forgotten', 'info'), ForgetRecordedStep())
             return
         step, targets = adopted
+        if survey is not self.mapped.map:
+            self.mapped.map.load(record.survey)
         self.sequencer.adopt(step, targets, f'restarted in the middle of the step '
-                             f'{step.from_node} -> {step.to_node}: resume to complete it')
+                             f'{step.from_node} -> {step.to_node}: resume to complete it',
+                             self.mapped.search(step))
         # the adopted step's base is measured attached in its node: a latched mode heard after
         # (this supervisor's own hold, commanded before the record was read) must not change it
         self._base_known = True
