@@ -36,7 +36,7 @@ class CameraParameters:
     """The wrist camera of each gripper (``gripper.camera.*``): mount and intrinsics."""
 
     enabled: bool = parameter(
-        'whether the grippers carry a wrist camera; false is the paper\'s blind robot',
+        "whether the grippers carry a wrist camera; false is the paper's blind robot",
         source='chosen: off until the visually aligned fine motion is proven in campaigns')
     width: int = parameter('image width', 'px', 16, 4096,
                            source='chosen: enough pixels on the hole, a cheap frame')

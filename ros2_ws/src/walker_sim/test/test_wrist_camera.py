@@ -1,4 +1,4 @@
-"""The wrist cameras: rendered only when asked, from the truth, with the hole, sun, noise, delay."""
+"""The wrist cameras: rendered only when asked, from the truth: the hole, sun, noise, delay."""
 
 import numpy as np
 import pytest
@@ -33,7 +33,7 @@ def cameras_over(params, sim, mount_errors=(0.0, 0.0), seed=0):
 
 
 def pose_over(params, node, offset=(0.0, 0.0), height=None):
-    """A vertical gripper over a node: its axis ``offset`` [m] from the hole, ``height`` up."""
+    """Return a vertical gripper over a node, ``offset`` [m] off its hole, ``height`` up."""
     from walker_core.truss import Truss
 
     height = params.gripper.approach_height if height is None else height

@@ -98,11 +98,11 @@ class MountErrors:
                 self._errors[gripper] = error
 
     def error(self, gripper: str) -> np.ndarray:
-        """The true optical frame in the nominal one (4x4)."""
+        """Return the true optical frame in the nominal one (4x4)."""
         return self._errors[gripper].copy()
 
     def true_mount(self, gripper: str, nominal: np.ndarray) -> np.ndarray:
-        """The true optical frame in the gripper's frame, of the nominal one (4x4)."""
+        """Return the true optical frame in the gripper's frame, of the nominal one (4x4)."""
         return np.asarray(nominal, dtype=float) @ self._errors[gripper]
 
 

@@ -272,7 +272,7 @@ class WalkerPlant:
         self._steps_of: dict[float, int] = {}  # step duration [s] -> physics steps
 
     def _wrist_cameras(self) -> WristCameras | None:
-        """The grippers' cameras (``gripper.camera.*``), or None when there are none."""
+        """Return the grippers' cameras (``gripper.camera.*``), or None when there are none."""
         camera, imperfect = self.params.gripper.camera, self.sim.imperfections
         if not camera.enabled:
             return None
@@ -649,8 +649,9 @@ class WalkerPlant:
         return Pose(np.array(position), np.array(orientation))
 
     def camera_frame(self, gripper: str) -> CameraFrame:
-        """Render a gripper's wrist camera now, from the true state (see
-        :mod:`walker_sim.core.wrist_camera`).
+        """Render a gripper's wrist camera now, from the true state.
+
+        See :mod:`walker_sim.core.wrist_camera`.
 
         Raises
         ------
