@@ -108,7 +108,7 @@ def measure(frames: int) -> dict:
 
 
 def table(results: dict) -> str:
-    """The results as a text table."""
+    """Return the results as a text table."""
     width, height = results['image']
     error = results['vision_error_mm'] or {}
     rows = [

@@ -51,8 +51,8 @@ class CameraRendering:
         'light that is not the sun (earthshine, reflections), as a fraction of full light', '',
         0.0, 1.0, source='chosen: dim, as in orbit')
     pixel_noise: float = parameter(
-        "standard deviation of each pixel's noise, every frame", 'grey levels of 255', 0.0,
-        50.0, source='chosen: a small sensor in daylight')
+        "standard deviation of each pixel's noise (of 255 levels), every frame", 'grey levels',
+        0.0, 50.0, source='chosen: a small sensor in daylight')
     exposure_latency: float = parameter(
         'the most a frame is ready after the instant it shows (drawn uniformly up to it)', 's',
         0.0, 1.0, source='chosen: a camera read out at 30 Hz')
