@@ -28,7 +28,11 @@ import numpy as np
 
 from walker_core.parameter_schema import ParameterError, parameter
 
-__all__ = ['CameraParameters', 'CameraModel', 'mount_transform', 'optical_frame_name']
+__all__ = ['CameraParameters', 'CameraModel', 'PlumbBob', 'mount_transform',
+           'optical_frame_name', 'PLUMB_BOB']
+
+#: ``sensor_msgs/CameraInfo.distortion_model`` of the camera (its five coefficients are zero).
+PLUMB_BOB = 'plumb_bob'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,6 +116,32 @@ def mount_transform(position, aim_distance: float) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
+class PlumbBob:
+    """The calibration a ``sensor_msgs/CameraInfo`` carries (REP 104), row-major lists.
+
+    Attributes
+    ----------
+    width, height : int
+        [px]
+    d : list of 5 float
+        Distortion (k1, k2, t1, t2, k3): zero, the renderer being a pinhole.
+    k : list of 9 float
+        The camera matrix.
+    r : list of 9 float
+        Rectification: the identity (a monocular camera).
+    p : list of 12 float
+        Projection ``[K | 0]``.
+    """
+
+    width: int
+    height: int
+    d: list[float]
+    k: list[float]
+    r: list[float]
+    p: list[float]
+
+
+@dataclasses.dataclass(frozen=True)
 class CameraModel:
     """A pinhole camera on a gripper: intrinsics and the optical frame in the gripper's frame.
 
@@ -151,6 +181,13 @@ class CameraModel:
     def matrix(self) -> np.ndarray:
         """The 3x3 camera matrix K."""
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def plumb_bob(self) -> PlumbBob:
+        """Return the calibration of a ``sensor_msgs/CameraInfo`` (REP 104)."""
+        k = self.matrix
+        return PlumbBob(self.width, self.height, [0.0] * 5, k.reshape(-1).tolist(),
+                        np.eye(3).reshape(-1).tolist(),
+                        np.hstack([k, np.zeros((3, 1))]).reshape(-1).tolist())
 
     @property
     def horizontal_field_of_view(self) -> float:
