@@ -28,7 +28,7 @@ import numpy as np
 
 from walker_core.parameter_schema import ParameterError, parameter
 
-__all__ = ['CameraParameters', 'CameraModel', 'PlumbBob', 'mount_transform',
+__all__ = ['CameraParameters', 'CameraModel', 'PlumbBob', 'mount_transform', 'mount_rpy',
            'optical_frame_name', 'PLUMB_BOB']
 
 #: ``sensor_msgs/CameraInfo.distortion_model`` of the camera (its five coefficients are zero).
@@ -113,6 +113,18 @@ def mount_transform(position, aim_distance: float) -> np.ndarray:
     transform[:3, 0], transform[:3, 1], transform[:3, 2] = x_axis, y_axis, sight
     transform[:3, 3] = position
     return transform
+
+
+def mount_rpy(transform: np.ndarray) -> tuple[float, float, float]:
+    """Return URDF's fixed-axis roll, pitch, yaw [rad] of a transform's rotation.
+
+    The rotation is ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF's ``<origin rpy>``).
+    """
+    r = np.asarray(transform, dtype=float)[:3, :3]
+    pitch = math.asin(max(-1.0, min(1.0, -r[2, 0])))
+    if abs(r[2, 0]) < 1.0 - 1e-12:
+        return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
+    return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)  # gimbal lock: roll takes it all
 
 
 @dataclasses.dataclass(frozen=True)
