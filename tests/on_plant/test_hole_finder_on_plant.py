@@ -207,3 +207,26 @@ def test_an_image_of_another_size_or_a_face_above_is_refused(finder):
     with pytest.raises(ValueError, match='height'):
         finder.find(np.zeros((PARAMS.gripper.camera.height, PARAMS.gripper.camera.width, 3),
                              np.uint8), -0.01)
+
+
+def test_the_plants_own_frame_at_its_start_measures_its_hole(finder):
+    """End to end through the plant: the image of a gripper over a displaced node.
+
+    The free gripper starts at the approach height over the real node; the image says so.
+    """
+    from walker_sim.core.config import StartConfiguration
+    from walker_sim.core.plant import WalkerPlant
+
+    displaced = replace_in_section(SIM, {'sim.imperfections.node_placement': 0.002,
+                                         'sim.imperfections.seed': 3}, 'sim.')
+    plant = WalkerPlant(PARAMS, displaced)
+    try:
+        start = displaced.start
+        plant.reset(StartConfiguration(base_gripper=start.base_gripper,
+                                       base_node=start.base_node, other_node=start.other_node,
+                                       other_attached=False, other_height=HEIGHT))
+        gripper = 'b' if start.base_gripper == 'a' else 'a'
+        frame = plant.camera_frame(gripper)
+        assert error_of(finder.find(frame.image, HEIGHT), frame) < REQUIRED
+    finally:
+        plant.close()
