@@ -61,11 +61,14 @@ def check_bag(bag_dir: Path) -> dict:
 
 def run_chaos(out: Path, seed: int, count: int, say: Callable[[str], None] = print,
               targets: Sequence[str] = DEFAULT_TARGETS, timeout: float = 300.0,
-              **plan) -> dict:
+              faults: Sequence | None = None, options: Sequence[str] = (), **plan) -> dict:
     """Run ``count`` faults planned from ``seed`` on a served graph; return what it came to.
 
     ``plan`` goes to :func:`~walker_bringup.core.chaos.plan_faults` (``nodes``, ``phases``,
-    ``freeze_share``, ...). Returns ``figures`` (:func:`summarise_outcomes`), ``outcomes``
+    ``freeze_share``, ...); ``faults`` (a sequence of
+    :class:`~walker_bringup.core.chaos.Fault`) replaces the planned ones with a given sequence
+    (``count`` must be its length); ``options`` are more of ``run_all.py``'s (a plant
+    parameter file, ...). Returns ``figures`` (:func:`summarise_outcomes`), ``outcomes``
     (one dict per fault), ``reached`` (the walk's last target reached), ``left_running``
     (process ids of the run still alive), ``error`` (what the run waited for in vain, or
     ''), ``stale_shared_memory`` (files of its processes still in /dev/shm), ``bag``
@@ -80,11 +83,14 @@ def run_chaos(out: Path, seed: int, count: int, say: Callable[[str], None] = pri
     from walker_bringup.processes import fastdds_shm_files, stale_shared_memory_files
     from walker_msgs.msg import StepPhase
 
-    faults = plan_faults(seed, count, **plan)
+    if faults is None:
+        faults = plan_faults(seed, count, **plan)
+    elif len(faults) != count:
+        raise ValueError(f'{len(faults)} faults given for a run of {count}')
     started = time.monotonic()
     result: dict = {'seed': seed, 'reached': False, 'error': ''}
     with isolated_domain() as domain:
-        with NodeProcess(serve_command(NAMESPACE, out), ros_environment(domain),
+        with NodeProcess(serve_command(NAMESPACE, out, *options), ros_environment(domain),
                          'run_all') as run:
             driver = None
             # the graph's files in /dev/shm kept from other runs' clean-ups while it runs (not

@@ -3,14 +3,16 @@
 The graph is a walk session's (:mod:`walker_bringup.session`); this module holds what is the
 fault tests' own. Shared by the fault suite (``tests/integration/test_faults.py``) and the
 fault matrix (``tests/fault_matrix/``): the recorder, the plant, five controllers (the vertex
-one reading its setpoints through a ``lossy_link``, lossless until a test degrades it), the
-planner and the supervisor, each a separate process, with timeouts that tolerate a loaded
+one reading the planner's motions through a ``lossy_link``, lossless until a test degrades it:
+its whole trajectories, or with ``planner.send_whole_trajectories`` false its setpoint stream),
+the planner and the supervisor, each a separate process, with timeouts that tolerate a loaded
 machine; a client that keeps every phase, gripper state, step report and supervisor
 diagnostic seen; and the operations a test needs (a step, a kill, a restart, a resume until
 the step completes).
 """
 
 import contextlib
+import dataclasses
 import json
 import os
 import signal
@@ -23,7 +25,8 @@ from ros_test_support import SharedMemoryGuard, log_tails
 
 __all__ = ['FaultGraph', 'assert_the_bag_holds_the_faults', 'write_outcomes', 'TIMEOUT',
            'TEST_TIMEOUT', 'lossy_link_options', 'LOADED_MACHINE_TIMEOUTS', 'STARTUP_TIMEOUT',
-           'FAULT_TIMEOUT', 'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LINK_INPUT', 'LINK_OUTPUT']
+           'FAULT_TIMEOUT', 'WATCHDOG', 'INPUT_TIMEOUTS', 'STILL', 'LossyInput',
+           'TRAJECTORY_LINK', 'SETPOINT_LINK']
 
 TIMEOUT = 300.0  # [s] of wall time for a step (or the rest of one) on a loaded 2-core machine
 #: [s] pytest's limit for a test on this graph: above its waits' own, so that a wait that is
@@ -34,8 +37,6 @@ WATCHDOG = 3.0  # [s] steady clock: the supervisor's watchdog (shipped: 1 s)
 INPUT_TIMEOUTS = (('control.setpoint_timeout', '2.0'),  # [s] the controllers' (shipped: 0.5 s)
                   ('control.state_timeout', '2.0'))
 STILL = 1e-3  # [rad] joints that moved less than this did not move
-LINK_INPUT = 'controllers/vertex_joint/setpoint'  # the planner's stream to the vertex joint
-LINK_OUTPUT = 'controllers/vertex_joint/setpoint_lossy'  # what the vertex controller reads
 STARTUP_TIMEOUT = 180.0  # [s] of wall time for the graph to come up on a loaded machine
 # Timeouts that tolerate a loaded shared machine's pauses (a planning request holds the
 # planner's interpreter, and with it its setpoint stream, for up to a second there): a healthy
@@ -45,19 +46,39 @@ LOADED_MACHINE_TIMEOUTS = (*(('controller*', name, value) for name, value in INP
                            ('supervisor', 'supervisor.watchdog_timeout', str(WATCHDOG)))
 
 
-def lossy_link_options(params_file: Path) -> dict:
+
+
+@dataclasses.dataclass(frozen=True)
+class LossyInput:
+    """The vertex controller's input from the planner that the lossy link sits on."""
+
+    topic: str  # what the planner publishes
+    lossy: str  # what the vertex controller reads instead
+    type: str  # the message type of both
+
+
+#: the planner's whole trajectories (to every controller; the vertex one reads them lossy)
+TRAJECTORY_LINK = LossyInput('controllers/joint_trajectory', 'controllers/joint_trajectory_lossy',
+                             'trajectory_msgs/msg/JointTrajectory')
+#: the planner's setpoint stream to the vertex joint (``planner.send_whole_trajectories`` false)
+SETPOINT_LINK = LossyInput('controllers/vertex_joint/setpoint',
+                           'controllers/vertex_joint/setpoint_lossy',
+                           'walker_msgs/msg/JointCommand')
+
+
+def lossy_link_options(params_file: Path, link: LossyInput) -> dict:
     """Return the session options of the lossy link the vertex controller reads through.
 
-    A ``lossy_link`` node between the planner's setpoint stream to the vertex joint and the
-    vertex controller (remapped to read its output), lossless until a test sets it to drop,
-    delay or cut.
+    A ``lossy_link`` node between the planner's ``link`` to the vertex joint and the vertex
+    controller (remapped to read its output), lossless until a test sets it to drop, delay or
+    cut.
     """
     from walker_bringup.graph import NodeSpec
 
-    link = NodeSpec('walker_bringup', 'lossy_link', 'lossy_link', '/walker', str(params_file),
-                    parameters=(('input', LINK_INPUT), ('output', LINK_OUTPUT),
-                                ('type', 'walker_msgs/msg/JointCommand'), ('seed', '5')))
-    return {'extra_nodes': (link,), 'remaps': (('controller_vertex', LINK_INPUT, LINK_OUTPUT),)}
+    node = NodeSpec('walker_bringup', 'lossy_link', 'lossy_link', '/walker', str(params_file),
+                    parameters=(('input', link.topic), ('output', link.lossy),
+                                ('type', link.type), ('seed', '5')))
+    return {'extra_nodes': (node,), 'remaps': (('controller_vertex', link.topic, link.lossy),)}
 
 
 class FaultGraph:
@@ -79,10 +100,16 @@ class FaultGraph:
         from walker_bringup.processes import STOP_TIMEOUT
         from walker_bringup.session import Arrangement, SessionOptions, WalkSession
         from walker_config.core.configuration import load_configuration
+        from walker_core.parameter_schema import load_parameter_file
         from walker_core.progress import ProgressLine
 
         configuration = load_configuration()
         self.params = configuration.walker
+        whole = dict(parameters).get('planner.send_whole_trajectories', str(load_parameter_file(
+            configuration.path)['planner.send_whole_trajectories']))
+        #: the planner sends whole trajectories (else it streams setpoints)
+        self.whole_trajectories = whole.lower() == 'true'
+        self.link = TRAJECTORY_LINK if self.whole_trajectories else SETPOINT_LINK
         self.bag = tmp / 'bag'
         self.processes = {}
         self.killed: set[str] = set()  # nodes killed by the test and not restarted since
@@ -95,7 +122,7 @@ class FaultGraph:
             # with SIGKILL leaves its Fast DDS shared-memory ports behind, and a node restarted
             # in its place has been seen deaf to the graph over them (walker_bringup.transport).
             transport='udp', node_parameters=LOADED_MACHINE_TIMEOUTS,
-            **({} if grouped else lossy_link_options(configuration.path)),
+            **({} if grouped else lossy_link_options(configuration.path, self.link)),
             stop_timeout=STOP_TIMEOUT, handle_signals=False),
             ProgressLine(True, stream=sys.stderr), on_client=self._subscribe)
         self._environment = contextlib.ExitStack()

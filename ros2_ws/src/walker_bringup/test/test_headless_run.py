@@ -3,6 +3,7 @@
 import json
 
 import pytest
+import yaml
 
 from walker_bringup.run import main, parse_arguments
 
@@ -29,6 +30,13 @@ def test_a_headless_walk_writes_the_summary_and_the_bag_and_says_it_reached(tmp_
     assert summary['runner'] == 'headless' and summary['loop']['lockstep_timeouts'] == 0
     assert [s['to_node'] for s in summary['steps']] == ['n1_2']
     assert (tmp_path / 'bag' / 'metadata.yaml').exists()
+    # the grip monitor counted every gripper state the bag holds, none without a grip
+    metadata = yaml.safe_load((tmp_path / 'bag' / 'metadata.yaml').read_text())
+    counts = {t['topic_metadata']['name']: t['message_count']
+              for t in metadata['rosbag2_bagfile_information']['topics_with_message_count']}
+    assert summary['grip_monitor'] == {'states': counts['/walker/gripper_states'],
+                                       'no_gripper_attached': 0}
+    assert counts['/walker/gripper_states'] > 0
     assert 'n2_1 -> n1_2' in printed and '[walker] reached n1_2 in 1 steps' in printed
     assert main(['--headless', '--target', 'n1_2', '--out', str(tmp_path), '--quiet']) == 2
     assert 'already exists' in capsys.readouterr().out  # a bag is never overwritten
@@ -58,5 +66,8 @@ def test_a_walks_truss_survey_starts_the_next_walk_and_a_bad_one_is_refused(tmp_
                  '--no-record', '--quiet', '--truss-survey', str(bad)]) == 2
     assert str(bad) in capsys.readouterr().out
     assert not (tmp_path / 'third').exists(), 'a refused survey writes nothing'
-    assert main(['--target', 'n1_2', '--truss-survey', str(survey), '--no-record']) == 2
-    assert 'headless' in capsys.readouterr().out
+    # the graph refuses it as well, before anything starts
+    assert main(['--target', 'n1_2', '--out', str(tmp_path / 'graph'), '--no-record',
+                 '--quiet', '--truss-survey', str(bad)]) == 2
+    assert str(bad) in capsys.readouterr().out
+    assert not (tmp_path / 'graph').exists(), 'a refused survey starts no graph'

@@ -9,8 +9,8 @@ from walker_bringup.composed_process import (
 from walker_bringup.composition import (
     COMPONENTS, LOOP_NODES, ComposedGraph, CompositionError, component_of)
 from walker_bringup.graph import (
-    NodeSpec, StartStance, several_walkers, start_stances, walker_graph, walker_namespace,
-    walker_targets)
+    SURVEY_FILE_PARAMETER, NodeSpec, StartStance, several_walkers, start_stances, walker_graph,
+    walker_namespace, walker_targets)
 from walker_config.core.configuration import load_configuration
 from walker_bringup.run import parse_arguments as run_arguments
 from walker_core.robot_parameters import default_parameter_file
@@ -73,6 +73,19 @@ def test_several_walkers_get_their_namespace_start_and_clock(configuration):
                        for arg in n.command('/bin/true'))
 
 
+def test_each_walkers_supervisor_alone_keeps_its_own_truss_survey(configuration, tmp_path):
+    graphs = several_walkers(configuration, 2, sim_time=True, state_dir=tmp_path)
+    kept = {}
+    for namespace, _, nodes in graphs:
+        for node in nodes:
+            survey = dict(node.parameters).get(SURVEY_FILE_PARAMETER)
+            assert (survey is not None) == (node.executable == 'supervisor_node'), node.name
+            if survey is not None:
+                kept[namespace] = survey
+    assert kept == {'/walker': str(tmp_path / 'truss_survey.yaml'),
+                    '/walker_2': str(tmp_path / 'truss_survey_walker_2.yaml')}
+
+
 def test_each_walker_walks_the_same_route_moved_with_its_start(configuration):
     stances = start_stances(configuration, 4)  # rows 1, 2, 3, 0 from column 1
     assert walker_targets(configuration, 'n3_1', stances) == ['n3_1', 'n3_2', 'n3_3', 'n3_0']
@@ -105,6 +118,7 @@ def test_run_all_refuses_a_bad_number_of_walkers(capsys):
     {'sim_time': True, 'grouped_controllers': True, 'only': LOOP_NODES},
     {'sim_time': True, 'record': True, 'bag_path': '/tmp/some/bag',
      'plant_state_file': '/tmp/some/plant_state.json'},
+    {'sim_time': True, 'survey_file': '/tmp/some/truss_survey.yaml'},
 ])
 def test_the_composed_command_describes_the_same_graph(options):
     keywords = {'namespace': '/walker', 'sim_time': False, 'record': False, 'bag_path': None,

@@ -43,6 +43,9 @@ def parse_arguments(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument('--plant-state-file', default=None, metavar='PATH',
                         help="the plant's state snapshot: a plant started again restores the "
                              'physical state it had from it (walker_sim.core.snapshot)')
+    parser.add_argument('--truss-survey-file', default=None, metavar='PATH',
+                        help="the supervisor's truss survey file (supervisor.truss_survey_file): "
+                             'its map starts from it where it exists and is kept in it')
     parser.add_argument('--start', default=None, metavar='GRIPPER,BASE_NODE,OTHER_NODE',
                         help="start stance of the plant (default: the parameter file's)")
     parser.add_argument('--clock-topic', default=None,
@@ -87,12 +90,14 @@ def graph_from_arguments(args: argparse.Namespace) -> list[NodeSpec]:
     params_file = Path(args.params_file or default_parameter_file()).resolve()
     plant_file = args.plant_params_file and Path(args.plant_params_file).resolve()
     state_file = getattr(args, 'plant_state_file', None)
+    survey_file = getattr(args, 'truss_survey_file', None)
     specs = walker_graph(params_file, args.namespace, sim_time=args.sim_time,
                          record=args.record, bag_path=args.bag_path, start=args.start,
                          clock_topic=args.clock_topic, parameters=args.param,
                          grouped_controllers=args.grouped_controllers,
                          plant_params_file=plant_file,
-                         plant_state_file=state_file and Path(state_file).resolve())
+                         plant_state_file=state_file and Path(state_file).resolve(),
+                         survey_file=survey_file and Path(survey_file).resolve())
     if getattr(args, 'append_bag', False):
         specs = [dataclasses.replace(spec, parameters=(*spec.parameters, APPEND_BAG))
                  if spec.executable == 'recorder_node' else spec for spec in specs]
@@ -116,7 +121,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
                      grouped_controllers: bool = False,
                      only: Sequence[str] | None = None,
                      plant_params_file: str | Path | None = None,
-                     plant_state_file: str | Path | None = None) -> list[str]:
+                     plant_state_file: str | Path | None = None,
+                     survey_file: str | Path | None = None) -> list[str]:
     """Return the command line of the composed graph with :func:`walker_graph`'s arguments."""
     command = [executable or str(executable_path('walker_bringup', 'composed_graph')),
                '--params-file', str(params_file), '--namespace', namespace]
@@ -140,6 +146,8 @@ def composed_command(params_file: str | Path, namespace: str = '/walker',
         command += ['--only', ','.join(only)]
     if plant_state_file is not None:
         command += ['--plant-state-file', str(plant_state_file)]
+    if survey_file is not None:
+        command += ['--truss-survey-file', str(survey_file)]
     return command
 
 

@@ -11,10 +11,12 @@ import dataclasses
 from pathlib import Path
 
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_supervisor.core.survey_file import SURVEY_FILE_NAME
 
 __all__ = ['NodeSpec', 'StartStance', 'walker_graph', 'walker_namespace', 'start_stances',
            'several_walkers', 'walker_targets', 'executable_path', 'controller_node_name',
-           'GROUPED_CONTROLLERS_NODE', 'VIZ_NODE', 'FOXGLOVE_NODE', 'RECORDED_TOPICS', 'tf_remaps']
+           'GROUPED_CONTROLLERS_NODE', 'VIZ_NODE', 'FOXGLOVE_NODE', 'RECORDED_TOPICS', 'tf_remaps',
+           'SURVEY_FILE_PARAMETER', 'walker_survey_file']
 
 #: Name of the one node of the five joint controllers in a graph with ``grouped_controllers``.
 GROUPED_CONTROLLERS_NODE = 'controllers'
@@ -22,6 +24,8 @@ GROUPED_CONTROLLERS_NODE = 'controllers'
 VIZ_NODE = 'viz'
 #: Name of the node that serves the graph to Foxglove (``run_all.py --foxglove``).
 FOXGLOVE_NODE = 'foxglove_bridge'
+#: The supervisor's parameter naming its truss survey file.
+SURVEY_FILE_PARAMETER = 'supervisor.truss_survey_file'
 
 #: What a walk's bag holds (relative to the robot's namespace): everything the walk report
 #: uses. The high-rate inner-loop topics (effort_commands, joint_accelerations, the setpoint
@@ -139,7 +143,8 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                  grouped_controllers: bool = False,
                  foxglove_port: int | None = None,
                  plant_state_file: str | Path | None = None,
-                 plant_params_file: str | Path | None = None) -> list[NodeSpec]:
+                 plant_params_file: str | Path | None = None,
+                 survey_file: str | Path | None = None) -> list[NodeSpec]:
     """List the walker's nodes in start order: plant, controllers, planner, supervisor, viz.
 
     Parameters
@@ -178,6 +183,9 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
     plant_params_file : str or Path, optional
         A parameter file of the plant's own (default: ``params_file``): the robot as it
         really is, where the other nodes work on the model (a campaign's dispersed runs).
+    survey_file : str or Path, optional
+        The supervisor's truss survey file (``supervisor.truss_survey_file``): its map starts
+        from it where it exists and is kept up to date in it.
     """
     params_file = str(params_file)
     parameters = tuple(parameters)
@@ -217,8 +225,11 @@ def walker_graph(params_file: str | Path, namespace: str = '/walker', sim_time: 
                               (('joint_name', joint),) + controller + parameters, remaps))
     nodes.append(NodeSpec('walker_planner', 'planner_node', 'planner', namespace, params_file,
                           common + parameters, remaps))
+    supervisor = common
+    if survey_file is not None:
+        supervisor += ((SURVEY_FILE_PARAMETER, str(survey_file)),)
     nodes.append(NodeSpec('walker_supervisor', 'supervisor_node', 'supervisor', namespace,
-                          params_file, common + parameters, remaps))
+                          params_file, supervisor + parameters, remaps))
     nodes.append(NodeSpec('walker_viz', 'viz_node', VIZ_NODE, namespace, params_file,
                           common + parameters, remaps))
     if foxglove_port is not None:
@@ -293,7 +304,8 @@ def several_walkers(configuration, count: int, sim_time: bool = False,
     single walker's. With ``record``, each walker's recorder writes ``<bag_dir>/bag`` (the
     first) or ``<bag_dir>/bag_walker_<i>``; ``parameters`` go to every node and
     ``grouped_controllers`` is each graph's (see :func:`walker_graph`); with ``state_dir``,
-    each plant keeps its state snapshot in ``<state_dir>/plant_state_walker_<i>.json``.
+    each plant keeps its state snapshot in ``<state_dir>/plant_state_walker_<i>.json`` and
+    each supervisor its truss survey in ``<state_dir>/`` :func:`walker_survey_file`.
     """
     graphs = []
     for index, start in enumerate(start_stances(configuration, count), start=1):
@@ -307,8 +319,23 @@ def several_walkers(configuration, count: int, sim_time: bool = False,
             start=start if index > 1 else None, clock_topic=clock, parameters=parameters,
             grouped_controllers=grouped_controllers,
             plant_state_file=None if state_dir is None else
-            Path(state_dir) / f'plant_state_{namespace.strip("/")}.json')))
+            Path(state_dir) / f'plant_state_{namespace.strip("/")}.json',
+            survey_file=None if state_dir is None else
+            Path(state_dir) / walker_survey_file(namespace))))
     return graphs
+
+
+def walker_survey_file(namespace: str) -> str:
+    """Return the name of a walker's truss survey file in the run's output directory.
+
+    ``truss_survey.yaml`` for ``/walker``, ``truss_survey_walker_<i>.yaml`` for the others
+    (as the walk summaries are named).
+    """
+    label = namespace.strip('/')
+    if label == 'walker':
+        return SURVEY_FILE_NAME
+    stem, dot, suffix = SURVEY_FILE_NAME.rpartition('.')
+    return f'{stem}_{label}{dot}{suffix}'
 
 
 def walker_targets(configuration, target: str, stances: list[StartStance]) -> list[str]:

@@ -31,18 +31,21 @@ from walker_core.progress import ProgressLine
 from walker_core.walk_summary import Runner, WalkSummary
 from walker_report.core.steps import rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
+from walker_supervisor.core.survey_file import write_survey
 
 from walker_bringup.graph import walker_targets
 from walker_bringup.graph_client import (
     GoalRejectedError, GraphClient, GraphNotReadyError, WalkInterruptedError, init_context)
 from walker_bringup.graph_walk import SUMMARY_FILE, walk_one, walk_several
 from walker_bringup.graph_walkers import (
-    GraphWalker, Wrap, bag_paths, describe_walkers, launch, namespaces_in_use, recover_bags)
+    GraphWalker, Wrap, bag_paths, describe_walkers, launch, namespaces_in_use, recover_bags,
+    survey_files)
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.session_options import SessionError, SessionOptions
 from walker_bringup.transport import (
     DEFAULT_TRANSPORT, PROFILES_VARIABLE, STATIC_PEERS_VARIABLE, default_transport,
     graph_environment)
+from walker_bringup.truss_survey import checked_survey, survey_map
 
 __all__ = ['GraphBackend', 'SERVE_POLL']
 
@@ -77,6 +80,7 @@ class GraphBackend:
         self._previous_handlers: dict = {}
         self._lock = threading.Lock()
         self._prepared = False
+        self.survey: dict | None = None  # the truss survey the walkers start from
 
     # ------------------------------------------------------------------ set-up
     def prepare(self) -> None:
@@ -105,6 +109,8 @@ class GraphBackend:
                                '...): leave --namespace out')
         if options.walkers > 1 and options.foxglove_port is not None:
             raise SessionError('--foxglove serves one walker: leave --walkers out')
+        if options.truss_survey is not None:  # every walker's supervisor starts from it
+            self.survey = checked_survey(self.configuration, options.truss_survey)
         try:
             self.walkers = describe_walkers(options, self.configuration, self.out, self.env)
             timing = self.configuration.walker.timing
@@ -151,6 +157,10 @@ class GraphBackend:
         if PROFILES_VARIABLE in self.env and self._profile_before is None:
             self._profile_before = (os.environ.get(PROFILES_VARIABLE),)
             os.environ[PROFILES_VARIABLE] = self.env[PROFILES_VARIABLE]
+        for survey_file in survey_files(walkers):  # nor an earlier run's truss survey
+            survey_file.unlink(missing_ok=True)
+            if self.survey is not None:
+                write_survey(survey_file, survey_map(self.configuration, self.survey))
         context = init_context()
         busy = namespaces_in_use(walkers, context)
         if busy:

@@ -17,17 +17,19 @@ from pathlib import Path
 from walker_bag.core.bag_metadata import read_metadata
 from walker_bag.core.errors import MetadataError
 from walker_bag.core.losses import recorded_losses
+from walker_supervisor.core.survey_file import SURVEY_FILE_NAME
 from walker_bringup.composed_process import composed_command
 from walker_bringup.composition import LOOP_NODES
 from walker_bringup.graph import (
-    FOXGLOVE_NODE, NodeSpec, StartStance, several_walkers, start_stances, walker_graph)
+    FOXGLOVE_NODE, SURVEY_FILE_PARAMETER, NodeSpec, StartStance, several_walkers, start_stances,
+    walker_graph)
 from walker_bringup.graph_client import GraphClient
 from walker_bringup.processes import ProcessGroup
 from walker_bringup.respawning import RespawningGroup
 from walker_bringup.session_options import SessionOptions
 
 __all__ = ['GraphWalker', 'describe_walkers', 'with_node_settings', 'plant_file', 'bag_paths',
-           'graph_parameters', 'launch', 'recover_bags', 'namespaces_in_use',
+           'graph_parameters', 'launch', 'recover_bags', 'survey_files', 'namespaces_in_use',
            'PLANT_STATE_FILE', 'Wrap']
 
 #: What a process's command is replaced with: ``wrap(spec, command or None) -> command or None``.
@@ -97,7 +99,8 @@ def describe_walkers(options: SessionOptions, configuration, out: Path,
                              grouped_controllers=options.grouped_controllers,
                              foxglove_port=options.foxglove_port,
                              plant_state_file=out / PLANT_STATE_FILE,
-                             plant_params_file=plant_file(options))
+                             plant_params_file=plant_file(options),
+                             survey_file=out / SURVEY_FILE_NAME)
         nodes = with_node_settings(nodes, options)
         stance = start_stances(configuration, 1)[0]  # the parameter file's own start
         return [GraphWalker(options.namespace, None, nodes, ProcessGroup(out / 'logs', env),
@@ -164,6 +167,17 @@ def bag_paths(walkers: list[GraphWalker]) -> list[Path]:
     return bags
 
 
+def survey_files(walkers: list[GraphWalker]) -> list[Path]:
+    """List the truss survey file each walker's supervisor keeps its map in."""
+    files = []
+    for walker in walkers:
+        for spec in walker.nodes:
+            path = dict(spec.parameters).get(SURVEY_FILE_PARAMETER)
+            if spec.executable == 'supervisor_node' and path:
+                files.append(Path(path))
+    return files
+
+
 def graph_parameters(options: SessionOptions) -> tuple[tuple[str, str], ...]:
     """Return the overrides for every node.
 
@@ -198,6 +212,7 @@ def launch(walker: GraphWalker, options: SessionOptions, params_file: Path,
             walker.group.start(spec, wrap(spec, None))
         return
     plant = next(n for n in walker.nodes if n.executable == 'plant_node')
+    supervisor = next(n for n in walker.nodes if n.executable == 'supervisor_node')
     bags = bag_paths([walker])
     loop = LOOP_NODES if options.composed_loop else None
     command = composed_command(params_file, walker.namespace, options.sim_time,
@@ -206,7 +221,9 @@ def launch(walker: GraphWalker, options: SessionOptions, params_file: Path,
                                dict(plant.remaps).get('/clock'), graph_parameters(options),
                                grouped_controllers=options.grouped_controllers, only=loop,
                                plant_params_file=plant_file(options),
-                               plant_state_file=dict(plant.parameters).get('state_file'))
+                               plant_state_file=dict(plant.parameters).get('state_file'),
+                               survey_file=dict(supervisor.parameters).get(
+                                   SURVEY_FILE_PARAMETER))
     composed = NodeSpec('walker_bringup', 'composed_graph', 'graph' if loop is None else 'loop',
                         walker.namespace, str(params_file))
     walker.group.start(composed, wrap(composed, command))

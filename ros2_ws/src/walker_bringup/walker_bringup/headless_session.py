@@ -18,16 +18,16 @@ from walker_bag.core.errors import BagError
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.parameter_schema import ParameterError
 from walker_core.progress import ProgressLine, walk_progress
-from walker_core.truss import Truss
 from walker_headless.recording import WalkRecording
 from walker_core.walk_summary import Runner, WalkSummary
 from walker_headless.runner import walk
 from walker_report.core.steps import format_table, rows_from_reports, write_json
 from walker_report.walk_report import report_after_walk
-from walker_supervisor.core.survey_file import SURVEY_FILE_NAME, read_survey, write_survey
-from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
+from walker_supervisor.core.survey_file import SURVEY_FILE_NAME, write_survey
+from walker_supervisor.core.truss_map import SurveyFileError
 
 from walker_bringup.session_options import SessionError, SessionOptions
+from walker_bringup.truss_survey import checked_survey, survey_map
 
 __all__ = ['HeadlessBackend', 'loop_record']
 
@@ -60,7 +60,7 @@ class HeadlessBackend:
         Both refusals are :class:`SessionError` (code 2), before anything is written.
         """
         if self.options.truss_survey is not None:
-            self.survey = self._checked_survey(self.options.truss_survey)
+            self.survey = checked_survey(self.configuration, self.options.truss_survey)
         bag = self.out / 'bag'
         if self.options.record and bag.exists():
             raise SessionError(f'{bag} already exists and a recording never overwrites a bag: '
@@ -98,29 +98,12 @@ class HeadlessBackend:
         self.progress.end()
         summary = self._summarise(result)
         if result.survey is not None:
-            write_survey(self.out / SURVEY_FILE_NAME, self._survey_map(result.survey))
+            write_survey(self.out / SURVEY_FILE_NAME,
+                         survey_map(self.configuration, result.survey))
         if options.record and options.report:
             self.report_failed = not report_after_walk(
                 self.out / 'bag', self.out / 'report', self.configuration.path, options.quiet)
         return summary
-
-    def _checked_survey(self, path: Path) -> dict:
-        """Return the survey file at ``path``, checked against the truss."""
-        try:
-            content = read_survey(path)  # its errors name the file
-        except SurveyFileError as error:
-            raise SessionError(str(error)) from None
-        try:
-            self._survey_map(content)
-        except SurveyFileError as error:
-            raise SessionError(f'the truss survey {path}: {error}') from None
-        return content
-
-    def _survey_map(self, content: dict) -> TrussMap:
-        """Return the truss map of a survey's content, with the supervisor's uncertainties."""
-        settings = self.configuration.supervisor
-        return TrussMap.from_dict(Truss.from_parameters(self.configuration.walker),
-                                  settings.node_prior_std, settings.joint_reading_std, content)
 
     def _summarise(self, result: WalkSummary) -> WalkSummary:
         """Print the per-step table and the outcome, write ``summary.json``; return it whole.
@@ -141,8 +124,11 @@ class HeadlessBackend:
               f's of wall time ({speed(result.wall_time):.1f} x real time), the loop '
               f'{result.cpu_time:.1f} s of CPU ({speed(result.cpu_time):.1f} x real time on '
               'one core)')
-        write_json(rows, self.out / 'summary.json', result.json_fields(
-            'target', 'reached', 'message', 'path', 'timed_out', 'wall_time', 'loop', 'runner'))
+        fields = result.json_fields('target', 'reached', 'message', 'path', 'timed_out',
+                                    'wall_time', 'loop')
+        fields['grip_monitor'] = {'states': result.grip_states,
+                                  'no_gripper_attached': result.grip_losses}
+        write_json(rows, self.out / 'summary.json', {**fields, 'runner': result.runner})
         if result.reached:
             print(f'[walker] reached {result.target} in {result.steps_taken} steps, '
                   f'{result.duration:.1f} s of walking; summary in {self.out / "summary.json"}')

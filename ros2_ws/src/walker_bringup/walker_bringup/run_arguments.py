@@ -133,7 +133,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                              'report (walker_headless)')
     parser.add_argument('--truss-survey', default=None, metavar='FILE',
                         help="start from a truss survey (a walk's truss_survey.yaml, "
-                             'docs/walking.md); headless only')
+                             "docs/walking.md); the walk's own survey is written to "
+                             '<out>/truss_survey.yaml')
     parser.add_argument('--walkers', type=types.positive_count, default=1, metavar='N',
                         help='run N walkers side by side (namespaces /walker, /walker_2, ...), '
                              'each from its own start, walking the same route moved with it '

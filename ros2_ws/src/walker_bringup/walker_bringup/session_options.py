@@ -93,8 +93,8 @@ class SessionOptions:
     stop_timeout : float
         Wall-clock seconds each process is given to end on its interrupt at the shutdown.
     truss_survey : Path, optional
-        A truss survey file (a walk's ``truss_survey.yaml``) the walk starts from (the headless
-        runner's; ``None``: the nominal truss).
+        A truss survey file (a walk's ``truss_survey.yaml``) the walk starts from (``None``:
+        the nominal truss); with several walkers, every walker's.
     node_parameters : tuple of (str, str, str)
         ``(node, name, value)``: a parameter value for the nodes whose name matches the
         pattern ``node`` (:func:`fnmatch.fnmatchcase`, e.g. ``controller*``), over the file's
@@ -146,9 +146,6 @@ class SessionOptions:
             if graph_only:
                 raise SessionError(f'the headless runner runs no graph: leave '
                                    f'{", ".join(graph_only)} out')
-        elif self.truss_survey is not None:
-            raise SessionError('a truss survey is read by the headless runner: add --headless '
-                               'or leave --truss-survey out')
         if self.walkers < 1:
             raise SessionError(f'walkers must be at least 1, got {self.walkers}')
         if self.plant_params_file is not None and self.walkers > 1:

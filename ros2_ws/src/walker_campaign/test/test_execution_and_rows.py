@@ -5,7 +5,8 @@ import pytest
 from campaign_samples import stand_in_walk
 from walker_campaign.core.parameter_sets import load_nominal
 from walker_campaign.core.plan import plan_run
-from walker_campaign.core.rows import cause_of, deterministic_part, error_rows, run_rows
+from walker_campaign.core.rows import (
+    cause_of, combined_summary, deterministic_part, error_rows, run_rows)
 from walker_campaign.execution import RunTask, execute_run
 from walker_campaign.walks import WalkError
 from walker_core.parameter_schema import load_parameter_file
@@ -122,3 +123,27 @@ def test_a_search_on_a_jam_shows_its_probes_and_where_the_hole_was_found(small_s
     assert [s['probes'] for s in steps] == [3, 0]
     assert [s['hole_offset'] for s in steps] == [0.0026, 0.0]
     assert run['probes'] == 3 and run['jams'] == 3 and run['outcome'] == 'reached'
+
+
+def test_the_run_row_carries_the_grip_monitor_and_an_old_summary_reads_without_it(small_spec):
+    """``grip_monitor`` of the summary becomes the run row's ``grip_states`` and
+    ``grip_losses``; a summary without one (the graph's, an older file) gives None, not 0."""
+    plan = plan_run(small_spec, 0)
+    step = {'index': 0, 'success': False, 'attempts': 3, 'duration': 9.0, 'bound': 2.5,
+            'message': 'insertion jammed 3 times'}
+    summary = {'steps': [step], 'reached': False, 'message': 'insertion jammed 3 times',
+               'grip_monitor': {'states': 412, 'no_gripper_attached': 2}}
+    run = run_rows('c', plan, summary)[-1]
+    assert (run['grip_states'], run['grip_losses']) == (412, 2)
+    old = run_rows('c', plan, {k: v for k, v in summary.items() if k != 'grip_monitor'})[-1]
+    assert old['grip_states'] is None and old['grip_losses'] is None
+
+
+def test_walks_on_one_truss_sum_their_grip_monitors():
+    first = {'steps': [], 'reached': True, 'grip_monitor': {'states': 10,
+                                                            'no_gripper_attached': 0}}
+    second = {'steps': [], 'reached': True, 'grip_monitor': {'states': 12,
+                                                             'no_gripper_attached': 1}}
+    assert combined_summary([first, second])['grip_monitor'] == {
+        'states': 22, 'no_gripper_attached': 1}
+    assert 'grip_monitor' not in combined_summary([first, {'steps': [], 'reached': True}])

@@ -43,6 +43,24 @@ def test_the_analysis_counts_what_the_rows_say(results_path):
     assert analysis.walks == []  # one walk per run: nothing to set side by side
 
 
+def test_the_report_counts_the_grip_losses_of_the_runs_that_monitored_them(results_path,
+                                                                           tmp_path):
+    """Runs whose rows carry the grip monitor are summed in the jams table; older rows
+    without it (``grip_losses`` None) leave the table as it was."""
+    rows = [json.loads(line) for line in results_path.read_text().splitlines()]
+    runs = [r for r in rows if r.get('kind') == 'run']
+    assert 'runs with the grip monitor' not in analyse(read_results(results_path)).jams
+    runs[0]['grip_losses'], runs[0]['grip_states'] = 3, 100
+    runs[1]['grip_losses'], runs[1]['grip_states'] = 0, 90
+    path = tmp_path / 'results.jsonl'
+    path.write_text(''.join(json.dumps(r) + '\n' for r in rows))
+    jams = analyse(read_results(path)).jams
+    assert jams['grip losses (gripper states with no gripper attached)'] == 3
+    assert jams['runs with a grip loss'] == 1 and jams['runs with the grip monitor'] == 2
+    text = make_campaign_report(path, tmp_path / 'report', tolerance=0.002).markdown.read_text()
+    assert '| runs with a grip loss | 1 |' in text
+
+
 def test_the_stand_in_figures_follow_their_parameters(results_path):
     """The stand-in's coarse phase grows with friction: the sensitivity must say so."""
     analysis = analyse(read_results(results_path))

@@ -73,11 +73,11 @@ def test_a_bad_survey_on_the_command_line_runs_nothing(write_spec, tmp_path, cap
     assert not out.exists(), 'nothing is run or written'
 
 
-def test_the_graph_is_refused_a_survey_before_anything_runs(write_spec, survey_file, tmp_path):
-    spec_path = write_spec({**SMALL_SPEC, 'truss_survey': str(survey_file)}, load=False)
-    out = tmp_path / 'out'
-    assert main([str(spec_path), '--graph', '--out', str(out), '--quiet']) == 2
-    assert not out.exists()
+def test_the_graph_takes_a_survey_and_a_route_walked_twice(write_spec, survey_file, tmp_path):
+    spec_path = write_spec({**SMALL_SPEC, 'truss_survey': str(survey_file),
+                            'route': {**SMALL_SPEC['route'], 'walks': 2}}, load=False)
+    assert main([str(spec_path), '--graph', '--check', '--out', str(tmp_path / 'out'),
+                 '--quiet']) == 0
 
 
 def test_every_walk_of_the_campaign_starts_from_the_survey(write_spec, survey_file):

@@ -222,9 +222,6 @@ def main(argv: list[str] | None = None) -> int:
         out = Path(args.out or Path('runs') / 'campaigns' / spec.name).resolve()
         results_path = out / 'results.jsonl'
         walk = args.walk or ('graph' if args.graph else DEFAULT_WALK)
-        if walk == 'graph' and (spec.truss_survey is not None or spec.walks > 1):
-            raise SpecError('a truss survey is read by the headless runner: leave --graph out '
-                            'for a spec with truss_survey, --truss-survey or route.walks > 1')
         if args.check:
             check_every_run(spec)
             _say(f'{_describe(spec)}: every run checked')

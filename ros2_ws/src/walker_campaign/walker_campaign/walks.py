@@ -58,8 +58,8 @@ class WalkRequest:
     record : bool
         Record the walk's bag (``out_dir/bag``) for the walk report.
     truss_survey : Path or None
-        A truss survey file the walk starts from (the headless runner's ``--truss-survey``);
-        None: the nominal truss.
+        A truss survey file the walk starts from (``run_all.py --truss-survey``, on the graph
+        and headless); None: the nominal truss.
     """
 
     model_file: Path

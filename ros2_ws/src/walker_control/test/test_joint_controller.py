@@ -753,3 +753,51 @@ def test_a_shaper_that_cannot_be_designed_is_refused_when_the_settings_are_built
                                                                                    message):
     with pytest.raises((ParameterError, ValueError), match=message):
         replace_in_section(SETTINGS, changes)
+
+
+# ------------------------------------------------------------- a drive stiffer than identified
+def _stuck_joint_1(settings, stiction_factor, mode=Mode.FINE, seconds=2.0):
+    """Joint 1 whose friction is ``stiction_factor`` times the identified, asked 3.6 mrad on.
+
+    3.6 mrad of joint 1 are 3.2 mm of tip at the 0.9 m reach: a probe of the search on a jam
+    one grid step across the step's direction (the campaigns draw up to 1.35 times the drive's
+    friction).
+    """
+    controller = JointController(settings, 'a_yaw_joint', 'a')
+    plant = RigidJoint('a_yaw_joint', 'a')
+    plant.coulomb *= stiction_factor
+    plant.stiction *= stiction_factor
+    controller.command(mode, 'a')
+    start = plant.position
+    _, outputs = run(controller, plant, int(seconds / T), Setpoint(position=start + 0.0036))
+    return plant.position - start, outputs
+
+
+def test_joint_1_stuck_in_fine_under_a_higher_friction_breaks_away_and_arrives():
+    """A fine line of joint 1 against 1.3 times the identified friction reaches its setpoint.
+
+    Its fine gains (0.7 rad/s, Ti 4 s) add hundredths of a N*m over a few mrad: without the
+    compensation's rise the joint does not move at all.
+    """
+    moved, outputs = _stuck_joint_1(SETTINGS, 1.3)
+    assert moved == pytest.approx(0.0036, abs=SETTINGS.control.in_position_tolerance[0])
+    level = SETTINGS.friction_level(1)
+    assert max(abs(o.friction_compensation) for o in outputs) > 1.3 * level
+    assert max(abs(o.friction_compensation) for o in outputs) <= 1.5 * level + 1e-9
+    off = replace_in_section(SETTINGS, {'control.friction_compensation.breakaway_limit':
+                                        [0.0, 0.0, 0.0, 0.0, 0.0]})
+    stuck, _ = _stuck_joint_1(off, 1.3)
+    assert stuck == 0.0
+
+
+def test_the_compensation_rises_only_while_stuck_in_fine_and_never_past_its_limit():
+    """In COARSE it never rises; stuck beyond the limit, it stops at ``1 + breakaway_limit`` of
+    its level; once the joint has arrived (the error within the ramp) it is back at its level."""
+    level = SETTINGS.friction_level(1)
+    _, outputs = _stuck_joint_1(SETTINGS, 1.3, seconds=4.0)
+    assert abs(outputs[-1].friction_compensation) <= level + 1e-9
+    _, outputs = _stuck_joint_1(SETTINGS, 1.3, mode=Mode.COARSE)
+    assert max(abs(o.friction_compensation) for o in outputs) <= level + 1e-9
+    moved, outputs = _stuck_joint_1(SETTINGS, 2.0, seconds=4.0)  # the mode switch's transfer
+    assert moved == 0.0                                          # decays by then
+    assert abs(outputs[-1].friction_compensation) == pytest.approx(1.5 * level, rel=1e-3)

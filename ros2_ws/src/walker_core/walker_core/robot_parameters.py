@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from walker_core.camera import CameraParameters
 from walker_core.parameter_file import ParameterFile, default_parameter_file
 from walker_core.parameter_schema import ParameterError, parameter, section_from_flat
 
@@ -217,6 +218,7 @@ class GripperParameters:
         'height above the hole where insertion starts and extraction ends', 'm', 0.001, 0.5,
         source='chosen: insertion starts 30 mm above the hole')
     screw_time: float = parameter('time to screw in or unscrew', 's', 0.0, 60.0, source='chosen')
+    camera: CameraParameters
     # last, with its value also here: sections built field by field keep working without it
     screw_length: float = dataclasses.field(default=0.003, metadata=parameter(
         "how far the screw's tip reaches below the gripper's shoulder (its contact point)", 'm',

@@ -36,6 +36,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from walker_core.camera import mount_rpy, mount_transform, optical_frame_name
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 
 __all__ = [
@@ -327,5 +328,22 @@ def plant_urdf(params, *, out_of_plane_first: bool = False) -> str:
 
 
 def description_urdf(params) -> str:
-    """URDF for ``robot_description``: bending joints fixed, no rotors (five moving joints)."""
-    return robot_urdf(params, flexible=False, rotors=False)
+    """URDF for ``robot_description``: bending joints fixed, no rotors (five moving joints).
+
+    With wrist cameras (``gripper.camera.enabled``), each gripper ``g`` carries a frame
+    ``camera_<g>_optical`` on a fixed joint at the camera's nominal mount (REP 104), which TF
+    then carries.
+    """
+    urdf = robot_urdf(params, flexible=False, rotors=False)
+    camera = params.gripper.camera
+    if not camera.enabled:
+        return urdf
+    mount = mount_transform(camera.mount_position, camera.aim_distance)
+    build = _Builder(params.robot.name)
+    for gripper, link in GRIPPER_LINKS.items():
+        frame = optical_frame_name(gripper)
+        build.link(frame, None, [])
+        build.joint(f'camera_{gripper}_joint', 'fixed', link, frame, mount[:3, 3],
+                    mount_rpy(mount))
+    cameras = '\n'.join(build.parts[2:])  # after the builder's own header
+    return urdf.replace('</robot>', cameras + '\n</robot>')

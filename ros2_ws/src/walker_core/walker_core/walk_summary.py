@@ -69,6 +69,9 @@ class WalkSummary:
     survey : dict, optional
         The truss map at the end (headless;
         :meth:`~walker_supervisor.core.truss_map.TrussMap.to_dict`).
+    grip_states, grip_losses : int
+        The grip monitor (headless): the plant's gripper-state messages, and those with no
+        gripper attached (a grip loss: the walker let go of the truss).
     """
 
     target: str
@@ -90,6 +93,8 @@ class WalkSummary:
     periods: int = 0
     cpu_time: float = 0.0
     survey: dict | None = None
+    grip_states: int = 0
+    grip_losses: int = 0
 
     @property
     def code(self) -> int:

@@ -108,6 +108,9 @@ class RobotLoop:
         self.tracking = False
         self.poses_out = False  # the gripper poses went out with the state in self.state
         self.grippers_out = False  # and the gripper states (changed, or the heartbeat)
+        #: the grip monitor: gripper-state messages sent, and those with no gripper attached
+        self.grip_states = 0
+        self.grip_losses = 0
         #: each controller's newest state report not yet taken (joint -> report)
         self.reports: dict[str, ControllerReport] = {}
         #: commands the drives refused (non-finite) and clamped at the torque limit, so far
@@ -139,8 +142,12 @@ class RobotLoop:
             recording.poses(stamp, state)
         key = gripper_states_key(state)
         self.grippers_out = self._heartbeat.due(stamp, force=key != self._gripper_key)
-        if self.grippers_out and recording is not None:
-            recording.gripper_states(stamp, state)
+        if self.grippers_out:
+            self.grip_states += 1
+            if not any(state.statuses[g].mode == GripperState.ATTACHED for g in GRIPPERS):
+                self.grip_losses += 1
+            if recording is not None:
+                recording.gripper_states(stamp, state)
         self._gripper_key = key
         viz = self.viz
         if viz is not None:

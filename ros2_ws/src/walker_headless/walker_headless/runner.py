@@ -25,6 +25,7 @@ from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
 from walker_core.urdf import description_urdf
 from walker_core.walk_summary import Runner, WalkSummary
 from walker_supervisor.core.commands import Feedback
+from walker_supervisor.core.survey_file import SurveyKeeper
 
 from walker_headless.loop import RobotLoop
 from walker_headless.shell import WalkShell
@@ -68,7 +69,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         ``'walk_to'`` (any node) or ``'step'`` (one step to a neighbouring node).
     survey : dict, optional
         A truss survey to start from (a survey file's content); raises
-        :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit.
+        :class:`~walker_supervisor.core.truss_map.SurveyFileError` if it does not fit. Without
+        it the walk starts from ``supervisor.truss_survey_file`` where that file exists; the
+        walk's survey is written to that file at the end, as the graph's supervisor does.
     whole_trajectories : bool, optional
         The controllers hold whole trajectories instead of following a setpoint stream
         (:class:`~walker_headless.loop.RobotLoop`); by default as the graph's planner does
@@ -85,6 +88,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         if recording is not None:
             recording.robot_description(0, description_urdf(configuration.walker))
         shell = WalkShell(loop, say, progress)
+        # supervisor.truss_survey_file, as the graph's supervisor keeps it; ``survey`` over it
+        keeper = SurveyKeeper(shell.runner.mapped.map,
+                              configuration.supervisor.truss_survey_file)
         if survey is not None:
             shell.runner.mapped.map.load(survey)
         shell.send_goal(goal, target)
@@ -108,6 +114,9 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
             if periods % _WALL_CHECK_PERIODS == 0 and time.monotonic() - started > wall_timeout:
                 message = f'the walk did not end within {wall_timeout:g} s of wall time'
                 break
+        failure = keeper.write_if_changed()
+        if failure is not None and say is not None:
+            say('warning', failure)
         return dataclasses.replace(
             _result(target, shell, loop, started, message),
             cpu_time=time.process_time() - cpu_started, timed_out=message is not None,
@@ -129,7 +138,8 @@ def _result(target: str, shell: WalkShell, loop: RobotLoop, started: float,
         duration=ended.duration if ended is not None else 0.0,
         wall_time=time.monotonic() - started, runner=Runner.HEADLESS,
         reports=tuple(shell.reports), phases=tuple(shell.phases), sim_time=loop.time,
-        periods=loop.stamp // loop.period_ns)
+        periods=loop.stamp // loop.period_ns, grip_states=loop.grip_states,
+        grip_losses=loop.grip_losses)
 
 
 def _plant_diagnostics(recording, loop: RobotLoop) -> None:

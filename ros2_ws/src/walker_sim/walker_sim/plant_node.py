@@ -55,6 +55,7 @@ from walker_sim.core.outputs import StampedRate, gripper_states_key
 from walker_sim.core.plant import PlantState, WalkerPlant
 from walker_sim.core.snapshot import SnapshotKeeper
 from walker_sim.messages import COMMAND_QOS, gripper_state_msg, stamp_ns
+from walker_sim.camera_publishers import CameraPublishers
 from walker_sim.plant_publishers import PlantPublishers
 from walker_sim.state_handover import StateHandover
 
@@ -99,6 +100,7 @@ class PlantNode(Node):
         self._clock_rate = StampedRate(self.sim.clock_rate)
         self._pose_rate = StampedRate(self.sim.pose_rate)
         self._out = PlantPublishers(self, self.params, self.sim_time)
+        self._cameras = CameraPublishers(self, self.params, self.sim.camera.frame_rate)
         self.create_subscription(JointState, 'effort_commands', self._on_effort, COMMAND_QOS)
         if self.sim_time:
             self.create_subscription(ClockMsg, 'supervisor/decided_until', self._on_decided,
@@ -309,6 +311,7 @@ class PlantNode(Node):
         accelerations, joint_states = self._out.state(state, stamp)
         if self._pose_rate.due(stamp):
             self._out.poses(state, self.plant.bending(), stamp)
+        self._cameras.publish(self.plant, stamp)  # only while an image is heard
         self._publish_grippers(state)
         self._last_sent = self._steady_now()
         self.lockstep.begin(stamp, self._last_sent)

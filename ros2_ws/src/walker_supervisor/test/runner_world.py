@@ -5,7 +5,9 @@ stream under way exactly (the planner core's own plans, sampled), the plant's gr
 and out in ``gripper.screw_time`` (a screw-in farther than ``gripper.insertion_position_
 tolerance`` from a hole jams), and the runner hears joint, gripper and controller states; it
 decides every ``TICK_PERIOD`` (and at once on ``DecideNow``) and watches every
-``WATCH_PERIOD``. The planner can be told to fall silent (its requests go unanswered).
+``WATCH_PERIOD``. The planner can be told to fall silent (its requests go unanswered), or to
+die mid-motion: the arm follows the trajectory under way to its end and holds it, as the
+controllers hold a whole trajectory, and the end is never reported.
 """
 
 from __future__ import annotations
@@ -92,6 +94,8 @@ class World:
         self.planner_silent = False  # the planner answers nothing ...
         self.heard_after_renewal = False  # ... until a client of it is made anew
         self.acceptances_lost = 0  # stream requests whose acceptance is lost on the way back
+        self.planner_dead = False  # the planner reports no motion's end and answers nothing
+        self.end_delay = 0.0  # [s] the planner reports each motion's end this late
         self.unanswered = []  # PlanMotion and FollowMotion commands it did not answer
         self.jam = 0  # screw-ins that jam whatever the tip
         self.holes = {}  # node -> (x, y) [m]: its hole off its nominal place by this much
@@ -171,7 +175,7 @@ class World:
             elapsed = self.now - started
             self.positions = np.array(trajectory.sample(min(elapsed, trajectory.duration))
                                       .position)
-            if elapsed >= trajectory.duration:
+            if elapsed >= trajectory.duration + self.end_delay and not self.planner_dead:
                 self.stream = None
                 self.execute(self.runner.follow_done(ticket, True, '', self.now))
         self.velocities = (self.positions - previous) / DT
@@ -190,7 +194,8 @@ class World:
             elif isinstance(command, (PlanMotion, FollowMotion)):
                 self._planner(command)
             elif isinstance(command, CancelFollow):
-                if self.stream is not None and self.stream[0] == command.ticket:
+                if self.stream is not None and self.stream[0] == command.ticket \
+                        and not self.planner_dead:  # a dead planner sends no hold
                     self.stream = None
             elif isinstance(command, DecideNow):
                 self.execute(self.runner.tick(self.now, self.now))
@@ -198,7 +203,7 @@ class World:
     def _planner(self, command) -> None:
         """Answer at once with the planner core (unless silent), as a headless loop would."""
         self.runner.request_sent(command.ticket, self.now)
-        if self.planner_silent:
+        if self.planner_silent or self.planner_dead:
             self.unanswered.append(command)
         elif isinstance(command, PlanMotion):
             answer = self.plan(command.call)

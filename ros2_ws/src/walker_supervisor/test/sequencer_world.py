@@ -25,6 +25,7 @@ KIN = WalkerKinematics.from_parameters(PARAMS)
 TRUSS = Truss.from_parameters(PARAMS)
 SUPERVISOR = SupervisorParameters(coarse_to_fine_region=0.03, insertion_alignment=0.001,
                                   settle_velocity=0.02, settle_time=0.1, phase_timeout=5.0,
+                                  motion_end_margin=2.0,
                                   max_insertion_attempts=3, watchdog_timeout=1.0,
                                   mode_mismatch_hold_time=1.0,
                                   coarse_start_tolerance=0.02, relaxation_wait=0.3,

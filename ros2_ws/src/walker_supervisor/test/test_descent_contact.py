@@ -154,3 +154,24 @@ def test_without_overtravel_the_face_is_only_said():
     run.motions.running = True
     said = stream_down_to_the_face(run, -0.0002)
     assert [type(command) for command in said] == [Notice]
+
+
+def test_a_tip_resting_on_the_face_beside_the_hole_is_aligned_onto_the_axis():
+    """3 mm off the axis (past ``descent_region``, within ``descent_axis_tolerance``), the
+    press goes straight down where the tip is, and the line at the mouth onto the axis."""
+    run = run_at_insertion(OVERTRAVEL)
+    transitions.enter_insertion(run, 0.0)
+    mouth = run.targets.point_to
+    beside = 0.003
+    assert SUPERVISOR.descent_region < beside < SUPERVISOR.descent_axis_tolerance
+    rest = mouth + np.array([beside, 0.0, 0.003])  # on the face: the screw's length up
+    run.theta = np.array(KIN.inverse([*rest, 0.0, run.targets.at_to[4]],
+                                     reference=run.targets.at_to))
+    assert run.tries.contact.at_rest(float(rest[2]))
+    _, press = insertion._on_the_face(run, run.tries.contact)
+    np.testing.assert_allclose(press[:2], rest[:2], atol=1e-9)
+    line = insertion._align(run)[0]
+    assert line.purpose == 'fine' and run.stage == Stage.ALIGNING
+    np.testing.assert_allclose(line.goal_point[:2], mouth[:2], atol=1e-12)
+    assert line.goal_point[2] == pytest.approx(rest[2] - insertion.MOUTH_PRESS, abs=1e-9)
+    np.testing.assert_allclose(KIN.forward(line.goal)[:3], line.goal_point, atol=1e-9)

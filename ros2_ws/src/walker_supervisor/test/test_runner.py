@@ -328,6 +328,51 @@ def test_a_stream_accepted_after_it_was_asked_again_is_cancelled():
     assert world.of(GoalEnded)[0].success
 
 
+def test_a_planner_that_dies_mid_motion_holds_the_walker_after_the_motions_end_and_margin():
+    """The controllers finish a whole trajectory without the planner; its end never comes.
+
+    The walker holds once the motion's planned end and ``motion_end_margin`` have passed on
+    the graph's clock, not before, naming the planner, with the base attached and the
+    controllers told to hold; with the planner back, resume completes the step.
+    """
+    world = World()
+    world.execute(world.runner.start_goal('step', 'n1_2', world.now, world.now))
+    world.run_until(lambda: world.phases and world.phases[-1] == Phase.COARSE, 30.0)
+    ticket, trajectory, started = world.stream
+    world.planner_dead = True
+    world.run_until(lambda: world.of(GoalEnded), 60.0)
+    assert world.phases[-1] == Phase.SAFE_HOLD
+    held_at = world.when(GoalEnded)[0]
+    due = started + trajectory.duration + SETTINGS.motion_end_margin
+    assert due < held_at <= due + 2 * WATCH_PERIOD, (held_at, due)
+    reason = world.of(PhaseRecord)[-1].reason
+    assert reason.startswith('fault: the planner did not report the end of the') \
+        and f'within {SETTINGS.motion_end_margin:g} s of its planned end' in reason, reason
+    assert world.of(GoalEnded)[0].status == 'aborted'
+    assert world.grippers['a'] == ('attached', 'n1_1'), 'the base holds the walker'
+    assert world.of(CancelFollow)[-1].ticket == ticket
+    assert [c.mode for c in world.of(SetControlMode)][-1] == 'hold'
+    # the controllers hold: the arm stands where it is, a fraction of a milliradian off the
+    # plan's end as the plant's does (the ideal arm's exact end leaves a way back nothing to move)
+    world.stream, world.positions = None, world.positions + 2e-4
+    world.period()
+    world.planner_dead = False  # started again
+    answer, commands = world.runner.resume(world.now, world.now)
+    assert answer.startswith('resumed'), answer
+    world.execute(commands)
+    world.run_until(lambda: world.phases[-1] == Phase.IDLE, 60.0)
+    assert world.grippers == {'a': ('attached', 'n1_1'), 'b': ('attached', 'n1_2')}
+
+
+def test_motion_ends_reported_late_but_within_the_margin_hold_nothing():
+    """A planner that reports each end late, within ``motion_end_margin``, is no fault."""
+    world = World()
+    world.end_delay = 0.8 * SETTINGS.motion_end_margin
+    ended = world.goal('step', 'n1_2', limit=120.0)
+    assert ended.status == 'succeeded', ended.message
+    assert Phase.SAFE_HOLD not in world.phases
+
+
 # ---------------------------------------------------------------------- goals refused
 @pytest.mark.parametrize('goal, target, words', [
     ('walk_to', 'n99_99', 'not on the truss'),

@@ -27,3 +27,14 @@ def test_a_foreign_or_broken_file_is_ignored(tmp_path):
     for text in ('', 'not: [yaml', 'base_gripper: a\n', '- 1\n- 2\n'):
         path.write_text(text)
         assert read_step_state(path) is None
+
+
+def test_the_truss_map_the_step_was_planned_on_is_kept_with_it(tmp_path):
+    path = tmp_path / 'step.yaml'
+    survey = {'format': 'walker-truss-survey-1', 'frame': 'truss', 'anchor': 'n1_1',
+              'nodes': {'n1_1': {'position': [0.9, 0.9, 0.0],
+                                 'covariance': [[0.0] * 3] * 3}}}
+    write_step_state(path, PlannedStep('a', 'n1_1', 'n2_1', 'n1_2', math.pi / 2), 0.5, survey)
+    assert read_step_state(path).survey == survey
+    write_step_state(path, PlannedStep('a', 'n1_1', 'n2_1', 'n1_2', math.pi / 2), 0.5)
+    assert read_step_state(path).survey is None  # a record without a map: nominal places

@@ -15,7 +15,7 @@ FLAT = load_parameter_file(default_parameter_file())
 
 def test_parameters_refuse_an_alignment_looser_than_the_region():
     with pytest.raises(ParameterError, match='smaller'):
-        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 3, 1.0, 1.0, 0.02, 0.3, 0.1, 0.02,
+        SupervisorParameters(0.01, 0.02, 0.02, 0.1, 5.0, 2.0, 3, 1.0, 1.0, 0.02, 0.3, 0.1, 0.02,
                              0.03, 0.02, 0.0, 0.0015, 0.0002, 0.0, 3.0)
 
 

@@ -16,7 +16,9 @@ it reports. Interfaces (relative to the node's namespace):
   same messages, a latched history), ``control_mode`` (latched), ``step_reports``
   (walker_msgs/StepReport, one per step, latched history) and
   ``/diagnostics``; subscriptions: :mod:`walker_supervisor.inputs`; clients of the planner and
-  the plant: :mod:`walker_supervisor.links`.
+  the plant: :mod:`walker_supervisor.links`;
+* the truss map starts from ``supervisor.truss_survey_file`` where that file exists and is
+  written to it as it changes, at the latest before a goal's result is sent.
 """
 
 from __future__ import annotations
@@ -45,6 +47,8 @@ from walker_supervisor.core.goals import GoalRefusedError
 from walker_supervisor.core.parameters import SupervisorParameters, check_with_gripper
 from walker_supervisor.core.phases import SequencerError
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
+from walker_supervisor.core.survey_file import SurveyKeeper
+from walker_supervisor.core.truss_map import SurveyFileError
 from walker_supervisor.inputs import SupervisorInputs
 from walker_supervisor.links import SimTimeRelease, SupervisorLinks
 from walker_supervisor.map_frames import MapFrames
@@ -81,6 +85,11 @@ class SupervisorNode(Node):
         self._state_file = step_state_path(self.get_namespace())
         self.runner = WalkRunner(self.params, settings, join_answers,
                                  read_step_state(self._state_file))
+        # the map starts from supervisor.truss_survey_file where it exists, and is kept in it
+        try:
+            self._survey_file = SurveyKeeper(self.runner.mapped.map, settings.truss_survey_file)
+        except SurveyFileError as error:  # a refusal to start, in one line (node_main)
+            raise SurveyFileError(f'supervisor.truss_survey_file: {error}') from None
         guard_section_updates(self, SupervisorParameters, 'supervisor.',
                               lambda: self.runner.settings, self._apply_settings,
                               check=lambda s: check_with_gripper(s, self.params.gripper))
@@ -164,11 +173,13 @@ class SupervisorNode(Node):
                 if self._goal_handle is not None:
                     self._goal_handle.publish_feedback(feedback_message(command))
             elif isinstance(command, GoalEnded):
+                self._keep_survey()  # before the result: the walk's client reads it
                 ended, self._goal_ended = self._goal_ended, None
                 if ended is not None and not ended.done():
                     ended.set_result(command)
             elif isinstance(command, RecordStep):
-                write_step_state(self._state_file, command.step, command.heading)
+                write_step_state(self._state_file, command.step, command.heading,
+                                 command.survey)
             elif isinstance(command, ForgetRecordedStep):
                 clear_step_state(self._state_file)
             elif isinstance(command, StopJog):
@@ -316,7 +327,13 @@ class SupervisorNode(Node):
         self._release_clock()
         self.inputs.resubscribe_silent()
 
+    def _keep_survey(self) -> None:
+        failure = self._survey_file.write_if_changed()
+        if failure is not None:
+            self.get_logger().warning(failure)
+
     def _publish_diagnostics(self) -> None:
+        self._keep_survey()
         level, summary, statuses = self.runner.diagnostics(self.clocks.steady(),
                                                            self.links.statuses())
         sequencer = self.runner.sequencer

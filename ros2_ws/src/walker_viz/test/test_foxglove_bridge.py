@@ -121,6 +121,9 @@ def test_a_websocket_client_decodes_tf_and_joint_states(rclpy_context, ros_env):
         assert bridge.wait_for_output('to Foxglove at ws://127.0.0.1:', WAIT), bridge.output
         port = int(bridge.output.split('to Foxglove at ws://127.0.0.1:')[1].split()[0])
         assert viz.wait_for_output('publishing TF', WAIT), viz.output
+        executor.spin_once(timeout_sec=0.01)
+        for topic in ('/tf', '/walker/joint_states'):
+            assert bridge.wait_for_output(f'serving {topic} ', WAIT), bridge.output
         loop = asyncio.new_event_loop()
         deadline = time.monotonic() + WAIT
         task = loop.create_task(_receive(
@@ -130,8 +133,9 @@ def test_a_websocket_client_decodes_tf_and_joint_states(rclpy_context, ros_env):
             loop.run_until_complete(asyncio.sleep(0.01))
         decoded = task.result()
         loop.close()
+        output = bridge.output
     node.destroy_node()
-    assert all(decoded.values()), {t: len(v) for t, v in decoded.items()}
+    assert all(decoded.values()), ({t: len(v) for t, v in decoded.items()}, output)
     joints = decoded['/walker/joint_states'][-1]
     assert list(joints.name)[0] == 'a_yaw_joint' and joints.position[2] == pytest.approx(1.5)
     moving = {t.child_frame_id: t for m in decoded['/tf'] for t in m.transforms}

@@ -192,6 +192,17 @@ def compare_walks(runs: list[dict[str, Any]]) -> list[WalkFigures]:
     return figures
 
 
+def _grip_losses(runs: list[dict[str, Any]]) -> dict[str, int]:
+    """The grip monitor's counts over the runs that carry them (none: nothing to say)."""
+    monitored = [r for r in runs if r.get('grip_losses') is not None]
+    if not monitored:
+        return {}
+    return {'grip losses (gripper states with no gripper attached)':
+            sum(r['grip_losses'] for r in monitored),
+            'runs with a grip loss': sum(1 for r in monitored if r['grip_losses'] > 0),
+            'runs with the grip monitor': len(monitored)}
+
+
 def analyse(results: Results) -> Analysis:
     """Compute what the report shows from a campaign's results."""
     runs, steps = results.run_rows, results.step_rows
@@ -218,7 +229,8 @@ def analyse(results: Results) -> Analysis:
         jams={'jammed screw-ins': sum(s['jams'] for s in jam_steps),
               'steps with a jam': len(jam_steps),
               'runs with a jam': len({s['index'] for s in jam_steps}),
-              'steps': len(steps)},
+              'steps': len(steps),
+              **_grip_losses(runs)},
         sensitivities=sensitivities, points=_points(results), failed_runs=failed,
         walks=compare_walks(runs))
 

@@ -16,6 +16,11 @@ A run that walks its route several times on the same truss (a spec's ``route.wal
 one summary of its walks (:func:`combined_summary`): its step rows carry ``walk`` (1, 2, ...),
 its run row is reached when every walk reached, and adds ``walk<k>.<figure>`` for each walk
 (:data:`WALK_FIGURES`: reached, steps, probes, jams, walk time and its ratio to the bound).
+
+The run row carries the grip monitor's count from the summary's ``grip_monitor``:
+``grip_states`` (the plant's gripper-state messages) and ``grip_losses`` (those with no
+gripper attached: the walker let go of the truss); both ``None`` for a summary without one
+(the graph's, or results written before the count existed).
 """
 
 from __future__ import annotations
@@ -113,6 +118,15 @@ def _summary_figures(steps: list[dict[str, Any]]) -> dict[str, Any]:
         'vibration_max': max(values('residual_vibration'), default=None)}
 
 
+def _grip_monitor(summary: Mapping[str, Any]) -> dict[str, int | None]:
+    """Return the run row's ``grip_states`` and ``grip_losses`` (None without a monitor)."""
+    monitor = summary.get('grip_monitor')
+    if not isinstance(monitor, Mapping):
+        return {'grip_states': None, 'grip_losses': None}
+    return {'grip_states': int(monitor.get('states') or 0),
+            'grip_losses': int(monitor.get('no_gripper_attached') or 0)}
+
+
 def run_rows(campaign: str, plan: RunPlan, summary: Mapping[str, Any],
              execution: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
     """Return the rows of a walk: one per step, then the run's (which marks the run as done).
@@ -142,7 +156,7 @@ def run_rows(campaign: str, plan: RunPlan, summary: Mapping[str, Any],
         outcome = 'failed'
         cause = failed_step['cause'] if failed_step else cause_of(message)
     run = {'kind': RUN, **identity, 'outcome': outcome, 'reached': reached, 'cause': cause,
-           'message': message, **_summary_figures(steps)}
+           'message': message, **_summary_figures(steps), **_grip_monitor(summary)}
     for number, walk in enumerate(summary.get('walks') or [], start=1):
         figures = _summary_figures([s for s in steps if s.get('walk') == number])
         run[f'walk{number}.reached'] = bool(walk.get('reached'))
@@ -155,7 +169,7 @@ def combined_summary(summaries: list[Mapping[str, Any]]) -> dict[str, Any]:
     """Return one summary of walks of the same route on the same truss, in order.
 
     Its ``steps`` are every walk's, each with ``walk`` (1, 2, ...); ``reached`` when every walk
-    reached; ``message`` the first walk's that did not reach (else the last's); ``timed_out``
+    reached; ``grip_monitor`` the walks' counts summed (when every walk has one); ``message`` the first walk's that did not reach (else the last's); ``timed_out``
     when one ran out of time; ``walks`` each walk's ``reached``, ``timed_out`` and ``message``.
     """
     if not summaries:
@@ -163,7 +177,13 @@ def combined_summary(summaries: list[Mapping[str, Any]]) -> dict[str, Any]:
     steps = [{**step, 'walk': number} for number, summary in enumerate(summaries, start=1)
              for step in summary.get('steps') or []]
     short = next((s for s in summaries if not s.get('reached')), summaries[-1])
+    monitors = [s.get('grip_monitor') for s in summaries]
+    monitor = ({'states': sum(int(m.get('states') or 0) for m in monitors),
+                'no_gripper_attached': sum(int(m.get('no_gripper_attached') or 0)
+                                           for m in monitors)}
+               if all(isinstance(m, Mapping) for m in monitors) else None)
     return {'steps': steps, 'reached': all(bool(s.get('reached')) for s in summaries),
+            **({'grip_monitor': monitor} if monitor is not None else {}),
             'message': str(short.get('message') or ''),
             'timed_out': any(bool(s.get('timed_out')) for s in summaries),
             'walks': [{'reached': bool(s.get('reached')), 'timed_out': bool(s.get('timed_out')),

@@ -1,11 +1,11 @@
 """A campaign's truss survey: the survey file every walk of the campaign starts from.
 
 A spec's ``truss_survey`` (or ``campaign.py --truss-survey FILE``) names a survey file, the
-YAML a headless walk writes as ``truss_survey.yaml`` and ``run_all.py --headless
---truss-survey FILE`` reads (format ``walker-truss-survey-1``, docs/walking.md). It is read
-and checked against the nominal truss once, when the spec is read; its content then travels
-with each run to the worker (:class:`~walker_campaign.execution.RunTask`), which writes it
-next to the run's parameter files for the walk's session.
+YAML a walk writes as ``truss_survey.yaml`` and ``run_all.py --truss-survey FILE`` reads
+(format ``walker-truss-survey-1``, docs/walking.md). It is read and checked against the
+nominal truss once, when the spec is read; its content then travels with each run to the
+worker (:class:`~walker_campaign.execution.RunTask`), which writes it next to the run's
+parameter files for the walk's session.
 """
 
 from __future__ import annotations

@@ -160,9 +160,18 @@ class FrictionCompensationSettings:
         'setpoint speed at which the friction feed-forward reaches tanh(1) of it (0: none)',
         'rad/s', 0.0, 10.0, read_only=False,
         source='chosen: 1 % of the cruise speed')
+    breakaway_limit: tuple[float, ...] = parameter(
+        'rise of the compensation of roles J1..J5 over its level while stuck in FINE (0: none)',
+        '', 0.0, 1.0, read_only=False,
+        source='chosen: J1, whose fine gains break no stiction, up to the 1.35 times the '
+               'campaigns draw')
+    breakaway_rate: float = parameter(
+        "rise of a stuck joint's compensation in FINE, in multiples of its level per second",
+        '1/s', 0.0, 100.0, read_only=False,
+        source='chosen: 30 % of the level within a fine line')
 
     def __post_init__(self) -> None:
-        _require_five(self, 'deadband', 'ramp')
+        _require_five(self, 'deadband', 'ramp', 'breakaway_limit')
 
 
 @dataclasses.dataclass(frozen=True)

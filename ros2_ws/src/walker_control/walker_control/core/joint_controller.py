@@ -73,7 +73,7 @@ from walker_control.core.reference_shaping import InputShapedSetpoint, Restartin
 from walker_control.core.stability import LoopDesign
 
 __all__ = ['Measurement', 'ControlOutput', 'RoleChangeError', 'MeasurementError',
-           'MissingAccelerationError', 'JointController']
+           'MissingAccelerationError', 'JointController', 'STUCK_VELOCITY']
 
 
 class RoleChangeError(ValueError):
@@ -141,6 +141,9 @@ class ControlOutput(NamedTuple):
 #: Most control periods the filters catch up in one sample (0.2 s at 500 Hz: longer gaps are
 #: stale inputs, and the controller holds).
 _MAX_CATCH_UP_PERIODS = 100
+#: [rad/s] A joint slower than this under its full friction compensation is stuck in its
+#: friction (the plant's stiction band is 1e-3 rad/s; a stuck joint reads 0).
+STUCK_VELOCITY = 1e-4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,6 +212,8 @@ class JointController:
         self._last_friction = 0.0
         self._transfer = 0.0
         self._friction_transfer = 0.0
+        self._breakaway_extra = 0.0  # the compensation's rise while stuck, in its level
+        self._breakaway_sign = 1.0  # the sign of the error it rose for
         self._saturation = 0.0
         self._last_output: ControlOutput | None = None
         self._relaxing_for: float | None = None  # [s] into the relaxation dither, if on
@@ -317,8 +322,34 @@ class JointController:
         self._feedforward = RigidFeedForward(RigidModel.from_parameters(settings))
         self._sample_time = settings.sample_time  # [s]
         self._feedforward_speed = settings.control.friction_compensation.feedforward_speed
+        self._breakaway_limits = settings.control.friction_compensation.breakaway_limit
+        self._breakaway_rate = settings.control.friction_compensation.breakaway_rate  # [1/s]
         self._bumpless_time_constant = settings.control.bumpless_time_constant  # [s]
         self._decay_of: tuple[float, float] = (math.nan, math.nan)  # (dt, its decay)
+
+    def _breakaway(self, mode: Mode, role: int, compensator: FrictionCompensator,
+                   error: float, velocity: float, dt: float) -> float:
+        """Return the factor on the compensation: above 1 while a joint is stuck in FINE.
+
+        The compensation cancels the identified breakaway friction; a drive whose friction is
+        higher than identified (a cold drive, wear) stays stuck under its full compensation when
+        its gains are too low for the PID to add the rest soon (joint 1 in FINE: a few mrad of
+        error give hundredths of a N*m). While the error is past the compensation's ramp and the
+        joint does not move (slower than :data:`STUCK_VELOCITY`), the factor rises by
+        ``breakaway_rate`` [1/s] up to ``1 + breakaway_limit`` of the role; it is kept while
+        the joint moves and falls back to 1 once the error is within the ramp or changes sign,
+        or in another mode.
+        """
+        limit = self._breakaway_limits[role - 1]
+        full = compensator.deadband + compensator.ramp
+        if mode != Mode.FINE or limit <= 0.0 or abs(error) < full \
+                or (error > 0.0) != (self._breakaway_sign > 0.0):
+            self._breakaway_extra = 0.0
+            self._breakaway_sign = 1.0 if error > 0.0 else -1.0
+            return 1.0
+        if abs(velocity) < STUCK_VELOCITY:
+            self._breakaway_extra = min(limit, self._breakaway_extra + self._breakaway_rate * dt)
+        return 1.0 + self._breakaway_extra
 
     # ------------------------------------------------------------------------------- update
     def update(self, measurement: Measurement, setpoint: Setpoint | None,
@@ -404,7 +435,8 @@ class JointController:
             acceleration -= reference.acceleration
         accel_term = acceleration_feedback_torque(design.acceleration_feedback, inertia,
                                                   acceleration)
-        friction = cached.compensator.torque(error)
+        friction = cached.compensator.torque(error) * self._breakaway(
+            mode, role, cached.compensator, error, measurement.velocity, dt)
 
         if redesign:
             self._bumpless_transfer(role, transition, cached.ki > 0.0,

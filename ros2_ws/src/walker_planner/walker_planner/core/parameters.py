@@ -129,4 +129,4 @@ class PlannerParameters:
     stream: StreamParameters
     send_whole_trajectories: bool = parameter(
         'send each followed trajectory once, whole, on controllers/joint_trajectory (else stream)',
-        source='chosen: false, the setpoint stream the fault tests are built on')
+        source='chosen: true, as joint_trajectory_controller is fed: a late message costs nothing')

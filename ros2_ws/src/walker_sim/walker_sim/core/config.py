@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from walker_core.parameter_file import ParameterFile
 from walker_core.parameter_schema import ParameterError, parameter, section_from_flat
 from walker_core.truss import Truss, UnknownNodeError
+from walker_sim.core.camera_truth import CameraRendering
 from walker_sim.core.imperfections import Imperfections
 
 __all__ = ['CLOCK_MODES', 'StartConfiguration', 'SimParameters', 'load_sim_parameters',
@@ -104,6 +105,7 @@ class SimParameters:
         source='chosen: no injected fault')
     start: StartConfiguration
     imperfections: Imperfections
+    camera: CameraRendering
 
     @classmethod
     def from_flat(cls, flat: Mapping[str, Any]) -> 'SimParameters':

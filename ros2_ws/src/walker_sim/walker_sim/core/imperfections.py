@@ -3,7 +3,8 @@
 The controllers, the planner and the supervisor work on the model (the nominal parameter file);
 a plant given other values is the *truth* differing from it. Most such differences are plain
 parameters of the plant (friction, masses, modes, tolerances); the two here have no nominal
-counterpart in the model and are off by default (``sim.imperfections.*``, all zero):
+counterpart in the model and are off by default (``sim.imperfections.*``, all zero; the wrist
+cameras' mount errors are here too, drawn by :mod:`walker_sim.core.camera_truth`):
 
 * **node placement**: each truss node (its hole, mouth and axis) sits off the place the model
   gives it by an independent normal error of ``node_placement`` [m] standard deviation along x,
@@ -53,8 +54,14 @@ class Imperfections:
         "standard deviation of the white noise on each joint's position reading, every step",
         'rad', 0.0, 0.05,
         source='chosen: none; a campaign disperses it')
-    seed: int = parameter('seed of the node placement errors and of the sensor noise', '',
-                          0, 2**32 - 1, source='chosen; a campaign sets it for each run')
+    camera_mount_position: float = parameter(
+        "standard deviation of each wrist camera's mount error along each optical axis", 'm',
+        0.0, 0.05, source='chosen: none; a campaign disperses it')
+    camera_mount_angle: float = parameter(
+        "standard deviation of each wrist camera's mount error about each optical axis", 'rad',
+        0.0, 0.2, source='chosen: none; a campaign disperses it')
+    seed: int = parameter('seed of the node placement errors, the sensor noise and the cameras',
+                          '', 0, 2**32 - 1, source='chosen; a campaign sets it for each run')
 
     def __post_init__(self) -> None:
         for name in ('joint_offset', 'joint_noise'):

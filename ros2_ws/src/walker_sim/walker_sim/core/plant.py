@@ -32,12 +32,14 @@ import numpy as np
 import pybullet
 
 from walker_core.joint_roles import GRIPPERS, other_gripper
+from walker_core.camera import CameraModel
 from walker_core.kinematics import WalkerKinematics
 from walker_core.parameter_schema import ParameterError
 from walker_core.rotations import quaternion_from_matrix
 from walker_core.truss import Truss
 from walker_core.urdf import flex_joints
 from walker_core.gripper_state import GripperState
+from walker_sim.core.camera_truth import MountErrors
 from walker_sim.core.config import SimParameters, StartConfiguration, check_against_walker
 from walker_sim.core.contact import (
     ContactForce, NodeGeometry, Seat, contact_forces, where_the_screw_is)
@@ -49,6 +51,7 @@ from walker_sim.core.imperfections import JointSensors, NodePlacement
 from walker_sim.core.motor import DriveCommand, DriveModel
 from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
 from walker_sim.core.snapshot import PlantSnapshot
+from walker_sim.core.wrist_camera import CameraFrame, WristCameras
 
 __all__ = ['PlantError', 'Pose', 'GripperReport', 'PlantState', 'WalkerPlant',
            'SOLVER_ITERATIONS', 'SOLVER_RESIDUAL']
@@ -237,6 +240,7 @@ class WalkerPlant:
         self.node_geometry = NodeGeometry.from_parameters(params)
         self._mouths = {name: tuple(float(v) for v in self.node_position(name))
                         for name in self.truss.node_names}
+        self.cameras = self._wrist_cameras()
         self._contacts: list[ContactForce] = []
         self._contact_enabled = True
         self._contact_skip = 0  # physics steps the free gripper cannot reach a face in
@@ -267,6 +271,17 @@ class WalkerPlant:
         self._motor_levels: tuple[float, ...] | None = None
         self._steps_of: dict[float, int] = {}  # step duration [s] -> physics steps
 
+    def _wrist_cameras(self) -> WristCameras | None:
+        """Return the grippers' cameras (``gripper.camera.*``), or None when there are none."""
+        camera, imperfect = self.params.gripper.camera, self.sim.imperfections
+        if not camera.enabled:
+            return None
+        return WristCameras(
+            CameraModel.from_parameters(camera), self.sim.camera,
+            MountErrors(imperfect.camera_mount_position, imperfect.camera_mount_angle,
+                        imperfect.seed),
+            self.truss, self._mouths, self.node_geometry, imperfect.seed)
+
     @property
     def client(self) -> int:
         """Pybullet client of the body being stepped (the one rooted at the base gripper)."""
@@ -286,6 +301,8 @@ class WalkerPlant:
         """Disconnect the physics clients (the plant cannot be used afterwards)."""
         for rooted in getattr(self, '_bodies', {}).values():
             rooted.disconnect()
+        if getattr(self, 'cameras', None) is not None:
+            self.cameras.close()
 
     def __enter__(self) -> 'WalkerPlant':
         return self
@@ -358,6 +375,8 @@ class WalkerPlant:
         self._read_joints()
         self.sensors.restart()
         self.sensors.sample()
+        if self.cameras is not None:
+            self.cameras.restart()
         return self.state()
 
     # ------------------------------------------------------------------ snapshot
@@ -628,6 +647,23 @@ class WalkerPlant:
                                                physicsClientId=self.client)
             position, orientation = link_state[4], link_state[5]
         return Pose(np.array(position), np.array(orientation))
+
+    def camera_frame(self, gripper: str) -> CameraFrame:
+        """Render a gripper's wrist camera now, from the true state.
+
+        See :mod:`walker_sim.core.wrist_camera`.
+
+        Raises
+        ------
+        PlantError
+            If the grippers carry no camera (``gripper.camera.enabled: false``) or the gripper
+            is not ``'a'`` or ``'b'``.
+        """
+        if self.cameras is None:
+            raise PlantError('the grippers carry no camera (gripper.camera.enabled is false)')
+        if gripper not in GRIPPERS:
+            raise PlantError(f"gripper must be 'a' or 'b', got {gripper!r}")
+        return self.cameras.frame(gripper, self._gripper_pose(gripper).matrix(), self.time)
 
     # ------------------------------------------------------------------ grippers
     def screw_in(self, gripper: str) -> ScrewOutcome:

@@ -1,11 +1,17 @@
 """Taking up a step an earlier supervisor left unfinished (a restart), free of ROS.
 
-While a step runs the supervisor keeps it on record (:class:`RecordedStep`: its nodes, base
-and the heading of its base frame; the ROS layer keeps it in a file,
-:mod:`walker_supervisor.step_state`). A supervisor that starts with a gripper free reads it
-back and takes the step up, in safe hold for an operator's resume, only if the grippers are
+While a step runs the supervisor keeps it on record (:class:`RecordedStep`: its nodes, base,
+the heading of its base frame and the truss map it was planned on; the ROS layer keeps it in a
+file, :mod:`walker_supervisor.step_state`). A supervisor that starts with a gripper free reads
+it back and takes the step up, in safe hold for an operator's resume, only if the grippers are
 as the record says: the base attached in the base node, the other not attached. A record
 that does not describe the walker is forgotten, so that it cannot be taken up later by mistake.
+
+The step is taken up in the frame it was planned in: the base node and the target where the
+map on record puts them, with the recorded heading. The heading was measured through the map's
+estimates of the stance's nodes, so it fits those and not the nodes' nominal places; on a
+truss as built, a target taken from the parameter file instead would sit off the hole by the
+nodes' placement errors and the heading's error through them.
 """
 
 from __future__ import annotations
@@ -18,9 +24,9 @@ import numpy as np
 from walker_core.gripper_state import GripperState
 from walker_core.joint_roles import other_gripper, physical_to_roles
 from walker_core.kinematics import KinematicsError, WalkerKinematics
-from walker_core.truss import Truss
 from walker_supervisor.core.route import PlannedStep, step_sweep
 from walker_supervisor.core.step_geometry import BaseFrame, StepTargets, recovery_targets
+from walker_supervisor.core.truss_map import TrussMap
 
 __all__ = ['RecordedStep', 'AdoptionRefusedError', 'adopt_step']
 
@@ -34,6 +40,9 @@ class RecordedStep:
     base_gripper, base_node, from_node, to_node : str
     heading : float
         [rad] of the base frame in the truss frame.
+    survey : dict or None
+        The truss map the step was planned on (a survey file's content), or None (a record
+        written without one: the nodes' nominal places are taken).
     """
 
     base_gripper: str
@@ -41,6 +50,7 @@ class RecordedStep:
     from_node: str
     to_node: str
     heading: float
+    survey: dict | None = None
 
 
 class AdoptionRefusedError(ValueError):
@@ -48,7 +58,7 @@ class AdoptionRefusedError(ValueError):
 
 
 def adopt_step(record: RecordedStep, grippers: Mapping[str, str], nodes: Mapping[str, str],
-               positions: np.ndarray, truss: Truss, kinematics: WalkerKinematics,
+               positions: np.ndarray, survey: TrussMap, kinematics: WalkerKinematics,
                approach_height: float) -> tuple[PlannedStep, StepTargets] | None:
     """Return the recorded step and its targets from where the arm is, or None.
 
@@ -59,7 +69,9 @@ def adopt_step(record: RecordedStep, grippers: Mapping[str, str], nodes: Mapping
         Each gripper's reported state and node now.
     positions : ndarray, shape (5,)
         Joint angles now, physical order [rad].
-    truss, kinematics
+    survey : TrussMap
+        The truss map to take the nodes' places from (the record's, loaded by the caller).
+    kinematics
     approach_height : float
         [m] above a hole where insertion starts (``gripper.approach_height``).
 
@@ -79,11 +91,11 @@ def adopt_step(record: RecordedStep, grippers: Mapping[str, str], nodes: Mapping
             or nodes.get(base) != record.base_node:
         return None
     try:
-        sweep = step_sweep(truss, record.base_node, record.from_node, record.to_node)
+        sweep = step_sweep(survey.truss, record.base_node, record.from_node, record.to_node)
         step = PlannedStep(base, record.base_node, record.from_node, record.to_node, sweep)
-        frame = BaseFrame(truss.position(record.base_node), record.heading)
-        targets = recovery_targets(kinematics, frame, step, truss.position(step.from_node),
-                                   truss.position(step.to_node),
+        frame = BaseFrame(survey.position(record.base_node), record.heading)
+        targets = recovery_targets(kinematics, frame, step, survey.position(step.from_node),
+                                   survey.position(step.to_node),
                                    physical_to_roles(positions, base), approach_height)
     except (ValueError, KinematicsError) as error:
         raise AdoptionRefusedError(str(error)) from None

@@ -222,10 +222,14 @@ class RecordStep:
     step : PlannedStep
     heading : float
         Heading [rad] of the base frame in the truss frame.
+    survey : dict or None
+        The truss map the step was planned on (:meth:`~walker_supervisor.core.truss_map.
+        TrussMap.to_dict`): a supervisor started again aims where this one did.
     """
 
     step: PlannedStep
     heading: float
+    survey: dict | None = None
 
 
 @dataclasses.dataclass(frozen=True)

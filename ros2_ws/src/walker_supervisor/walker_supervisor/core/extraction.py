@@ -58,6 +58,7 @@ def start(run: StepRun, step: PlannedStep, targets: StepTargets, now: float,
     run.tries.insertions = run.tries.fine_lines = 0
     run.tries.insertion_error = math.nan
     run.search, run.estimate, run.height_shift = search, None, 0.0
+    run.search_over = ''
     run.outcome = None
     run.reason = ''
     run.remeasure = remeasure if now < run.relaxed_at else None

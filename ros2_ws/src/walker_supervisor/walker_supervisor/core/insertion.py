@@ -19,8 +19,10 @@ gripper screwed in. A jammed screw-in is retried up to ``max_insertion_attempts`
 lift goes straight up from where the gripper jammed), then the step is aborted to SAFE_HOLD;
 with a search (:mod:`~walker_supervisor.core.hole_search`), each jam moves the targets to the
 next probe instead (descending at the height a jam on the node's face felt), and the step holds
-once the last probe has jammed. A step ends when the gripper reports attached, with the
-controllers commanded to HOLD under the new base (which starts their relaxation).
+once the last probe has jammed, its reason naming where the joints put the tip at the last jam
+from the map's estimate (the search's bound: a resume does not try the same probes again). A
+step ends when the gripper reports attached, with the controllers commanded to HOLD under the
+new base (which starts their relaxation).
 """
 
 from __future__ import annotations
@@ -79,21 +81,23 @@ def _press_lightly(run: StepRun) -> list:
     return [*stop, run.trajectory('insertion', run.theta, joints, run.tip(), point)]
 
 
-def _on_the_face(run: StepRun, contact: DescentContact) -> tuple[np.ndarray, np.ndarray]:
+def _on_the_face(run: StepRun, contact: DescentContact,
+                 press: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Return the joints [rad] and point [m] on the hole's axis :data:`MOUTH_PRESS` below contact.
 
-    The press is a line along the hole's axis, which the planner accepts only from within the
-    insertion tolerance of it: a tip that met the face farther than ``descent_region`` (at most
-    that tolerance) from the axis, as a descent swinging 2-3 mm off it does, is pressed
-    straight down where it is, and the lines at the mouth bring it over the hole. The point at
-    the nominal mouth (and its joints) if the face was not felt or that point is out of reach.
+    The press (``press``) is a line along the hole's axis, which the planner accepts only from
+    within the insertion tolerance of it: a tip that met the face farther than
+    ``descent_region`` (at most that tolerance) from the axis, as a descent swinging 2-3 mm off
+    it does, is pressed straight down where it is, and the lines at the mouth (not a press:
+    a fine line, which goes anywhere) bring it over the hole. The point at the nominal mouth
+    (and its joints) if the face was not felt or that point is out of reach.
     """
     t = run.targets
     if not contact.felt:
         return t.at_to, t.point_to
     point = np.array([t.point_to[0], t.point_to[1], contact.height - MOUTH_PRESS])
     tip = run.tip()
-    if np.linalg.norm(tip[:2] - point[:2]) > run.parameters.descent_region:
+    if press and np.linalg.norm(tip[:2] - point[:2]) > run.parameters.descent_region:
         point[:2] = tip[:2]
     try:
         joints = run.kinematics.inverse([*point, 0.0, t.at_to[4]], reference=t.at_to)
@@ -175,7 +179,8 @@ def _align(run: StepRun) -> list:
     """Run a fine line at the mouth, from where the tip settled onto the hole's axis.
 
     At the height where the descent felt the face, :data:`MOUTH_PRESS` lower (at the nominal
-    mouth if it felt none).
+    mouth if it felt none), on the axis however far the tip rests from it (within
+    ``descent_axis_tolerance``): a line that stayed where the tip is would align nothing.
     """
     run.tries.mouth_lines += 1
     run.stage = Stage.ALIGNING
@@ -183,7 +188,7 @@ def _align(run: StepRun) -> list:
     if contact is None:
         joints, point = run.targets.at_to, run.targets.point_to
     else:
-        joints, point = _on_the_face(run, contact)
+        joints, point = _on_the_face(run, contact, press=False)
     return [run.trajectory('fine', run.theta, joints, run.tip(), point)]
 
 
@@ -243,10 +248,14 @@ def jammed(run: StepRun, message: str, now: float) -> list:
         run.felt_faces.append(run.theta.copy())  # resting on the face: the node's height
     notices = []
     if run.search is not None:
+        offset = _offset_from_estimate(run)
         probe = _next_probe(run)
         if isinstance(probe, str):
+            run.search_over = (f'the hole of {run.step.to_node} was not found: {probe}; the '
+                               f'last jam with the tip {offset} from the estimate (measured '
+                               f'by the joints)')
             return run.abort(f'insertion jammed {run.tries.insertions} times: {message}; '
-                             f'{probe}', now)
+                             f'{run.search_over}', now)
         notices.append(probe)
     elif run.tries.insertions >= run.parameters.max_insertion_attempts:
         return run.abort(f'insertion jammed {run.tries.insertions} times: {message}', now)
@@ -256,6 +265,17 @@ def jammed(run: StepRun, message: str, now: float) -> list:
         return run.abort(f'insertion jammed: {message}; and no straight lift out of the hole '
                          f'from here', now)
     return notices + [run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
+
+
+def _offset_from_estimate(run: StepRun) -> str:
+    """Where the tip jammed, measured by the joints, from the map's estimate of the hole.
+
+    ``(+x, +y) mm`` in the truss frame (the frame of the search's probes).
+    """
+    estimate = run.estimate if run.estimate is not None else run.targets
+    c, s = math.cos(estimate.frame.heading), math.sin(estimate.frame.heading)
+    dx, dy = (run.tip() - estimate.point_to)[:2]
+    return f'({(c * dx - s * dy) * 1e3:+.1f}, {(s * dx + c * dy) * 1e3:+.1f}) mm'
 
 
 def _next_probe(run: StepRun) -> Notice | str:

@@ -18,12 +18,22 @@ the steady clock is sent again over a new client (:mod:`walker_supervisor.core.u
 unanswered ``give_up_after`` after its first sending, its motion fails. Answers to requests
 of a motion since replaced or cancelled are stale: ignored (a stream accepted that late is
 cancelled).
+
+A motion whose end the planner has not reported ``end_margin`` [s] after its planned end fails
+as *unreported* (:attr:`MotionEnded.unreported`): the step holds at once. The margin must pass
+on both clocks: on the graph's from the planned end, and on the steady clock from the first
+check that found the graph's clock past that end (a simulation running faster than the wall
+clock does not outrun a planner that is only slow, and a clock held still faults nothing).
+The controllers hold a whole trajectory and execute it to its end without the planner, so a
+planner that died (or lost its goal) mid-motion is noticed by this deadline, not by setpoints
+going stale; the cancel sent with it has a living planner send the controllers a hold.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 from collections.abc import Callable
 
 from walker_core.kinematics import WalkerKinematics
@@ -51,10 +61,15 @@ class MotionStarted:
 
 @dataclasses.dataclass(frozen=True)
 class MotionEnded:
-    """The motion ended (``success``), or was refused, failed or could not be asked for."""
+    """The motion ended (``success``), or was refused, failed or could not be asked for.
+
+    ``unreported``: the planner never reported its end (the message says how long it was
+    waited for); the step holds rather than plan a way on with that planner.
+    """
 
     success: bool
     message: str
+    unreported: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,6 +100,8 @@ class _Motion:
     duration: float = 0.0
     first_duration: float | None = None
     streaming: bool = False
+    end: float = math.inf  # [s] graph clock: the planned end, once streaming
+    past_end_since: float | None = None  # [s] steady clock: the graph's clock first seen past it
     # the request waited for: its sendings (None: not sent yet), and the sendings a request
     # sent again goes on counting from
     sendings: UnansweredRequest | None = None
@@ -113,12 +130,21 @@ class MotionRequests:
         [s] steady clock: a request unanswered this long is sent again over a new client.
     give_up_after : float
         [s] steady clock: unanswered this long after its first sending, its motion fails.
+    end_margin : float
+        [s] graph clock: a motion whose end is not reported this long after its planned end
+        fails as unreported (``supervisor.motion_end_margin``; > 0).
+
+    Raises
+    ------
+    ValueError
+        Waits not positive and ordered, or a margin not positive (nothing is made).
     """
 
     def __init__(self, kinematics: WalkerKinematics,
                  join: Callable[[PlanAnswer, PlanAnswer, float], object],
-                 answer_wait: float, give_up_after: float) -> None:
+                 answer_wait: float, give_up_after: float, end_margin: float) -> None:
         UnansweredRequest(0.0, 0.0, answer_wait, give_up_after)  # refuses bad waits
+        self.end_margin = end_margin
         self._kinematics = kinematics
         self._answer_wait = float(answer_wait)
         self._give_up_after = float(give_up_after)
@@ -126,6 +152,17 @@ class MotionRequests:
         self.prepared = PreparedMotions(join)
         self._motion: _Motion | None = None
         self._stream: int | None = None  # the ticket of the stream accepted last
+
+    @property
+    def end_margin(self) -> float:
+        """[s] graph clock: how long after its planned end a motion's end is waited for."""
+        return self._end_margin
+
+    @end_margin.setter
+    def end_margin(self, value: float) -> None:
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f'end_margin must be a positive number of seconds, got {value!r}')
+        self._end_margin = float(value)
 
     @property
     def awaiting_answer(self) -> bool:
@@ -199,8 +236,11 @@ class MotionRequests:
         motion.answers[ticket] = answer
         return out + self._when_planned(motion)
 
-    def accepted(self, ticket: int, accepted: bool) -> list:
-        """Take the planner's acceptance (or refusal) to stream ``ticket``."""
+    def accepted(self, ticket: int, accepted: bool, now: float) -> list:
+        """Take the planner's acceptance (or refusal) to stream ``ticket`` at ``now`` [s].
+
+        ``now`` is on the graph's clock: the motion's end is due its duration after it.
+        """
         motion = self._motion
         if motion is None or motion.streaming or ticket != motion.following:
             # a late answer to a request sent again, or a stream of a motion since dropped
@@ -209,6 +249,7 @@ class MotionRequests:
             self._motion = None
             return [MotionEnded(False, 'the planner refused to stream the trajectory')]
         motion.streaming = True
+        motion.end = now + motion.duration
         self._stream = ticket
         request = motion.request
         first = '' if motion.first_duration is None else (
@@ -225,11 +266,18 @@ class MotionRequests:
         self._motion, self._stream = None, None
         return [MotionEnded(success, message)]
 
-    def check(self, steady: float) -> list:
-        """Send a request unanswered too long again, or give its motion up (steady [s])."""
+    def check(self, steady: float, now: float) -> list:
+        """Send a request unanswered too long again, or give its motion up.
+
+        ``steady`` [s] times the requests' answers; ``now`` [s], on the graph's clock, the end
+        of a motion under way (:attr:`end_margin` after its planned end on both clocks, it
+        fails as unreported, and its goal is cancelled).
+        """
         motion = self._motion
-        if motion is None or motion.streaming:
+        if motion is None:
             return []
+        if motion.streaming:
+            return self._end_overdue(motion, steady, now)
         if motion.sendings is None:
             if motion.following is None and not motion.new_plans:
                 # its plans were all asked ahead: waited for from now
@@ -263,6 +311,23 @@ class MotionRequests:
         return out
 
     # ------------------------------------------------------------------ internals
+    def _end_overdue(self, motion: _Motion, steady: float, now: float) -> list:
+        """Fail a motion whose end is overdue (``steady``, ``now`` [s]); cancel its goal."""
+        if not now > motion.end:
+            return []
+        if motion.past_end_since is None:
+            motion.past_end_since = steady
+        margin = self._end_margin
+        if not (now > motion.end + margin and steady > motion.past_end_since + margin):
+            return []
+        ticket = motion.following
+        self._motion, self._stream = None, None
+        reason = (f'the planner did not report the end of the {motion.request.purpose} motion '
+                  f'({motion.duration:.2f} s planned) within {self._end_margin:g} s of its '
+                  f'planned end: the planner may have died or lost its goal')
+        return [Notice(reason, 'error'), CancelFollow(ticket),
+                MotionEnded(False, reason, unreported=True)]
+
     def _ahead(self, ticket: int, answer: PlanAnswer | None) -> list:
         answered = self.prepared.answered(ticket, answer)
         if answered is None:

@@ -50,6 +50,10 @@ class SupervisorParameters:
         'time a phase may overrun its plan before the step is aborted',
         's', 0.1, 600.0, read_only=False,
         source="chosen: joint 1's fine loop needs seconds to settle after an overshoot")
+    motion_end_margin: float = parameter(
+        "time past a motion's planned end (graph and steady clock) to wait for its end, then hold",
+        's', 0.1, 60.0, read_only=False,
+        source='chosen: controllers finish a whole trajectory without the planner; above its lag')
     max_insertion_attempts: int = parameter(
         'screw-in attempts before a jammed insertion aborts the step', '', 1, 10, read_only=False,
         source='chosen: a bounded retry')
@@ -114,6 +118,9 @@ class SupervisorParameters:
         "standard deviation of a node's height felt by a gripper resting on its face",
         'm', 0.0, 0.01, read_only=False,
         source='chosen: the light press on the face, 0.3 mm below contact').metadata)
+    truss_survey_file: str = dataclasses.field(default='', metadata=parameter(
+        "truss survey file the map starts from where it exists and is kept in ('': none)",
+        source="chosen: none; run_all.py gives the graph's <out>/truss_survey.yaml").metadata)
 
     def __post_init__(self) -> None:
         check_section(self)

@@ -3,7 +3,9 @@
 :func:`resume` leaves SAFE_HOLD: with both grippers attached it returns to IDLE; with the moving
 gripper free it completes the interrupted step from where the arm is (straight up out of the
 hole it was leaving if it is still in it, then to the point above the target, settling,
-insertion). The way back above the target is a straight tip line where the arm can follow one,
+insertion). A step whose search for the hole has ended without it is not resumed: the same
+probes would jam again, so the hold stays for an operator to jog the gripper over the hole. The
+way back above the target is a straight tip line where the arm can follow one,
 else a joint-space line that keeps the tip above the truss
 (:mod:`walker_supervisor.core.way_back`), also when the planner refuses the tip line; with
 neither, resume is refused and nothing changes. A fine line (:mod:`.approach`) goes the same
@@ -50,6 +52,9 @@ def resume(run: StepRun, now: float, theta_roles: np.ndarray, grippers: dict[str
     if run.step is None or run.targets is None:
         raise SequencerError('the free gripper has no step to complete: jog it over a node and '
                              'screw it in')
+    if run.search_over:
+        raise SequencerError(f'{run.search_over}: resume does not try the same places again; '
+                             f'jog the gripper over the hole and screw it in')
     tip, above_from = run.tip(), run.targets.point_above_from
     in_hole = (tip[2] < 0.5 * above_from[2] and np.linalg.norm(tip[:2] - above_from[:2])
                < run.parameters.coarse_to_fine_region)

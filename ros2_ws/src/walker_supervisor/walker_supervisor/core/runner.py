@@ -82,6 +82,7 @@ from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.sequencer import StepSequencer
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.teleop import Situation, busy_reason
+from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
 from walker_supervisor.core.walk import Walk
 
 __all__ = ['WalkRunner', 'Measurements', 'ControllerReport', 'PlanAnswer', 'TICK_PERIOD',
@@ -155,7 +156,8 @@ class WalkRunner:
                                     trouble_grace=timeout)
         self.controllers = ControllerWatch()
         self.figures = StepFigures(settings.mouth_settle_time, params.gripper.screw_time)
-        self._motions = MotionRequests(self.kinematics, join, answer_wait, give_up_after)
+        self._motions = MotionRequests(self.kinematics, join, answer_wait, give_up_after,
+                                       settings.motion_end_margin)
         self._announcer = PhaseAnnouncer()
         self._walk: Walk | None = None
         self._goal = ''  # the goal under way: 'walk_to' or 'step' ('' when none)
@@ -203,6 +205,7 @@ class WalkRunner:
         self.figures.set_window(settings.mouth_settle_time)
         self.health.set_timeouts(settings.watchdog_timeout,
                                  trouble_grace=settings.watchdog_timeout)
+        self._motions.end_margin = settings.motion_end_margin
 
     # ------------------------------------------------------------------ measurements
     def joint_states(self, positions, velocities, steady: float) -> None:
@@ -289,7 +292,7 @@ class WalkRunner:
 
     def follow_accepted(self, ticket: int, accepted: bool, now: float) -> list:
         """Take the acceptance (or refusal) of :class:`FollowMotion` ``ticket``."""
-        self._apply(self._motions.accepted(ticket, accepted), now)
+        self._apply(self._motions.accepted(ticket, accepted, now), now)
         return self._flush()
 
     def follow_done(self, ticket: int, success: bool, message: str, now: float) -> list:
@@ -450,7 +453,7 @@ class WalkRunner:
         if self._adoption_due and measured.positions is not None and len(measured.grippers) == 2:
             self._adoption_due = False
             self._adopt()
-        self._apply(self._motions.check(steady), now)
+        self._apply(self._motions.check(steady, now), now)
         if measured.positions is not None:
             base = self.sequencer.base_gripper
             self._execute(self.sequencer.tick(now, measured.roles(base),
@@ -477,7 +480,7 @@ class WalkRunner:
         """
         stalled = self._own_stall(steady)
         self._steady = steady
-        self._apply(self._motions.check(steady), now)
+        self._apply(self._motions.check(steady, now), now)
         if stalled:
             # What the sources sent while this process stood still has not been taken yet:
             # their silence is its own. Each has a whole timeout to be heard again.
@@ -577,7 +580,7 @@ class WalkRunner:
                                              {}, 0.0, math.nan, 0))
             self._emit(Notice(walk.outcomes[-1].message, 'error'))
             return
-        self._emit(RecordStep(step, targets.frame.heading))
+        self._emit(RecordStep(step, targets.frame.heading, self.mapped.map.to_dict()))
         self.figures.start()
         self._emit(Notice(f'step {walk.step_index + 1}/{len(walk.route)}: gripper '
                           f'{step.moving_gripper} {step.from_node} -> {step.to_node} '
@@ -621,7 +624,7 @@ class WalkRunner:
         """Measure the targets from the relaxed stance (the sequencer's remeasure); record."""
         targets = self._measure_targets(step, theta_roles)
         change = math.remainder(targets.frame.heading - first.frame.heading, 2 * math.pi)
-        self._emit(RecordStep(step, targets.frame.heading),
+        self._emit(RecordStep(step, targets.frame.heading, self.mapped.map.to_dict()),
                    Notice(f'stance measured again after the relaxation: the base heading moved '
                           f'by {change * 1e3:+.3f} mrad', 'info'))
         return targets
@@ -661,9 +664,21 @@ class WalkRunner:
         record, self._recorded = self._recorded, None
         if record is None:
             return
+        survey = self.mapped.map
+        if record.survey is not None:
+            # the map the step was planned on (its frame, its target, its search), kept only
+            # if the record describes the walker
+            survey = TrussMap(self.truss, survey.prior_std, survey.joint_std)
+            try:
+                survey.load(record.survey)
+            except SurveyFileError as error:
+                survey = self.mapped.map
+                self._emit(Notice(f'the truss map on record is not usable ({error}): the '
+                                  f'step is taken up on the nominal places of its nodes',
+                                  'warning'))
         try:
             adopted = adopt_step(record, self.measured.grippers, self.measured.nodes,
-                                 self.measured.positions, self.truss, self.kinematics,
+                                 self.measured.positions, survey, self.kinematics,
                                  self.params.gripper.approach_height)
         except AdoptionRefusedError as error:
             self._emit(Notice(f'cannot take up the interrupted step: {error}', 'error'))
@@ -676,8 +691,11 @@ class WalkRunner:
                               f'forgotten', 'info'), ForgetRecordedStep())
             return
         step, targets = adopted
+        if survey is not self.mapped.map:
+            self.mapped.map.load(record.survey)
         self.sequencer.adopt(step, targets, f'restarted in the middle of the step '
-                             f'{step.from_node} -> {step.to_node}: resume to complete it')
+                             f'{step.from_node} -> {step.to_node}: resume to complete it',
+                             self.mapped.search(step))
         # the adopted step's base is measured attached in its node: a latched mode heard after
         # (this supervisor's own hold, commanded before the record was read) must not change it
         self._base_known = True
@@ -719,6 +737,11 @@ class WalkRunner:
         for item in items:
             if isinstance(item, MotionStarted):
                 self.sequencer.trajectory_started(item.duration, now, item.first_duration)
+            elif isinstance(item, MotionEnded) and item.unreported:
+                # the planner never said the motion ended: hold, as for setpoints gone stale,
+                # rather than plan on with it (the controllers hold their trajectory's end)
+                self._execute(self.sequencer.hold(f'fault: {item.message}', now), now)
+                self._announce(now)
             elif isinstance(item, MotionEnded):
                 self._execute(self.sequencer.trajectory_done(item.success, item.message, now),
                               now)

@@ -237,16 +237,20 @@ class StepSequencer:
         """
         return extraction.start(self._run, step, targets, now, grippers, remeasure, search)
 
-    def adopt(self, step: PlannedStep, targets: StepTargets, reason: str) -> None:
+    def adopt(self, step: PlannedStep, targets: StepTargets, reason: str,
+              search: HoleSearch | None = None) -> None:
         """Take over an interrupted step, in SAFE_HOLD, so that :meth:`resume` completes it.
 
-        Used by a supervisor restarted in the middle of a step; raises :class:`SequencerError`
-        if a step is under way here.
+        Used by a supervisor restarted in the middle of a step, with the search a jam of its
+        screw-in starts (as :meth:`start`'s); raises :class:`SequencerError` if a step is under
+        way here.
         """
         run = self._run
         if run.busy:
             raise SequencerError(f'a step is already under way (phase {run.phase.name})')
         run.step, run.targets = step, targets
+        run.search, run.estimate, run.height_shift = search, None, 0.0
+        run.search_over = ''
         run.base_gripper = step.base_gripper
         run.phase, run.stage, run.reason = Phase.SAFE_HOLD, Stage.NONE, reason
 

@@ -142,6 +142,9 @@ class StepRun:
         # targets at the map's estimate, which the probes are offsets from
         self.search: HoleSearch | None = None
         self.estimate: StepTargets | None = None
+        # why the search ended without the hole ('' while it has not): resume does not try
+        # the same places again
+        self.search_over = ''
         # joints [rad] (role order) of each jam with the gripper resting on the node's face,
         # until the map takes them (StepSequencer.take_felt_faces)
         self.felt_faces: list[np.ndarray] = []
