@@ -126,8 +126,11 @@ def test_a_search_on_a_jam_shows_its_probes_and_where_the_hole_was_found(small_s
 
 
 def test_the_run_row_carries_the_grip_monitor_and_an_old_summary_reads_without_it(small_spec):
-    """``grip_monitor`` of the summary becomes the run row's ``grip_states`` and
-    ``grip_losses``; a summary without one (the graph's, an older file) gives None, not 0."""
+    """The summary's ``grip_monitor`` becomes the run row's grip counts.
+
+    ``grip_states`` and ``grip_losses``; a summary without one (the graph's, an older file)
+    gives None, not 0.
+    """
     plan = plan_run(small_spec, 0)
     step = {'index': 0, 'success': False, 'attempts': 3, 'duration': 9.0, 'bound': 2.5,
             'message': 'insertion jammed 3 times'}

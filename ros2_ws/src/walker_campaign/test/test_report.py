@@ -45,8 +45,10 @@ def test_the_analysis_counts_what_the_rows_say(results_path):
 
 def test_the_report_counts_the_grip_losses_of_the_runs_that_monitored_them(results_path,
                                                                            tmp_path):
-    """Runs whose rows carry the grip monitor are summed in the jams table; older rows
-    without it (``grip_losses`` None) leave the table as it was."""
+    """Runs whose rows carry the grip monitor are summed in the jams table.
+
+    Older rows without it (``grip_losses`` None) leave the table as it was.
+    """
     rows = [json.loads(line) for line in results_path.read_text().splitlines()]
     runs = [r for r in rows if r.get('kind') == 'run']
     assert 'runs with the grip monitor' not in analyse(read_results(results_path)).jams

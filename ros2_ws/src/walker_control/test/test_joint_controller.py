@@ -791,8 +791,11 @@ def test_joint_1_stuck_in_fine_under_a_higher_friction_breaks_away_and_arrives()
 
 
 def test_the_compensation_rises_only_while_stuck_in_fine_and_never_past_its_limit():
-    """In COARSE it never rises; stuck beyond the limit, it stops at ``1 + breakaway_limit`` of
-    its level; once the joint has arrived (the error within the ramp) it is back at its level."""
+    """The compensation rises only while stuck in FINE, and never past its limit.
+
+    In COARSE it never rises; stuck beyond the limit, it stops at ``1 + breakaway_limit`` of
+    its level; once the joint has arrived (the error within the ramp) it is back at its level.
+    """
     level = SETTINGS.friction_level(1)
     _, outputs = _stuck_joint_1(SETTINGS, 1.3, seconds=4.0)
     assert abs(outputs[-1].friction_compensation) <= level + 1e-9

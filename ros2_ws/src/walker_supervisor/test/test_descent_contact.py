@@ -157,8 +157,11 @@ def test_without_overtravel_the_face_is_only_said():
 
 
 def test_a_tip_resting_on_the_face_beside_the_hole_is_aligned_onto_the_axis():
-    """3 mm off the axis (past ``descent_region``, within ``descent_axis_tolerance``), the
-    press goes straight down where the tip is, and the line at the mouth onto the axis."""
+    """A tip resting 3 mm off the axis is pressed where it is, then lined up onto the axis.
+
+    3 mm off the axis (past ``descent_region``, within ``descent_axis_tolerance``), the
+    press goes straight down where the tip is, and the line at the mouth onto the axis.
+    """
     run = run_at_insertion(OVERTRAVEL)
     transitions.enter_insertion(run, 0.0)
     mouth = run.targets.point_to

@@ -193,7 +193,7 @@ def compare_walks(runs: list[dict[str, Any]]) -> list[WalkFigures]:
 
 
 def _grip_losses(runs: list[dict[str, Any]]) -> dict[str, int]:
-    """The grip monitor's counts over the runs that carry them (none: nothing to say)."""
+    """Return the grip monitor's counts over the runs that carry them (none: nothing to say)."""
     monitored = [r for r in runs if r.get('grip_losses') is not None]
     if not monitored:
         return {}

@@ -169,8 +169,9 @@ def combined_summary(summaries: list[Mapping[str, Any]]) -> dict[str, Any]:
     """Return one summary of walks of the same route on the same truss, in order.
 
     Its ``steps`` are every walk's, each with ``walk`` (1, 2, ...); ``reached`` when every walk
-    reached; ``grip_monitor`` the walks' counts summed (when every walk has one); ``message`` the first walk's that did not reach (else the last's); ``timed_out``
-    when one ran out of time; ``walks`` each walk's ``reached``, ``timed_out`` and ``message``.
+    reached; ``grip_monitor`` the walks' counts summed (when every walk has one); ``message``
+    the first walk's that did not reach (else the last's); ``timed_out`` when one ran out of
+    time; ``walks`` each walk's ``reached``, ``timed_out`` and ``message``.
     """
     if not summaries:
         raise ValueError('a combined summary needs at least one walk')
