@@ -11,7 +11,8 @@ docs/architecture.md's rules that a reviewer would otherwise check by hand:
 * every workspace package a package's production modules import is declared in its
   ``package.xml`` (``depend`` or ``exec_depend``);
 * no production module builds a parameter section itself (``file.section(...)``,
-  ``section_from_flat``, ``Section.from_flat``, the one-section ``load_*`` helpers) but the
+  ``section_from_flat``, ``Section.from_flat``, the one-section ``load_*`` helpers, the
+  plant's ``plant_sections``) but the
   configuration loader and the few modules of :data:`SECTION_BUILDERS`, each with its reason:
   everyone else takes a ``WalkerConfiguration``, so a file that breaks a rule between sections
   is refused the same way everywhere; and where a node declares a section
@@ -232,7 +233,7 @@ def undeclared_dependencies(source: Path) -> list[str]:
 #: (``file.section(...)``, ``WalkerParameters.from_flat(...)``) or a function.
 _SECTION_METHODS = ('section', 'from_flat')
 _SECTION_FUNCTIONS = ('section_from_flat', 'load_walker_parameters', 'load_controller_settings',
-                      'load_sim_parameters', 'load_parameter_file')
+                      'load_sim_parameters', 'load_parameter_file', 'plant_sections')
 _BELOW_THE_LOADER = ('a tool of a package the configuration loader depends on (walker_config '
                      'needs every section): importing the loader would make a package circle')
 
@@ -251,6 +252,12 @@ SECTION_BUILDERS = {
                                  'without the supervisor, planner or controllers',
     'walker_teleop.walkerctl': "the truss layout on an operator's machine, which has no "
                                'plant, controllers or planner',
+    'walker_sim.core': "the plant core of a plant's own file: its sections and their rule "
+                       '(as the loader reads a plant file)',
+    'walker_campaign.core.parameter_sets': "a run's truth set: the plant's sections and their "
+                                           'rule (as the loader reads a plant file)',
+    'walker_sim.render_walker': _BELOW_THE_LOADER,
+    'walker_sim.identify_modes': _BELOW_THE_LOADER,
     'walker_control.analysis.design': _BELOW_THE_LOADER,
     'walker_control.analysis.floor': _BELOW_THE_LOADER,
     'walker_planner.report': _BELOW_THE_LOADER,
