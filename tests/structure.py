@@ -9,7 +9,14 @@ docs/architecture.md's rules that a reviewer would otherwise check by hand:
 * every console script a ``setup.py`` declares names a module of the workspace and a function
   defined in it;
 * every workspace package a package's production modules import is declared in its
-  ``package.xml`` (``depend`` or ``exec_depend``).
+  ``package.xml`` (``depend`` or ``exec_depend``);
+* no production module builds a parameter section itself (``file.section(...)``,
+  ``section_from_flat``, ``Section.from_flat``, the one-section ``load_*`` helpers, the
+  plant's ``plant_sections``) but the
+  configuration loader and the few modules of :data:`SECTION_BUILDERS`, each with its reason:
+  everyone else takes a ``WalkerConfiguration``, so a file that breaks a rule between sections
+  is refused the same way everywhere; and where a node declares a section
+  (:func:`section_declarations`), it is one the table of sections lists.
 
 The modules are found by walking the ROS packages of a source tree
 (:func:`ros_free.workspace_modules`), so a new package or module is checked without being
@@ -19,6 +26,7 @@ listed.
 from __future__ import annotations
 
 import ast
+import dataclasses
 import re
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
@@ -26,7 +34,8 @@ from pathlib import Path
 from ros_free import module_imports, workspace_modules
 
 __all__ = ['NODE_FILE_LINES', 'long_node_files', 'import_circles', 'unresolved_console_scripts',
-           'undeclared_dependencies']
+           'undeclared_dependencies', 'SECTION_BUILDERS', 'direct_section_builds',
+           'SectionDeclaration', 'section_declarations']
 
 #: Longest node file [lines].
 NODE_FILE_LINES = 400
@@ -218,3 +227,135 @@ def undeclared_dependencies(source: Path) -> list[str]:
                 found.setdefault((owner, top), f'{path}:{line}: {owner} imports {top}, which '
                                  f'its package.xml does not declare')
     return list(found.values())
+
+
+#: Calls that build a parameter section from a file's or a mapping's values: a method
+#: (``file.section(...)``, ``WalkerParameters.from_flat(...)``) or a function.
+_SECTION_METHODS = ('section', 'from_flat')
+_SECTION_FUNCTIONS = ('section_from_flat', 'load_walker_parameters', 'load_controller_settings',
+                      'load_sim_parameters', 'load_parameter_file', 'plant_sections')
+_BELOW_THE_LOADER = ('a tool of a package the configuration loader depends on (walker_config '
+                     'needs every section): importing the loader would make a package circle')
+
+#: The production modules that may build a section themselves, and why. Every other module
+#: takes its sections from ``walker_config.core.configuration.load_configuration``.
+SECTION_BUILDERS = {
+    'walker_config.core.configuration': 'the configuration loader',
+    'walker_core.parameter_schema': 'the schema: builds a section from flat values',
+    'walker_core.parameter_file': 'the parsed file the loader builds its sections from',
+    'walker_core.robot_parameters': 'defines WalkerParameters and its one-section helper',
+    'walker_control.core.config': 'defines ControllerSettings and its one-section helper',
+    'walker_sim.core.config': "defines SimParameters and the plant's sections (the loader's)",
+    'walker_runtime.node_parameters': 'a node declares the sections it reads as ROS '
+                                      'parameters and checks its own rules with them',
+    'walker_report.core.report': "reads the walk's file (which the walk's loader accepted) "
+                                 'without the supervisor, planner or controllers',
+    'walker_teleop.walkerctl': "the truss layout on an operator's machine, which has no "
+                               'plant, controllers or planner',
+    'walker_sim.core': "the plant core of a plant's own file: its sections and their rule "
+                       '(as the loader reads a plant file)',
+    'walker_campaign.core.parameter_sets': "a run's truth set: the plant's sections and their "
+                                           'rule (as the loader reads a plant file)',
+    'walker_sim.render_walker': _BELOW_THE_LOADER,
+    'walker_sim.identify_modes': _BELOW_THE_LOADER,
+    'walker_control.analysis.design': _BELOW_THE_LOADER,
+    'walker_control.analysis.floor': _BELOW_THE_LOADER,
+    'walker_planner.report': _BELOW_THE_LOADER,
+    'walker_planner.figures': _BELOW_THE_LOADER,
+}
+
+
+def _called_name(call: ast.Call) -> tuple[str, bool]:
+    """Return the name a call calls and whether it is an attribute (``x.name(...)``)."""
+    if isinstance(call.func, ast.Attribute):
+        return call.func.attr, True
+    return getattr(call.func, 'id', ''), False
+
+
+def direct_section_builds(source: Path, allowed=None) -> list[str]:
+    """Say where a production module outside ``allowed`` builds a parameter section itself.
+
+    ``allowed`` maps a module to its reason (default :data:`SECTION_BUILDERS`); a listed module
+    that is not in the workspace is said too, so the list does not outlive its reasons.
+    """
+    allowed = SECTION_BUILDERS if allowed is None else allowed
+    modules = workspace_modules(source)
+    found = [f'{module}: listed as a section builder ({reason}) but not in the workspace'
+             for module, reason in allowed.items() if module not in modules]
+    for module, path in sorted(modules.items()):
+        if module in allowed:
+            continue
+        tree = ast.parse(path.read_text(), filename=str(path))
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Call):
+                continue
+            name, method = _called_name(node)
+            if (method and name in _SECTION_METHODS) or name in _SECTION_FUNCTIONS:
+                found.append(f'{path}:{node.lineno}: {module} builds a parameter section '
+                             f'itself ({ast.unparse(node.func)}(...)): take it from '
+                             f'walker_config.core.configuration.load_configuration')
+    return found
+
+
+#: The node layer's calls that take a section type and its prefix (``node, type, prefix``).
+_DECLARING_CALLS = ('declare_section', 'guard_section_updates')
+
+
+@dataclasses.dataclass(frozen=True)
+class SectionDeclaration:
+    """Where a node declares a section, and what names its type and prefix.
+
+    ``section`` and ``prefix`` are each ``(module, name)`` of an imported name, or ``(None,
+    value)`` of a literal (a prefix left out is ``(None, '')``); an argument that is neither
+    is ``(None, None)``.
+    """
+
+    where: str
+    section: tuple[str | None, object]
+    prefix: tuple[str | None, object]
+
+
+def _imported_names(tree: ast.Module, module: str, path: Path) -> dict[str, tuple[str, str]]:
+    package = module.split('.') if path.name == '__init__.py' else module.split('.')[:-1]
+    names = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ''
+            if node.level:
+                base = '.'.join(package[:len(package) - node.level + 1]
+                                + ([node.module] if node.module else []))
+            for alias in node.names:
+                names[alias.asname or alias.name] = (base, alias.name)
+    return names
+
+
+def _reference(argument: ast.expr | None, names: dict[str, tuple[str, str]]):
+    if argument is None:
+        return None, ''
+    if isinstance(argument, ast.Constant):
+        return None, argument.value
+    if isinstance(argument, ast.Name) and argument.id in names:
+        return names[argument.id]
+    return None, None
+
+
+def section_declarations(source: Path) -> list[SectionDeclaration]:
+    """Return every ``declare_section``/``guard_section_updates`` call of the production modules.
+
+    The section and prefix are read from the call (positional or by keyword), each traced to
+    the import that names it; no module is imported.
+    """
+    found = []
+    for module, path in sorted(workspace_modules(source).items()):
+        tree = ast.parse(path.read_text(), filename=str(path))
+        names = _imported_names(tree, module, path)
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Call) or _called_name(node)[0] not in _DECLARING_CALLS:
+                continue
+            keywords = {k.arg: k.value for k in node.keywords}
+            section = node.args[1] if len(node.args) > 1 else keywords.get('section_type')
+            prefix = node.args[2] if len(node.args) > 2 else keywords.get('prefix')
+            found.append(SectionDeclaration(f'{path}:{node.lineno}',
+                                            _reference(section, names),
+                                            _reference(prefix, names)))
+    return found

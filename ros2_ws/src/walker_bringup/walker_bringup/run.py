@@ -62,11 +62,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from walker_config.core.configuration import load_configuration
-    from walker_core.parameter_file import ParameterFile
+    from walker_config.core.configuration import load_configuration, load_plant
     from walker_core.parameter_schema import ParameterError
     from walker_core.progress import ProgressLine
-    from walker_sim.core.config import plant_sections
 
     say = ProgressLine(args.quiet, stream=sys.stdout)
     # Everything the command line names is checked before anything is started or written.
@@ -77,7 +75,7 @@ def _run(args: argparse.Namespace) -> int:
         return 2
     if args.plant_params_file is not None:
         try:
-            plant = plant_sections(ParameterFile.read(args.plant_params_file))
+            plant = load_plant(args.plant_params_file)
         except ParameterError as error:
             say.error(f'[walker] error: --plant-params-file {args.plant_params_file}: {error}')
             return 2

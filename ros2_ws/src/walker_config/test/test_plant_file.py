@@ -3,7 +3,7 @@
 import pytest
 import yaml
 
-from walker_config.core.configuration import load_configuration
+from walker_config.core.configuration import load_configuration, load_plant
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import default_parameter_file
 
@@ -39,3 +39,14 @@ def test_the_plant_file_reaches_the_plant_alone(tmp_path):
 def test_a_plant_file_the_plant_refuses_is_refused(tmp_path):
     with pytest.raises(ParameterError, match='joint_offset'):
         load_configuration(plant_path=_truth_file(tmp_path, [1e-4]))
+
+
+def test_a_plant_file_named_apart_is_read_as_the_configuration_reads_it(tmp_path):
+    """``run_all.py --plant-params-file`` names the file in its error: the same sections."""
+    truth = _truth_file(tmp_path, [1e-4, 0.0, 0.0, 0.0, -1e-4])
+    assert load_plant(truth) == load_configuration(plant_path=truth).plant
+    document = yaml.safe_load(truth.read_text())
+    document['/**']['ros__parameters']['sim']['start']['other_node'] = 'n9_9'
+    truth.write_text(yaml.safe_dump(document))
+    with pytest.raises(ParameterError, match='sim.start.other_node'):  # the rule between two
+        load_plant(truth)

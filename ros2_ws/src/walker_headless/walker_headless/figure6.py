@@ -21,26 +21,33 @@ from walker_control.analysis.figure6 import PlantCore, TwoMassJoint1Model, repor
 __all__ = ['plant_factory', 'main']
 
 
-def plant_factory(model: str, params_file: str | None,
-                  settings) -> tuple[Callable[[], PlantCore], str]:
+def plant_factory(model: str, params_file: str | None, settings,
+                  walker=None) -> tuple[Callable[[], PlantCore], str]:
     """Return a maker of the experiment's plant and its name in the table.
 
     ``model`` is ``'plant'`` (the pybullet plant, gripper b free at the approach height) or
-    ``'two-mass'``; ``params_file`` the parameter file (``None``: the installed one).
+    ``'two-mass'``; ``params_file`` the parameter file (``None``: the installed one);
+    ``walker`` its robot (default: read through the configuration loader).
+
+    Raises
+    ------
+    ParameterError
+        If the file is refused by the configuration loader (the message names the parameter).
     """
     if model == 'two-mass':
         return lambda: TwoMassJoint1Model(settings), 'two-mass model of joint 1 (NOT the plant)'
-    from walker_core.robot_parameters import load_walker_parameters
+    from walker_config.core.configuration import load_configuration
     from walker_sim.core import make_plant
 
-    height = load_walker_parameters(params_file).gripper.approach_height
+    walker = walker or load_configuration(params_file).walker
+    height = walker.gripper.approach_height
     return (lambda: make_plant(params_file, other_attached=False,
                                other_height=height)), 'pybullet plant'
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the experiment, print its table and draw ``figure6.png``; return the exit code."""
-    from walker_control.core.config import load_controller_settings
+    from walker_config.core.configuration import load_configuration
     from walker_core.parameter_schema import ParameterError
 
     parser = argparse.ArgumentParser(prog='figure6', description=__doc__.split('\n\n')[0])
@@ -52,8 +59,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help='plant to run on (default: the pybullet plant)')
     args = parser.parse_args(argv)
     try:
-        settings = load_controller_settings(args.params_file)
-        factory, what = plant_factory(args.model, args.params_file, settings)
+        configuration = load_configuration(args.params_file)
+        settings = configuration.controllers
+        factory, what = plant_factory(args.model, args.params_file, settings,
+                                      configuration.walker)
     except ParameterError as error:
         print(f'refused: {error}')
         return 2

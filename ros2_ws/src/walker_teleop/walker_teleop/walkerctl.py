@@ -220,6 +220,9 @@ def _status(client, args) -> int:
     from walker_core.truss import Truss
     from walker_teleop.core.status import format_status
 
+    # The truss layout alone, to name the nearest hole: walkerctl runs on an operator's machine
+    # without the plant, controllers or planner (package.xml), so not through the configuration
+    # loader, which needs every package's section; the running graph's loader checked the file.
     truss = Truss.from_parameters(load_walker_parameters(
         args.params_file or default_parameter_file()))
     view, missing = client.status()

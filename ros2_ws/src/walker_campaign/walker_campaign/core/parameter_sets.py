@@ -46,11 +46,11 @@ def load_nominal(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
     return flat, document
 
 
-def _model(flat: Mapping[str, Any]) -> None:
+def _model(flat: Mapping[str, Any]):
     from walker_config.core.configuration import configuration_of
     from walker_core.parameter_file import ParameterFile
 
-    configuration_of(ParameterFile(flat, Path('model.yaml')))
+    return configuration_of(ParameterFile(flat, Path('model.yaml')))
 
 
 def _truth(flat: Mapping[str, Any]) -> None:
@@ -60,26 +60,27 @@ def _truth(flat: Mapping[str, Any]) -> None:
     plant_sections(ParameterFile(flat, Path('truth.yaml')))
 
 
-_CHECKED: dict[tuple[str, str], str | None] = {}
+#: Each checked set's configuration, or the refusal's text.
+_CHECKED: dict[tuple[str, str], Any] = {}
 _CACHE_SIZE = 1024
 
 
-def _check_once(check, flat: Mapping[str, Any]) -> None:
+def _check_once(check, flat: Mapping[str, Any]) -> Any:
     values = json.dumps(dict(flat), sort_keys=True, default=repr)
     key = (check.__name__, values)
     if key not in _CHECKED:
         if len(_CHECKED) >= _CACHE_SIZE:
             _CHECKED.clear()
         try:
-            check(flat)
-            _CHECKED[key] = None
+            _CHECKED[key] = check(flat)
         except ParameterError as error:
-            _CHECKED[key] = str(error)
-    if _CHECKED[key] is not None:
-        raise ParameterError(_CHECKED[key])
+            _CHECKED[key] = ParameterError(str(error))
+    if isinstance(_CHECKED[key], ParameterError):
+        raise ParameterError(str(_CHECKED[key]))
+    return _CHECKED[key]
 
 
-def check_model(flat: Mapping[str, Any]) -> None:
+def check_model(flat: Mapping[str, Any]):
     """Check the model's set as the walker's one configuration loader checks a file.
 
     Every section and every rule between sections
@@ -87,12 +88,17 @@ def check_model(flat: Mapping[str, Any]) -> None:
     file it is given; once per distinct set (the controllers' stability check designs every
     filter of every mode over the inertia range: seconds on a loaded machine).
 
+    Returns
+    -------
+    WalkerConfiguration
+        The set's sections, for whoever needs one of them (the truss of a route or a survey).
+
     Raises
     ------
     ParameterError
         Naming the parameter and the rule (the controllers' stability check included).
     """
-    _check_once(_model, flat)
+    return _check_once(_model, flat)
 
 
 def check_truth(flat: Mapping[str, Any]) -> None:

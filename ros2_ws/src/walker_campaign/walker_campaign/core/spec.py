@@ -326,7 +326,7 @@ def parse_spec(mapping: Any, default_name: str = 'campaign',
     SpecError
         Naming the field and the rule.
     """
-    from walker_core.robot_parameters import WalkerParameters, default_parameter_file
+    from walker_core.robot_parameters import default_parameter_file
 
     spec = _mapping(mapping, 'campaign spec')
     _unknown(spec, _TOP_KEYS, 'campaign spec')
@@ -346,14 +346,14 @@ def parse_spec(mapping: Any, default_name: str = 'campaign',
     params_file = (Path(base_dir) / Path(params_file).expanduser()).resolve()
     try:
         nominal, document = load_nominal(params_file)
-        check_model(nominal)
+        configuration = check_model(nominal)
     except ParameterError as error:
         raise SpecError(f'params_file: {error}') from None
     route = _mapping(spec['route'], 'route')
     _unknown(route, _ROUTE_KEYS, 'route')
     target = route.get('target')
     try:
-        Truss.from_parameters(WalkerParameters.from_flat(nominal)).index(target)
+        Truss.from_parameters(configuration.walker).index(target)
     except UnknownNodeError as error:
         raise SpecError(f'route.target: {error}') from None
     timeout = route.get('walk_timeout', DEFAULT_WALK_TIMEOUT)

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from walker_campaign.core.errors import SpecError
-from walker_core.robot_parameters import WalkerParameters
+from walker_campaign.core.parameter_sets import check_model
 from walker_core.truss import Truss
 from walker_supervisor.core.survey_file import read_survey
 from walker_supervisor.core.truss_map import SurveyFileError, TrussMap
@@ -51,7 +51,7 @@ def load_campaign_survey(path: str | Path, nominal: Mapping[str, Any],
         content = read_survey(path)  # its errors name the file
     except SurveyFileError as error:
         raise SpecError(f'{where}: {error}') from None
-    truss = Truss.from_parameters(WalkerParameters.from_flat(dict(nominal)))
+    truss = Truss.from_parameters(check_model(nominal).walker)  # the loader's, cached
     try:
         TrussMap.from_dict(truss, nominal[PRIOR_STD_KEY], nominal[JOINT_STD_KEY], content)
     except SurveyFileError as error:

@@ -40,8 +40,8 @@ from walker_viz.core.parameters import VizParameters
 
 from walker_config.core.sections import configuration_sections
 
-__all__ = ['WalkerConfiguration', 'load_configuration', 'configuration_of', 'plant_sections',
-           'check_cross_section_rules']
+__all__ = ['WalkerConfiguration', 'load_configuration', 'load_plant', 'configuration_of',
+           'plant_sections', 'check_cross_section_rules']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -158,6 +158,21 @@ def load_configuration(path: str | Path | None = None,
         If a file cannot be read or parsed, or a value or rule is broken: the message names
         the parameter. Nothing is half-built.
     """
-    plant = None if plant_path is None \
-        else plant_sections(ParameterFile.read(plant_path, overrides))
+    plant = None if plant_path is None else load_plant(plant_path, overrides)
     return configuration_of(ParameterFile.read(path, overrides), plant)
+
+
+def load_plant(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None
+               ) -> tuple[WalkerParameters, SimParameters]:
+    """Read a plant's own parameter file: its robot and ``sim.*``, and the rule between them.
+
+    What :func:`load_configuration` reads of ``plant_path`` (``run_all.py
+    --plant-params-file``, a campaign's *truth*), for a caller that names the file apart.
+
+    Raises
+    ------
+    ParameterError
+        If the file cannot be read or parsed, or a value or the rule is broken: the message
+        names the parameter.
+    """
+    return plant_sections(ParameterFile.read(path, overrides))

@@ -2,7 +2,9 @@
 
 :func:`~walker_config.core.configuration.configuration_of` builds a configuration from it,
 and ``scripts/generate_parameter_docs.py`` writes docs/parameters.md from it: a new section
-is added here, once. Each row is one group of the file (``robot``, ``sim``, ...), in the
+is added here, once. The nodes, which cannot import it (this package depends on theirs), are
+checked against it: every section a node declares, under its prefix, is a row here
+(``tests/test_structure.py``). Each row is one group of the file (``robot``, ``sim``, ...), in the
 file's order; ``field`` names the :class:`~walker_config.core.configuration.
 WalkerConfiguration` attribute built from it (a group may be part of a larger section: the
 robot's four groups are ``walker``'s, ``control`` is part of ``controllers``).

@@ -226,6 +226,9 @@ def make_report(bag: str | Path, out: str | Path | None = None,
         raise ReportError(f'options must be ReportOptions, got {type(options).__name__}')
     params_file = Path(params_file or default_parameter_file())
     try:
+        # The walk's own file, which the walk's configuration loader accepted: the report
+        # reads the two sections it needs and no more, so it runs without the supervisor,
+        # planner or controllers (test_layers.py).
         file = ParameterFile.read(params_file)  # once, for every section the report needs
         params = file.section(WalkerParameters)
         settle_time = options.settle_time or file.section(SettlingWindow,
