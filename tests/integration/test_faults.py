@@ -255,61 +255,6 @@ def test_a_jammed_insertion_is_retried_a_bounded_number_of_times_then_held_and_r
     search_radius(radius)
 
 
-def test_a_descent_that_leaves_the_hole_axis_is_stopped_lifted_back_then_held(graph):
-    """A descent whose tip leaves the hole's axis is stopped and lifted back, never lowered.
-
-    Every ordinary descent swings about 2.3 mm off the axis whatever its start (0.2-1.4 mm off):
-    with the descent region at its smallest (``insertion_alignment``) and the tolerance a tenth
-    of a millimetre above it, each one counts as leaving the axis, with a margin of more than a
-    millimetre. Each is stopped, the gripper lifted back to the approach height (unless it was
-    stopped before it went down) and brought over the hole again, and after the bounded
-    attempts the step ends in safe hold with the base attached and the moving gripper never
-    screwed in. With both values back, resume completes the step.
-    """
-    from rcl_interfaces.srv import GetParameters, SetParameters
-    from rclpy.parameter import Parameter
-    from walker_msgs.msg import GripperState, StepPhase
-
-    region, tolerance = 'supervisor.descent_region', 'supervisor.descent_axis_tolerance'
-    names = [region, tolerance, 'supervisor.insertion_alignment',
-             'supervisor.max_insertion_attempts']
-    values = graph.parameters('supervisor', 'get_parameters',
-                              GetParameters.Request(names=names)).values
-    shipped = {region: values[0].double_value, tolerance: values[1].double_value}
-    smallest_region, attempts = values[2].double_value, values[3].integer_value
-
-    def set_in_order(*settings: tuple[str, float]) -> None:
-        # one at a time, in order: each value is checked against the others in force
-        request = SetParameters.Request(parameters=[
-            Parameter(name, value=value).to_parameter_msg() for name, value in settings])
-        results = graph.parameters('supervisor', 'set_parameters', request).results
-        assert all(r.successful for r in results), [r.reason for r in results]
-
-    set_in_order((region, smallest_region), (tolerance, smallest_region + 1e-4))
-    try:
-        step = graph.one_step()
-        # lifted back, or (stopped before it went down) brought over the hole by a fine line
-        again_before = graph.count_in_log('supervisor', 'over the hole again')
-        first_state = len(graph.gripper_states)
-        started = time.monotonic()
-        graph.start_walk(step.to_node)
-        held = graph.wait_step_end(started)
-        assert held.phase == StepPhase.SAFE_HOLD, \
-            f'the step completed: a descent stayed on the axis\n{graph.log_tails("supervisor")}'
-        assert "left the hole's axis" in held.reason, held.reason
-        assert f'{attempts} insertion attempts' in held.reason, held.reason
-        again = graph.count_in_log('supervisor', 'over the hole again')
-        assert again - again_before == attempts - 1, graph.log_tails('supervisor')
-        assert graph.attached_nodes() == {step.base_gripper: step.base_node}
-        moving_states = [g.state for message in graph.gripper_states[first_state:]
-                         for g in message.grippers if g.name == step.moving_gripper]
-        freed = moving_states.index(GripperState.FREE)  # unscrewed from its old node
-        assert not {GripperState.SCREWING, GripperState.ATTACHED} & set(moving_states[freed:])
-    finally:
-        set_in_order((tolerance, shipped[tolerance]), (region, shipped[region]))
-    graph.resume_and_complete(step)
-
-
 # ---------------------------------------------------------------------- a lossy link
 def _link_counts(graph) -> tuple[int, int]:
     """Return the messages the lossy link has received and dropped, by its newest report."""
@@ -459,7 +404,11 @@ def test_a_starved_planner_leaves_the_motion_as_planned(graph):
     during = [(t, q) for t, q in setpoints if 0.0 < t - origin < plan.duration]
     assert len(during) > 50, f'{len(during)} controller states of the sweep'
     off = max(abs(q - plan.sample(t - origin).position[column]) for t, q in during)
-    assert off < 1e-6, f'joint 1 used setpoints {off:.3g} rad off its plan'
+    # a stream carries the planner's own samples; a whole trajectory is interpolated between
+    # its points by the controller (quintic where it has accelerations), a few microradians
+    # from the planner's sampling: under one count of an 18-bit encoder (24 urad) either way
+    allowed = 1e-5 if graph.whole_trajectories else 1e-6
+    assert off < allowed, f'joint 1 used setpoints {off:.3g} rad off its plan'
 
 
 # ---------------------------------------------------------------------- a silent publisher
