@@ -409,7 +409,9 @@ def test_with_wait_for_decisions_the_plant_steps_no_further_than_the_supervisor_
         probe.spin_until(lambda: clocks and max(clocks) == 23 * period, 5.0)
         assert max(clocks) == 23 * period  # /clock reaches the release: the supervisor's
         # ROS-time timer sees the time it released up to
-        # silent for longer than decision_timeout: the plant steps on without it
+        # a supervisor holding the clock where it stands (awaiting an answer), then silent
+        # for longer than decision_timeout: the plant steps on without it
+        release(23 * period)
         assert probe.spin_until(lambda: max(states) > 60 * period, 15.0), plant.output
         assert plant.wait_for_output('has not decided beyond', 5.0), plant.output
     assert held <= period  # held at the first release (t = 0; the first state answered)

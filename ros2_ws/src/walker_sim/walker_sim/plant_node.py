@@ -283,6 +283,7 @@ class PlantNode(Node):
                            + ', '.join(self.lockstep.waiting_for(self.commands)))
             return
         if not self.gate.allows(self._stamp + self.period_ns):
+            self.gate.wait(now)  # a release that held the clock where it stood restarts no wait
             if self.gate.expired(now):
                 self.gate.drop()
                 self._warn(now, f'the supervisor has not decided beyond t={self._stamp * 1e-9:.3f}'
