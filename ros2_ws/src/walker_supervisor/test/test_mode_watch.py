@@ -37,6 +37,22 @@ def test_a_mode_nobody_commanded_is_named_and_the_commanded_mode_sent_again():
     assert watch.mismatch_since is None
 
 
+def test_a_new_mode_commanded_ends_the_disagreement_with_the_old_one():
+    """Resumed in FINE after controllers lingered in FINE under a HOLD: no hold for that."""
+    watch = _watch('hold')
+    lingering = ControllerReport(MODE_REPORT_GRACE + 0.01, False, False, 'fine', 2)
+    watch.unexpected_modes({'a_pitch_joint': lingering}, 1.0, 10.0)
+    assert watch.mismatch_since == 10.0
+    watch.commanded(SetControlMode('hold', 'a'), 1.0)  # a correction: the clock runs on
+    assert watch.mismatch_lasted(11.0, 1.0)
+    watch.commanded(SetControlMode('fine', 'a'), 1.2)  # the resume, before 1 s had passed
+    assert not watch.mismatch_lasted(11.4, 1.0)
+    # reports from within the grace after the command cannot tell: still no hold
+    early = ControllerReport(1.25, False, False, 'hold', 2)
+    assert watch.unexpected_modes({'a_pitch_joint': early}, 1.25, 11.5) == []
+    assert not watch.mismatch_lasted(11.5, 1.0)
+
+
 @pytest.mark.parametrize('report', [
     ControllerReport(0.05, False, False, 'coarse', 1),   # just after the command: not yet
     ControllerReport(1.0, True, True, 'hold', 1),        # stale inputs: holding for that

@@ -93,7 +93,14 @@ class ControllerWatch:
         self.repetition = ModeRepetition()
 
     def commanded(self, command: SetControlMode, now: float) -> SetControlMode:
-        """Note a mode command sent at ``now`` [s]; return it."""
+        """Note a mode command sent at ``now`` [s]; return it.
+
+        A command of another mode or base ends a disagreement with the one before (the
+        controllers have a new command to follow); the same command again, a correction,
+        does not.
+        """
+        if (command.mode, command.base_gripper) != (self.mode, self.base):
+            self.mismatch_since = None
         self.mode, self.base, self.commanded_at = command.mode, command.base_gripper, now
         return command
 
