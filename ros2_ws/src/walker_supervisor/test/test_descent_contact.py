@@ -178,3 +178,24 @@ def test_a_tip_resting_on_the_face_beside_the_hole_is_aligned_onto_the_axis():
     np.testing.assert_allclose(line.goal_point[:2], mouth[:2], atol=1e-12)
     assert line.goal_point[2] == pytest.approx(rest[2] - insertion.MOUTH_PRESS, abs=1e-9)
     np.testing.assert_allclose(KIN.forward(line.goal)[:3], line.goal_point, atol=1e-9)
+
+
+def test_a_descent_the_joints_did_not_follow_holds_and_teaches_the_map_nothing():
+    """A trajectory lost after a restart: the tip at rest 30 mm above the mouth, not a face."""
+    run = run_at_insertion(OVERTRAVEL)
+    transitions.enter_insertion(run, 0.0)
+    run.stage = Stage.SETTLING  # the descent's stream ended; the joints never moved
+    above = run.targets.point_above_to  # where the descent began
+    run.theta = np.array(KIN.inverse([*above, 0.0, run.targets.at_to[4]],
+                                     reference=run.targets.at_to))
+    said = []
+    for tick in range(200):
+        said += insertion.at_mouth(run, tick * TICK, np.zeros(5), {'a': 'attached', 'b': 'free'})
+        if said:
+            break
+    assert run.phase.name == 'SAFE_HOLD'
+    height = (run.targets.point_above_to[2] - run.targets.point_to[2]) * 1e3
+    assert 'did not follow' in run.reason \
+        and f'{height:.1f} mm above the nominal mouth' in run.reason
+    assert not run.tries.contact.felt and run.felt_faces == []
+    assert not any(isinstance(command, TrajectoryRequest) for command in said)

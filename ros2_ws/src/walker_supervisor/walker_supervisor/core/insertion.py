@@ -135,6 +135,9 @@ def at_mouth(run: StepRun, now: float, velocities: np.ndarray, grippers: dict[st
     if not run.settled(now, velocities, settle_wait(run)):
         return []
     parameters = run.parameters
+    unfollowed = _descent_not_followed(run)
+    if unfollowed:
+        return run.abort(unfollowed, now)
     notices = _judge_contact(run)
     if run.mouth_offset() > parameters.descent_axis_tolerance:
         return notices + left_the_axis(run, now)  # too far to slide at the mouth's height
@@ -158,6 +161,30 @@ def _judged_at_mouth(run: StepRun, now: float, grippers: dict[str, str]) -> list
     # a retry starts from 'jammed': that report is the last attempt's, not this one's
     run.gripper.state_before_screwing = grippers.get(run.step.moving_gripper, '')
     return [GripperRequest(run.step.moving_gripper, 'screw_in')]
+
+
+def _descent_not_followed(run: StepRun) -> str:
+    """Why a descent that ended with the tip still in the upper half of its way was not one.
+
+    '' if it was one. A node sits within millimetres of its nominal height, far below half
+    the approach height (the lowest a joint-space way back lets the tip go, too).
+
+    Its trajectory never reached the joints (a controller or planner restarted a moment
+    before): taken for contact, it would put the node's face where the tip stopped and every
+    probe after it at that height. The step holds instead, the map unchanged; resume comes
+    over the hole and descends again.
+    """
+    contact = run.tries.contact
+    if contact is None or contact.felt or contact.judged \
+            or run.parameters.insertion_overtravel <= 0.0:
+        return ''
+    height = float(run.tip()[2])
+    if height <= contact.mouth + 0.5 * (run.targets.point_above_to[2] - contact.mouth):
+        return ''
+    contact.judged = True
+    return (f'the descent ended with the tip {(height - contact.mouth) * 1e3:.1f} mm above the '
+            f'nominal mouth, in the upper half of its way down: the joints did not follow it '
+            f'(its trajectory lost?); nothing is learned of the node')
 
 
 def _judge_contact(run: StepRun) -> list:
