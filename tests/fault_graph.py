@@ -251,6 +251,10 @@ class FaultGraph:
         base = self.phase.base_gripper
         other = 'b' if base == 'a' else 'a'
         nodes = self.attached_nodes()
+        assert set(nodes) == {'a', 'b'}, (
+            f'the walker is not at rest on both grippers (attached: {nodes}; phase '
+            f'{self.phase.phase}: {self.phase.reason!r}): an earlier test on this graph left '
+            f'its step unfinished')
         yaws = (self.positions['a_yaw_joint'], self.positions['b_yaw_joint'])
         drive = self.params.robot.drive.yaw
         steps = possible_steps(Truss.from_parameters(self.params),
