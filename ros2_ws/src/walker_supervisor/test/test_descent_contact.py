@@ -199,3 +199,41 @@ def test_a_descent_the_joints_did_not_follow_holds_and_teaches_the_map_nothing()
         and f'{height:.1f} mm above the nominal mouth' in run.reason
     assert not run.tries.contact.felt and run.felt_faces == []
     assert not any(isinstance(command, TrajectoryRequest) for command in said)
+
+
+def searching_run():
+    from walker_supervisor.core.hole_search import HoleSearch, SearchPattern
+
+    run = run_at_insertion(OVERTRAVEL)
+    run.search = HoleSearch(SearchPattern.around(0.0015, 0.002, 3.0, 0.0075))
+    transitions.enter_insertion(run, 0.0)
+    run.theta = run.targets.at_to.copy()  # at the end of the descent
+    return run
+
+
+def test_a_jam_after_a_descent_that_met_no_face_sends_the_next_probes_deeper():
+    """The estimate 5 mm high: the descent ends on nothing, and so would every probe's."""
+    run = searching_run()
+    mouth = float(run.targets.point_to[2])
+    run.tries.contact.judged = True  # judged at rest at its end: no face
+    said = insertion.jammed(run, 'the screw-in jammed', 1.0)
+    assert run.height_shift == pytest.approx(-OVERTRAVEL)
+    assert any('met no face' in n.message for n in said if isinstance(n, Notice))
+    # the next probe's descent ends the overtravel deeper than the first
+    assert float(run.targets.point_to[2]) == pytest.approx(mouth - OVERTRAVEL, abs=1e-9)
+    for _ in range(2 * insertion.MAX_DEEPER_DESCENTS):  # bounded
+        transitions.enter_insertion(run, 2.0)
+        run.theta = run.targets.at_to.copy()
+        run.tries.contact.judged = True
+        insertion.jammed(run, 'the screw-in jammed', 2.0)
+    assert run.height_shift == pytest.approx(-insertion.MAX_DEEPER_DESCENTS * OVERTRAVEL)
+
+
+def test_a_jam_on_the_face_felt_changes_no_depth():
+    run = searching_run()
+    run.tries.contact.judged = True
+    run.tries.contact.height = float(run.targets.point_to[2]) + 0.003  # on the face
+    said = insertion.jammed(run, 'the screw-in jammed', 1.0)
+    assert run.height_shift == 0.0
+    assert not any('met no face' in getattr(n, 'message', '') for n in said)
+    assert len(run.felt_faces) == 1  # the map takes that height instead

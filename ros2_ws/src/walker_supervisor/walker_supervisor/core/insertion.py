@@ -41,11 +41,15 @@ from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.step_geometry import probe_targets
 from walker_supervisor.core.step_run import StepRun
 
-__all__ = ['MAX_MOUTH_LINES', 'feel_the_face', 'at_mouth', 'left_the_axis', 'jammed',
+__all__ = ['MAX_MOUTH_LINES', 'MAX_DEEPER_DESCENTS', 'feel_the_face', 'at_mouth', 'left_the_axis', 'jammed',
            'follow_screwing']
 
 #: Fine lines at the mouth tried before the gripper is screwed in anyway (as above the hole).
 MAX_MOUTH_LINES = 3
+#: Times a step's descents go ``insertion_overtravel`` deeper after one met no face and jammed
+#: (:func:`_deeper_after_no_face`): a node lower than that under its estimate is beyond what
+#: the map allows, and the search goes on at that depth.
+MAX_DEEPER_DESCENTS = 3
 #: [m] A line at the mouth after the descent felt the face ends this far below where it was
 #: felt: it keeps the gripper on the face (and drops it into the chamfer when it gets there)
 #: without pressing it so hard that the joints push it sideways.
@@ -275,6 +279,7 @@ def jammed(run: StepRun, message: str, now: float) -> list:
         run.felt_faces.append(run.theta.copy())  # resting on the face: the node's height
     notices = []
     if run.search is not None:
+        notices += _deeper_after_no_face(run)
         offset = _offset_from_estimate(run)
         probe = _next_probe(run)
         if isinstance(probe, str):
@@ -292,6 +297,27 @@ def jammed(run: StepRun, message: str, now: float) -> list:
         return run.abort(f'insertion jammed: {message}; and no straight lift out of the hole '
                          f'from here', now)
     return notices + [run.trajectory('retry_lift', run.theta, up[0], run.tip(), up[1])]
+
+
+def _deeper_after_no_face(run: StepRun) -> list:
+    """After a jam whose descent met no face, send the search's next descents deeper.
+
+    The descent ended ``insertion_overtravel`` below the estimated mouth with nothing under
+    the gripper, and the screw-in jammed there: a gripper over the hole would have come to
+    rest on the mouth, one beside it on the face (both felt), so the node sits lower than its
+    estimate by more than the overtravel. Screwed in at that height, every probe jams, even
+    the one over the hole: the next descents end ``insertion_overtravel`` deeper (at most
+    :data:`MAX_DEEPER_DESCENTS` times in a step), until one feels the face and the map gives
+    the height again (:meth:`~walker_supervisor.core.sequencer.StepSequencer.move_mouth`).
+    """
+    contact, overtravel = run.tries.contact, run.parameters.insertion_overtravel
+    if contact is None or contact.felt or not contact.judged or overtravel <= 0.0 \
+            or run.height_shift - overtravel < -MAX_DEEPER_DESCENTS * overtravel - 1e-12:
+        return []
+    run.height_shift -= overtravel
+    return [Notice(f'the descent met no face and the screw-in jammed: the node sits lower '
+                   f'than its estimate; the next descents end {overtravel * 1e3:.1f} mm '
+                   f'deeper', 'info')]
 
 
 def _offset_from_estimate(run: StepRun) -> str:
