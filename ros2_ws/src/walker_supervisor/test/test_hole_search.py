@@ -24,7 +24,7 @@ def _gap(offsets, covered, reach):
 def test_the_pattern_covers_its_disc_without_gaps_and_stays_within_the_radius(std):
     radius = 0.005
     pattern = SearchPattern.around(REACH, std, 3.0, radius)
-    assert pattern.covered == pytest.approx(min(3.0 * std, radius - REACH))
+    assert pattern.covered == pytest.approx(min(max(3.0 * std, REACH), radius - REACH))
     assert _gap(pattern.offsets, pattern.covered, REACH) <= REACH * (1 + 1e-9)
     assert np.linalg.norm(pattern.offsets, axis=1).max() <= radius + 1e-12
     # the estimate first, nearest first after it
@@ -64,6 +64,13 @@ def test_the_search_visits_every_probe_once_then_the_estimate_again_then_stops()
 def test_a_reach_that_is_not_positive_is_refused():
     with pytest.raises(ValueError, match='reach'):
         hex_pattern(0.0, 0.003)
+
+
+def test_an_estimate_known_to_less_than_the_reach_is_still_searched_one_ring_around():
+    pattern = SearchPattern.around(REACH, 1e-5, 3.0, 0.0075)
+    assert len(pattern) == 7 and pattern.covered == pytest.approx(REACH)
+    ring = np.linalg.norm(pattern.offsets[1:], axis=1)
+    np.testing.assert_allclose(ring, math.sqrt(3.0) * REACH)
 
 
 @pytest.mark.parametrize('radius', [0.0065, 0.015, 0.029])

@@ -74,12 +74,15 @@ class SearchPattern:
                radius: float) -> 'SearchPattern':
         """Return the pattern for an estimate of ``horizontal_std`` [m], no probe past ``radius``.
 
-        Covers ``sigmas * horizontal_std``, at most ``radius - reach`` (so its outer probes stay
-        within ``radius``); a ``radius`` under ``reach`` gives the estimate alone (no search).
+        Covers ``sigmas * horizontal_std`` but at least ``reach`` (the estimate's first ring of
+        six probes: the uncertainty of a surveyed node comes from its joint readings alone and
+        can be far under the reach, while the hole may lie farther), at most ``radius - reach``
+        (so its outer probes stay within ``radius``); a ``radius`` under ``reach`` gives the
+        estimate alone (no search).
         """
         if radius < reach:
             return cls(np.zeros((1, 2)), float(reach), 0.0)
-        covered = min(sigmas * max(horizontal_std, 0.0), radius - reach)
+        covered = min(max(sigmas * max(horizontal_std, 0.0), reach), radius - reach)
         return cls(hex_pattern(reach, covered), float(reach), float(covered))
 
     def __len__(self) -> int:
