@@ -229,3 +229,29 @@ def test_a_felt_height_is_kept_until_a_survey_takes_its_place():
     with pytest.raises(ValueError, match='base node'):
         survey.measure_height('n1_1', FRAME, 'n1_1', KIN, _joints_at(resting), screw, 3e-4)
     assert survey.version == version
+
+
+def test_a_hole_located_by_the_camera_is_the_estimate_until_a_height_felt_or_a_survey():
+    survey = TrussMap(TRUSS, prior_std=0.002, joint_std=2e-4)
+    survey.anchor_at('n1_1')
+    theta = _joints_at(DISPLACED + np.array([0.0, 0.0, 0.03]))  # looking from above it
+    located = FRAME.to_base(DISPLACED)
+    before = survey.estimate('n2_1')
+    seen = survey.sight('n2_1', FRAME, 'n1_1', KIN, theta, located, np.eye(3) * 1e-10)
+    np.testing.assert_allclose(seen.position, DISPLACED, atol=1e-12)
+    # the camera sees the hole against the gripper, which the joints place
+    joints = survey_covariance(KIN, theta, FRAME.heading, np.full(5, 2e-4))
+    np.testing.assert_allclose(seen.covariance, joints + 1e-10 * np.eye(3), rtol=1e-6,
+                               atol=1e-15)
+    np.testing.assert_allclose(survey.estimate('n2_1', seen=False).position, before.position)
+    version = survey.version
+    survey.measure_height('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED), 0.0, 3e-4)
+    assert survey.version > version
+    assert abs(survey.position('n2_1')[0] - DISPLACED[0]) > 1e-3, 'the felt height replaces it'
+    survey.sight('n2_1', FRAME, 'n1_1', KIN, theta, located, np.eye(3) * 1e-10)
+    survey.survey('n2_1', FRAME, 'n1_1', KIN, _joints_at(DISPLACED))
+    assert survey.estimate('n2_1').surveyed
+    np.testing.assert_allclose(survey.estimate('n2_1').position,
+                               survey.estimate('n2_1', seen=False).position)
+    with pytest.raises(ValueError, match='base node'):
+        survey.sight('n1_1', FRAME, 'n1_1', KIN, theta, located, np.eye(3))

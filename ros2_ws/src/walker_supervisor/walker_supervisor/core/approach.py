@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from walker_supervisor.core import transitions
+from walker_supervisor.core import looking, transitions
 from walker_supervisor.core.phases import Stage
 from walker_supervisor.core.step_run import StepRun
 
@@ -40,7 +40,19 @@ def coarse_tick(run: StepRun, now: float, velocities: np.ndarray) -> list:
 
 
 def fine_settling(run: StepRun, now: float, velocities: np.ndarray) -> list:
-    """FINE, the motion over: descend once over the hole, or a fine line once at rest."""
+    """FINE, the motion over: descend once over the hole, or a fine line once at rest.
+
+    Where it would descend, a gripper with a camera looks first (:mod:`.looking`).
+    """
+    if run.stage == Stage.LOOKING:
+        return looking.waiting(run, now)
+    if looking.wanted(run):
+        # a look waits for the arm at rest: the camera sees the gripper where its flexible
+        # links put it, the joints say where it would be rigid; the links ring on for a while
+        # after the joints are still
+        if run.settled(now, velocities, run.parameters.look_settle_time):
+            return looking.look(run, now)
+        return []
     if _may_descend(run, velocities):
         # the descent need not wait for the tip to come to rest: the insertion settles at the
         # mouth and checks the tip against the axis again before it screws in

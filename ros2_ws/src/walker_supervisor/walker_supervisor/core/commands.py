@@ -5,12 +5,12 @@ node, or a headless loop) carries out in order. Units are SI (rad, m, s).
 
 Commands of a step (:class:`~walker_supervisor.core.sequencer.StepSequencer`):
 :class:`SetControlMode`, :class:`GripperRequest`, :class:`TrajectoryRequest`,
-:class:`PrepareTrajectory`, :class:`CancelTrajectory`, :class:`Notice`.
+:class:`PrepareTrajectory`, :class:`CancelTrajectory`, :class:`LookRequest`, :class:`Notice`.
 
 Commands of the walk (:class:`~walker_supervisor.core.runner.WalkRunner`, which turns the
 step's trajectory commands into planner requests): :class:`SetControlMode`,
-:class:`GripperRequest`, :class:`PlanMotion`, :class:`FollowMotion`, :class:`CancelFollow`,
-:class:`RenewPlannerClient`, :class:`StopOrphanStream`, :class:`RecordStep`,
+:class:`GripperRequest`, :class:`LookRequest`, :class:`PlanMotion`, :class:`FollowMotion`,
+:class:`CancelFollow`, :class:`RenewPlannerClient`, :class:`StopOrphanStream`, :class:`RecordStep`,
 :class:`ForgetRecordedStep`, :class:`StopJog`, :class:`RenewModePublisher`,
 :class:`DecideNow`, :class:`Notice`; and the records to publish: :class:`PhaseRecord`,
 :class:`StepRecord`, :class:`Feedback`, :class:`GoalEnded`.
@@ -27,7 +27,7 @@ from walker_supervisor.core.route import PlannedStep
 
 __all__ = [
     'SetControlMode', 'GripperRequest', 'TrajectoryRequest', 'PrepareTrajectory',
-    'CancelTrajectory', 'Notice', 'PlanMotion', 'FollowMotion', 'CancelFollow',
+    'CancelTrajectory', 'LookRequest', 'Notice', 'PlanMotion', 'FollowMotion', 'CancelFollow',
     'RenewPlannerClient', 'StopOrphanStream', 'RecordStep', 'ForgetRecordedStep', 'StopJog',
     'RenewModePublisher', 'DecideNow', 'PhaseRecord', 'StepRecord', 'Feedback', 'GoalEnded',
     'LEVELS',
@@ -55,13 +55,26 @@ class GripperRequest:
 
 
 @dataclasses.dataclass(frozen=True)
+class LookRequest:
+    """Take one frame of a gripper's wrist camera, exposed no earlier than ``since`` [s].
+
+    Answer :meth:`~walker_supervisor.core.runner.WalkRunner.frame_seen` with the image and
+    the instant it shows (the graph's clock), once it is ready.
+    """
+
+    gripper: str
+    since: float
+
+
+@dataclasses.dataclass(frozen=True)
 class TrajectoryRequest:
     """Plan and stream a trajectory.
 
     Attributes
     ----------
     purpose : str
-        What the motion is for: 'extraction', 'coarse', 'fine', 'insertion' or 'retry_lift'
+        What the motion is for: 'extraction', 'coarse', 'fine', 'look_lift', 'insertion' or
+        'retry_lift'
         (a step's), 'jog_joint' or 'jog_tip' (an operator's, :mod:`.teleop`).
     start, goal : ndarray, shape (5,)
         Joint angles J1..J5 [rad] (role order of ``base_gripper``).

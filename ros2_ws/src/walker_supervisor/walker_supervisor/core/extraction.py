@@ -29,7 +29,7 @@ from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.phases import Phase, SequencerError, Stage
 from walker_supervisor.core.route import PlannedStep
 from walker_supervisor.core.step_geometry import StepTargets
-from walker_supervisor.core.step_run import StepRun
+from walker_supervisor.core.step_run import Looks, StepRun
 
 __all__ = ['start', 'awaiting_plan', 'follow_unscrewing', 'lift_ended', 'coarse_when_there']
 
@@ -58,6 +58,7 @@ def start(run: StepRun, step: PlannedStep, targets: StepTargets, now: float,
     run.tries.insertions = run.tries.fine_lines = 0
     run.tries.insertion_error = math.nan
     run.search, run.estimate, run.height_shift = search, None, 0.0
+    run.looks = Looks(due=run.camera and run.parameters.max_looks > 0)
     run.search_over = ''
     run.outcome = None
     run.reason = ''

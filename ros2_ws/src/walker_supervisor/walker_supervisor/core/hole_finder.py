@@ -44,8 +44,9 @@ __all__ = ['Unseen', 'HoleMeasurement', 'HoleFinder']
 
 _OUTLINE_POINTS = 64
 # A region's area against the model's outline of the mouth where the region is: within this
-# ratio either way, and the region filling its fitted ellipse at least this much.
-_AREA_RATIO = 1.6
+# ratio either way (a chamfer made 1.5 to 2.5 mm across for the nominal 2 mm is within it), and
+# the region filling its fitted ellipse at least this much.
+_AREA_RATIO = 1.9
 _FILL = 0.85
 # A region of the mouth's area within this ratio either way that is not its shape: the mouth
 # with something across it (larger regions are something else: a member, a shadow).

@@ -108,7 +108,22 @@ class SupervisorParameters:
     search_sigmas: float = parameter(
         "standard deviations of the node's estimate that a search covers",
         '', 0.0, 10.0, read_only=False, source='chosen: 3, 99 % of a normal placement error')
-    # last, with its value also here: sections built field by field keep working without it
+    # last, with their values also here: sections built field by field keep working without
+    # them
+    max_looks: int = dataclasses.field(default=4, metadata=parameter(
+        'looks through the wrist camera before a descent (0: the blind descent, camera or not)',
+        '', 0, 10, read_only=False,
+        source='chosen: a look, one from higher for the height, one to confirm, one more'
+        ).metadata)
+    look_settle_time: float = dataclasses.field(default=1.0, metadata=parameter(
+        'time the joints must be still before a look through the wrist camera', 's', 0.0, 10.0,
+        read_only=False,
+        source="chosen: the link's 18 rad/s mode rings on after the joints are still").metadata)
+    look_alignment: float = dataclasses.field(default=0.0005, metadata=parameter(
+        "largest offset of the hole seen from the gripper's axis to descend without moving",
+        'm', 1e-5, 0.05, read_only=False,
+        source='chosen: a quarter of the 2 mm insertion tolerance, as insertion_alignment'
+        ).metadata)
     insertion_overtravel: float = dataclasses.field(default=0.002, metadata=parameter(
         "how far past the hole's nominal mouth a descent is commanded, to meet a lower node's "
         'face', 'm', 0.0, 0.02, read_only=False,
@@ -164,6 +179,11 @@ def check_with_gripper(settings: SupervisorParameters, gripper) -> None:
             f'supervisor.descent_region ({settings.descent_region} m) must not exceed '
             f'gripper.insertion_position_tolerance ({tolerance} m): the descent starts '
             f'only with the tip inside it')
+    if settings.look_alignment >= tolerance:
+        raise ParameterError(
+            f'supervisor.look_alignment ({settings.look_alignment} m) must be smaller than '
+            f'gripper.insertion_position_tolerance ({tolerance} m): a hole seen that far off '
+            f'would be missed')
 
 
 def check_with_planner(settings: SupervisorParameters, stream_start_tolerance: float) -> None:

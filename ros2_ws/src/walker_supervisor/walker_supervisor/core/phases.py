@@ -36,6 +36,7 @@ class Stage(enum.StrEnum):
     MOVING = 'moving'  # COARSE: the sweep streams; FINE: a fine line or a way back streams
     ARRIVING = 'arriving'  # COARSE or FINE: the motion there ended (or runs on); waiting for
     # the tip to come within the region, or to come to rest
+    LOOKING = 'looking'  # FINE: a frame of the moving gripper's wrist camera is awaited
     SETTLING = 'settling'  # FINE, INSERTION: waiting for the joints to be still (or, above the
     # hole, for the tip to close on it slowly enough to descend)
     DESCENDING = 'descending'  # INSERTION: the descent along the axis streams

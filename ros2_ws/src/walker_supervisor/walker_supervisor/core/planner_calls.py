@@ -28,6 +28,8 @@ __all__ = ['TRAJECTORY_TYPES', 'planner_call']
 TRAJECTORY_TYPES = {
     'extraction': ('extraction_line', True),
     'retry_lift': ('extraction_line', True),
+    # up the gripper's axis, for a look at the hole from higher (core/looking.py)
+    'look_lift': ('extraction_line', True),
     'coarse': ('bang_bang_node', True),
     'fine': ('cartesian_line', True),
     'insertion': ('insertion_line', True),
@@ -40,7 +42,7 @@ TRAJECTORY_TYPES = {
     'jog_tip': ('cartesian_line', True),
 }
 #: Motions that start where the joints are now (the others start at a planned point).
-_FROM_MEASURED = frozenset({'fine', 'retry_lift', 'recover', 'jog_tip'})
+_FROM_MEASURED = frozenset({'fine', 'retry_lift', 'look_lift', 'recover', 'jog_tip'})
 
 
 def planner_call(request: TrajectoryRequest, kinematics: WalkerKinematics,

@@ -21,7 +21,8 @@ Events in (those marked * return the commands to carry out, in order)
 Measurements: :meth:`joint_states`, :meth:`gripper_states` *, :meth:`tip_pose`,
 :meth:`controller_states` *, :meth:`latched_mode` (the base a restarted supervisor takes back).
 Answers: :meth:`request_sent`, :meth:`request_failed` *, :meth:`plan_answered` *,
-:meth:`follow_accepted` *, :meth:`follow_done` *, :meth:`gripper_answered` *.
+:meth:`follow_accepted` *, :meth:`follow_done` *, :meth:`gripper_answered` *,
+:meth:`frame_seen` *.
 Operator: :meth:`start_goal` * (raises :class:`~walker_supervisor.core.goals.GoalRefusedError`),
 :meth:`cancel_goal`, :meth:`hold` *, :meth:`resume` (the answer, and commands; raises
 :class:`~walker_supervisor.core.phases.SequencerError`); teleoperation's own:
@@ -43,8 +44,10 @@ controllers; :class:`GripperRequest` to the plant (answer :meth:`gripper_answere
 accepted or refused; the gripper states then tell when it is done); :class:`PlanMotion` to the
 planner (``call`` is the planner core's request; answer :meth:`plan_answered` with its ticket);
 :class:`FollowMotion` (answer :meth:`follow_accepted`, then :meth:`follow_done` when the stream
-ends); :class:`CancelFollow` (stop that stream); the records (:class:`PhaseRecord`,
-:class:`StepRecord`, :class:`Feedback`, :class:`GoalEnded`) to publish; :class:`Notice` to log.
+ends); :class:`LookRequest` to the moving gripper's wrist camera (answer :meth:`frame_seen`
+with the frame once it is ready); :class:`CancelFollow` (stop that stream); the records
+(:class:`PhaseRecord`, :class:`StepRecord`, :class:`Feedback`, :class:`GoalEnded`) to
+publish; :class:`Notice` to log.
 A shell without ROS clients or files may ignore :class:`RenewPlannerClient`,
 :class:`RenewModePublisher`, :class:`StopOrphanStream`, :class:`RecordStep`,
 :class:`ForgetRecordedStep` and :class:`DecideNow`.
@@ -78,6 +81,8 @@ from walker_supervisor.core.prepared_motions import PlanAnswer
 from walker_supervisor.core.reports import (
     PhaseAnnouncer, StepFigures, goal_ended, goal_feedback)
 from walker_supervisor.core.route import PlannedStep
+from walker_supervisor.core.sighting import (
+    HoleSighter, JointHistory, LookResult, look_result)
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.sequencer import StepSequencer
 from walker_supervisor.core.step_geometry import StepTargets
@@ -143,7 +148,13 @@ class WalkRunner:
         self.params = params
         self.kinematics = WalkerKinematics.from_parameters(params)
         self.truss = Truss.from_parameters(params)
-        self.sequencer = StepSequencer(settings, self.kinematics, 'a', params.gripper.screw_time)
+        self.sequencer = StepSequencer(settings, self.kinematics, 'a', params.gripper.screw_time,
+                                       bool(params.gripper.camera.enabled))
+        #: places the holes the moving gripper's camera sees (:mod:`.looking`)
+        self.sighter = HoleSighter(params)
+        self._joint_history = JointHistory()
+        #: the last look taken (None before any), for a report against the plant's truth
+        self.last_look: LookResult | None = None
         #: the truss map and the step targets planned on it
         self.mapped = MapPlanning(self.kinematics, self.truss, settings,
                                   params.gripper.insertion_position_tolerance,
@@ -303,6 +314,43 @@ class WalkRunner:
             self._emit(DecideNow())  # the next motion or phase is decided now
         return self._flush()
 
+    def frame_seen(self, gripper: str, image: np.ndarray, exposure_time: float,
+                   now: float) -> list:
+        """Take the frame a :class:`LookRequest` asked for: RGB ``image`` of ``exposure_time``.
+
+        The hole is placed through the joints measured at the tick nearest the frame's
+        instant (:class:`~walker_supervisor.core.sighting.HoleSighter`); the map takes it, and
+        the step goes on from what it showed.
+        """
+        sequencer = self.sequencer
+        step, targets = sequencer.step, sequencer.targets
+        theta = self._joint_history.at(exposure_time)
+        if step is None or targets is None or theta is None \
+                or gripper != step.moving_gripper:
+            self._emit(Notice(f'frame of camera {gripper} ignored: no look of that gripper is '
+                              f'under way', 'warning'))
+            return self._flush()
+        roles = physical_to_roles(theta, step.base_gripper)
+        known = self.mapped.map.estimate(step.to_node, seen=False)
+        height = float(targets.frame.to_base(known.position)[2])
+        try:
+            sighting = self.sighter.sight(image, self.kinematics, roles,
+                                          float(targets.point_to[2]))
+            commands = sequencer.frame_seen(sighting, height,
+                                            math.sqrt(max(known.covariance[2, 2], 0.0)), now)
+        except (ValueError, SequencerError) as error:
+            self._emit(Notice(f'frame of camera {gripper} ignored: {error}', 'warning'))
+            return self._flush()
+        located = sequencer.take_located()
+        if located is not None:
+            self.mapped.map.sight(step.to_node, targets.frame, step.base_node, self.kinematics,
+                                  roles, *located)
+        self.last_look = look_result(gripper, step.to_node, exposure_time, sighting, located,
+                                     self.kinematics.forward_transform(roles),
+                                     not sequencer.looking)
+        self._execute(commands, now)
+        return self._flush()
+
     def gripper_answered(self, success: bool, message: str, now: float) -> list:
         """Take the plant's answer to a :class:`GripperRequest` (accepted, or refused: why)."""
         try:
@@ -455,6 +503,7 @@ class WalkRunner:
             self._adopt()
         self._apply(self._motions.check(steady, now), now)
         if measured.positions is not None:
+            self._joint_history.add(now, measured.positions)
             base = self.sequencer.base_gripper
             self._execute(self.sequencer.tick(now, measured.roles(base),
                                               physical_to_roles(measured.velocities, base),

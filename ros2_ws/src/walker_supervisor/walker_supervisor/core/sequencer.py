@@ -28,13 +28,15 @@ import numpy as np
 
 from walker_core.gripper_state import GripperState
 from walker_core.kinematics import KinematicsError, WalkerKinematics
-from walker_supervisor.core import approach, extraction, insertion, recovery, transitions
+from walker_supervisor.core import (
+    approach, extraction, insertion, looking, recovery, transitions)
 from walker_supervisor.core.hole_search import HoleSearch
 from walker_supervisor.core.transitions import MAX_FINE_LINES
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, SequencerError, Stage, StepOutcome
 from walker_supervisor.core.progress import PhaseProgress
 from walker_supervisor.core.route import PlannedStep
+from walker_supervisor.core.sighting import Sighting
 from walker_supervisor.core.step_geometry import StepTargets, probe_targets
 from walker_supervisor.core.step_run import StepRun
 
@@ -58,11 +60,14 @@ class StepSequencer:
         The base before the first step; after each completed step, the gripper that moved.
     screw_time : float
         Time a gripper takes to screw in or out [s] (``gripper.screw_time``).
+    camera : bool
+        The grippers carry wrist cameras (``gripper.camera.enabled``): the step looks before
+        it descends (:mod:`.looking`).
     """
 
     def __init__(self, parameters: SupervisorParameters, kinematics: WalkerKinematics,
-                 base_gripper: str = 'a', screw_time: float = 0.5) -> None:
-        self._run = StepRun(parameters, kinematics, base_gripper, screw_time)
+                 base_gripper: str = 'a', screw_time: float = 0.5, camera: bool = False) -> None:
+        self._run = StepRun(parameters, kinematics, base_gripper, screw_time, camera)
         self._progress = PhaseProgress()
 
     # ------------------------------------------------------------------ queries
@@ -160,12 +165,44 @@ class StepSequencer:
             return
         estimate = run.estimate if run.estimate is not None else run.targets
         run.height_shift = float(height) - float(estimate.point_to[2])
+        looking.height_felt(run)
         if run.stage == Stage.RETRY_LIFT and run.estimate is not None:
             try:
                 run.targets = probe_targets(run.kinematics, run.estimate, run.search.offset,
                                             run.height_shift)
             except KinematicsError:
                 pass  # out of reach there: the probe keeps its height
+
+    @property
+    def looking(self) -> bool:
+        """True while the step means to look again before its descent."""
+        return looking.wanted(self._run)
+
+    def take_located(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Return, once, the hole the step's looks located since the last call (or None).
+
+        Its mouth's position [m] and covariance [m^2] in the base frame.
+        """
+        located, self._run.looks.located = self._run.looks.located, None
+        return located
+
+    def frame_seen(self, sighting: Sighting, height: float, height_std: float,
+                   now: float) -> list:
+        """Take what the frame asked for by a :class:`LookRequest` showed (:mod:`.looking`).
+
+        ``height`` [m] (base frame) and ``height_std`` [m]: the target's mouth height as the
+        map knew it before any look.
+
+        Raises
+        ------
+        SequencerError
+            No look is under way.
+        """
+        run = self._run
+        if not (run.busy and run.stage == Stage.LOOKING):
+            raise SequencerError(f'no look is under way (phase {run.phase.name}, stage '
+                                 f'{run.stage or "none"})')
+        return looking.seen(run, now, sighting, height, height_std)
 
     def take_outcome(self) -> StepOutcome | None:
         """Return the outcome of the step that ended since the last call, once; else None.
@@ -379,7 +416,7 @@ class StepSequencer:
             return []
         if run.phase == Phase.COARSE:
             return approach.coarse_tick(run, now, velocities)
-        if run.phase == Phase.FINE and run.stage == Stage.SETTLING:
+        if run.phase == Phase.FINE and run.stage in (Stage.SETTLING, Stage.LOOKING):
             return approach.fine_settling(run, now, velocities)
         if run.phase == Phase.INSERTION and run.stage == Stage.SETTLING:
             return insertion.at_mouth(run, now, velocities, grippers)

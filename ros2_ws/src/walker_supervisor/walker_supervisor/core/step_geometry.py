@@ -17,7 +17,7 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_supervisor.core.route import PlannedStep
 
 __all__ = ['BaseFrame', 'StepTargets', 'plan_step_targets', 'measure_step_targets',
-           'recovery_targets', 'probe_targets']
+           'recovery_targets', 'probe_targets', 'shifted_targets', 'raised_approach']
 
 
 @dataclasses.dataclass(frozen=True)
@@ -242,7 +242,23 @@ def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
     """
     c, s = math.cos(targets.frame.heading), math.sin(targets.frame.heading)
     dx, dy = float(offset[0]), float(offset[1])
-    shift = np.array([c * dx + s * dy, -s * dx + c * dy, float(height_shift)])
+    return shifted_targets(kinematics, targets,
+                           np.array([c * dx + s * dy, -s * dx + c * dy, float(height_shift)]))
+
+
+def shifted_targets(kinematics: WalkerKinematics, targets: StepTargets,
+                    shift: np.ndarray) -> StepTargets:
+    """Return the step's targets with the hole moved by ``shift`` [m] (x, y, z, base frame).
+
+    The points above the hole and at its mouth move by it; the joint targets there are the IK
+    solutions nearest the step's own, the tip's yaw kept.
+
+    Raises
+    ------
+    KinematicsError
+        When a moved target is out of reach or outside the joint limits.
+    """
+    shift = np.asarray(shift, dtype=float)
     point_above_to = targets.point_above_to + shift
     point_to = targets.point_to + shift
     yaw = float(kinematics.forward(targets.above_to)[4])
@@ -250,3 +266,20 @@ def probe_targets(kinematics: WalkerKinematics, targets: StepTargets,
     at_to = kinematics.inverse([*point_to, 0.0, yaw], reference=above_to)
     return dataclasses.replace(targets, above_to=above_to, at_to=at_to,
                                point_above_to=point_above_to, point_to=point_to)
+
+
+def raised_approach(kinematics: WalkerKinematics, targets: StepTargets,
+                    height: float) -> StepTargets:
+    """Return the step's targets with the point above the hole ``height`` [m] over its mouth.
+
+    The descent starts there; the joints there are the IK solution nearest the step's own.
+
+    Raises
+    ------
+    KinematicsError
+        When the point is out of reach or outside the joint limits.
+    """
+    point_above_to = targets.point_to + np.array([0.0, 0.0, float(height)])
+    yaw = float(kinematics.forward(targets.above_to)[4])
+    above_to = kinematics.inverse([*point_above_to, 0.0, yaw], reference=targets.above_to)
+    return dataclasses.replace(targets, above_to=above_to, point_above_to=point_above_to)

@@ -22,10 +22,11 @@ from walker_supervisor.core.descent_contact import DescentContact
 from walker_supervisor.core.parameters import SupervisorParameters
 from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.route import PlannedStep
+from walker_supervisor.core.sighting import Sighting
 from walker_supervisor.core.step_geometry import StepTargets
 from walker_supervisor.core.way_back import vertical_ik
 
-__all__ = ['StepRun', 'Motions', 'GripperWatch', 'Tries']
+__all__ = ['StepRun', 'Motions', 'GripperWatch', 'Tries', 'Looks']
 
 
 @dataclasses.dataclass
@@ -101,6 +102,38 @@ class Tries:
     contact: DescentContact | None = None
 
 
+@dataclasses.dataclass
+class Looks:
+    """The looks of a step's approach.
+
+    Attributes
+    ----------
+    due : bool
+        A look is wanted before the next descent.
+    taken : int
+        Looks asked for since the last change of what is known of the hole.
+    asked_at : float or None
+        [s] When the look under way was asked for (None: none under way).
+    height_shift : float
+        [m] The probes' height shift the last look assumed (``run.height_shift``).
+    sightings : list of Sighting
+        The step's looks that saw the hole.
+    located : tuple of ndarray, or None
+        The hole located from them (position [m], covariance [m^2], base frame), until the walk
+        runner's map takes it.
+    raised : bool
+        The point above the hole has gone up for a look along a steeper line of sight.
+    """
+
+    due: bool = False
+    taken: int = 0
+    asked_at: float | None = None
+    height_shift: float = 0.0
+    sightings: list[Sighting] = dataclasses.field(default_factory=list)
+    located: tuple[np.ndarray, np.ndarray] | None = None
+    raised: bool = False
+
+
 class StepRun:
     """The state of the step under way (or of the last one) and the moves every phase makes.
 
@@ -111,10 +144,12 @@ class StepRun:
     base_gripper : str
     screw_time : float
         [s] a screw-in or unscrew (``gripper.screw_time``).
+    camera : bool
+        The grippers carry wrist cameras (``gripper.camera.enabled``).
     """
 
     def __init__(self, parameters: SupervisorParameters, kinematics: WalkerKinematics,
-                 base_gripper: str, screw_time: float) -> None:
+                 base_gripper: str, screw_time: float, camera: bool = False) -> None:
         self.parameters = parameters
         self.kinematics = kinematics
         self.base_gripper = base_gripper
@@ -151,6 +186,9 @@ class StepRun:
         # [m] how far the probes' mouth is moved in height from the estimate's: the height the
         # map took from a jam on the node's face (StepSequencer.move_mouth)
         self.height_shift = 0.0
+        # the grippers carry wrist cameras; the looks of the step's approach (:mod:`.looking`)
+        self.camera = camera
+        self.looks = Looks()
 
     # ------------------------------------------------------------------ where the tip is
     @property

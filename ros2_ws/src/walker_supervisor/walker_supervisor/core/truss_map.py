@@ -197,21 +197,28 @@ class TrussMap:
         # per node, its height felt by a descent: the base it was felt from, height [m] and
         # variance [m^2] (until a survey of the node takes its place)
         self._heights: dict[str, tuple[str, float, float]] = {}
+        # per node, where a wrist camera saw its hole: x, y [m] and covariance [m^2] (until a
+        # survey of the node takes its place)
+        self._sightings: dict[str, NodeEstimate] = {}
         self.anchor: str = ''
         self.version = 0  # grows with every change: a publisher re-latches on it
 
     # ------------------------------------------------------------------ queries
-    def estimate(self, node: str) -> NodeEstimate:
+    def estimate(self, node: str, seen: bool = True) -> NodeEstimate:
         """Return the node's estimate: surveyed, or predicted from the map (UnknownNodeError).
 
         A node not surveyed is predicted from the surveyed node that knows it best
-        (:meth:`predicted`); in a map with no surveyed node it is nominal with the prior.
+        (:meth:`predicted`); in a map with no surveyed node it is nominal with the prior. A
+        height felt on its face updates it; where a wrist camera located its hole since, that
+        is the estimate (``seen`` False: the estimate without it, the looks' prior).
         """
+        if seen and node in self._sightings:
+            return self._sightings[node]
         known = self._surveyed.get(node) or self.predicted(node)
         felt = self._heights.get(node)
-        if felt is None:
-            return known
-        return fuse_height(known, felt[1], felt[2])
+        if felt is not None:
+            known = fuse_height(known, felt[1], felt[2])
+        return known
 
     def nominal(self, node: str) -> NodeEstimate:
         """Return the node's nominal place with the prior ``prior_std`` (the truss's drawing)."""
@@ -326,7 +333,9 @@ class TrussMap:
             self._prior[node] = (base_node, prior)
         estimate = fuse(prior, measured)
         self._surveyed[node] = estimate
-        self._heights.pop(node, None)  # the survey measures the height through the same joints
+        # the survey measures the height and the place through the same joints
+        self._heights.pop(node, None)
+        self._sightings.pop(node, None)
         self.version += 1
         return estimate
 
@@ -368,6 +377,42 @@ class TrussMap:
         variance = float(self.estimate(base_node).covariance[2, 2] + survey_covariance(
             kinematics, theta, frame.heading, self.joint_std)[2, 2] + contact_std ** 2)
         self._heights[node] = (base_node, height, variance)
+        self._sightings.pop(node, None)  # the next look locates the hole at this height
+        self.version += 1
+        return self.estimate(node)
+
+    def sight(self, node: str, frame: BaseFrame, base_node: str, kinematics: WalkerKinematics,
+              theta_roles: np.ndarray, position: np.ndarray, covariance: np.ndarray
+              ) -> NodeEstimate:
+        """Take ``node``'s hole as the moving gripper's wrist camera located it.
+
+        ``position`` [m] and ``covariance`` [m^2] are the hole's mouth in the base frame
+        (``frame`` at ``base_node``) located by the looks from the map's estimate
+        (:func:`~walker_supervisor.core.sighting.locate`): the estimate with the images. The
+        camera sees the hole against the gripper, which the joints ``theta_roles`` [rad] (role
+        order of the base) place: the tip's covariance through them (eq (1)'s Jacobian) and the
+        base node's are added. It is the node's estimate until a later look, a height felt
+        (which the next look takes up) or a survey of the node.
+
+        Returns
+        -------
+        NodeEstimate
+            The node's new estimate (the anchor is never moved).
+        """
+        if node == base_node:
+            raise ValueError(f'cannot see the base node {node} from itself')
+        self.truss.index(node)
+        if node == self.anchor:
+            return self.estimate(node)
+        theta = np.asarray(theta_roles, dtype=float)
+        c, s = math.cos(frame.heading), math.sin(frame.heading)
+        rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        total = (rotation @ np.asarray(covariance, dtype=float) @ rotation.T
+                 + self.estimate(base_node).covariance
+                 + survey_covariance(kinematics, theta, frame.heading, self.joint_std))
+        known = self.estimate(node, seen=False)
+        self._sightings[node] = NodeEstimate(frame.to_truss(np.asarray(position, dtype=float)),
+                                             (total + total.T) / 2.0, known.surveyed)
         self.version += 1
         return self.estimate(node)
 
@@ -416,6 +461,7 @@ class TrussMap:
         self._surveyed = taken
         self._prior = {}
         self._heights = {}
+        self._sightings = {}
         self.anchor = anchor
         self.version += 1
 

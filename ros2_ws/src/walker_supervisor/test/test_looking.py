@@ -1,0 +1,183 @@
+"""LOOKING: the wrist camera aligns the gripper over the hole before the descent.
+
+The sequencer runs in ``sequencer_world``'s ideal world; its camera is a pinhole at the nominal
+mount that sees the true hole exactly (:func:`_sighting`): the hole as a look at an assumed
+height places it, on the line of sight from the camera's centre to the true hole.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from sequencer_world import KIN, PARAMS, SUPERVISOR, TRUSS, World
+from walker_core.camera import CameraModel
+from walker_supervisor.core.commands import LookRequest, Notice, TrajectoryRequest
+from walker_supervisor.core.looking import LOOK_WAIT
+from walker_supervisor.core.route import possible_steps
+from walker_supervisor.core.sequencer import StepSequencer
+from walker_supervisor.core.sighting import Sighting, locate
+
+MOUNT = CameraModel.from_parameters(PARAMS.gripper.camera).mount
+LATENCY = 0.03  # [s] a frame is ready this long after it was asked for
+
+
+def _sighting(theta, hole, assumed_height, sigma=2e-5):
+    """Return the look of a perfect camera at ``hole`` [m] (base frame), at an assumed height."""
+    pose = KIN.forward_transform(theta)
+    centre = (pose @ np.append(MOUNT[:3, 3], 1.0))[:3]
+    sight = np.asarray(hole, dtype=float) - centre
+    seen = centre + sight * (assumed_height - centre[2]) / sight[2]
+    offset = np.linalg.solve(pose, np.append(seen, 1.0))[:2]
+    return Sighting(seen, sight[:2] / sight[2], offset, sigma, '', 'a perfect look')
+
+
+class LookingWorld(World):
+    """The ideal world with a camera on the grippers and the hole ``hole_shift`` off its estimate.
+
+    ``frames``: 'seen' (the camera sees the true hole), 'unseen' (it never does), 'none' (no
+    frame ever comes). ``height_std`` [m] is the map's height uncertainty the looks start from.
+    """
+
+    def __init__(self, hole_shift=(0.0, 0.0, 0.0), frames='seen', height_std=0.002,
+                 parameters=SUPERVISOR, camera=True, **options):
+        super().__init__(**options)
+        self.sequencer = StepSequencer(parameters, KIN, self.stance.base_gripper, camera=camera)
+        self.hole_shift = np.asarray(hole_shift, dtype=float)
+        self.frames, self.height_std = frames, height_std
+        self.frames_due = []  # (time, request) of frames asked for
+        self.looks = []  # (time, tip [m], request) of every look asked for
+
+    def run_step(self, step, max_time=60.0):
+        self.hole = None
+        return super().run_step(step, max_time)
+
+    def execute(self, commands):
+        super().execute([c for c in commands if not isinstance(c, LookRequest)])
+        for command in commands:
+            if isinstance(command, LookRequest):
+                self.log.append(command)
+                self.looks.append((self.now, KIN.forward(self.theta)[:3], command))
+                if self.frames != 'none':
+                    self.frames_due.append((self.now + LATENCY, command))
+
+    def advance(self):
+        if self.hole is None:
+            self.hole = self.targets.point_to + self.hole_shift
+        for due in [f for f in self.frames_due if f[0] <= self.now + 1e-9]:
+            self.frames_due.remove(due)
+            if self.frames == 'unseen':
+                seen = Sighting(None, None, None, math.inf, 'out of view', 'no dark disc')
+            else:
+                seen = _sighting(self.theta, self.hole, float(self.sequencer.targets.point_to[2]))
+            self.execute(self.sequencer.frame_seen(seen, float(self.targets.point_to[2]),
+                                                   self.height_std, self.now))
+        super().advance()
+
+    def requests(self, purpose):
+        return [c for c in self.log if isinstance(c, TrajectoryRequest) and c.purpose == purpose]
+
+    def notices(self, level):
+        return [c.message for c in self.log if isinstance(c, Notice) and c.level == level]
+
+
+def _step(world):
+    return possible_steps(TRUSS, world.stance)[0]
+
+
+def test_a_hole_off_its_estimate_and_height_is_located_and_the_descent_goes_down_its_axis():
+    world = LookingWorld(hole_shift=(0.002, -0.001, 0.0015))  # 2.4 mm off, 1.5 mm high
+    outcome = world.run_step(_step(world))
+    assert outcome.success, outcome.message
+    lifts = world.requests('look_lift')
+    assert len(lifts) == 1, 'one look from higher measures the height'
+    assert lifts[0].goal_point[2] > lifts[0].start_point[2]
+    np.testing.assert_allclose(lifts[0].goal_point[:2], lifts[0].start_point[:2], atol=1e-9)
+    assert len(world.looks) >= 2
+    descent = world.requests('insertion')[-1]
+    np.testing.assert_allclose(descent.goal_point, world.hole, atol=5e-5)
+    located = world.sequencer.targets.point_to
+    np.testing.assert_allclose(located, world.hole, atol=5e-5)
+
+
+def test_each_look_waits_for_the_arm_at_rest():
+    world = LookingWorld(hole_shift=(0.002, 0.0, 0.0))
+    world.run_step(_step(world))
+    for time, _, _ in world.looks:
+        still_since = max(t for t, stage in world.stages if t < time and stage != 'settling'
+                          and stage != 'looking')
+        assert time - still_since >= SUPERVISOR.look_settle_time - 1e-9
+
+
+def test_a_hole_where_the_map_has_it_to_its_height_is_confirmed_by_one_look():
+    world = LookingWorld(height_std=1e-5)  # a surveyed node's height, nothing off
+    outcome = world.run_step(_step(world))
+    assert outcome.success, outcome.message
+    assert len(world.looks) == 1
+    assert not world.requests('look_lift') and not world.requests('fine')
+
+
+def test_a_hole_not_seen_goes_on_blind_at_the_estimate():
+    world = LookingWorld(frames='unseen')
+    outcome = world.run_step(_step(world))
+    assert outcome.success, outcome.message
+    assert len(world.looks) == 1
+    assert any('not seen (out of view' in m for m in world.notices('warning'))
+    np.testing.assert_allclose(world.requests('insertion')[-1].goal_point,
+                               world.targets.point_to, atol=1e-12)
+
+
+def test_a_camera_that_sends_no_frame_is_waited_for_a_bounded_time_then_the_step_goes_on():
+    world = LookingWorld(frames='none')
+    outcome = world.run_step(_step(world))
+    assert outcome.success, outcome.message
+    assert len(world.looks) == 1
+    assert any('no frame from the camera' in m for m in world.notices('warning'))
+    descent = next(t for t, r in world.requested if r.purpose == 'insertion')
+    assert descent - world.looks[0][0] == pytest.approx(LOOK_WAIT, abs=0.05)
+
+
+@pytest.mark.parametrize('camera, looks', [(False, 4), (True, 0)])
+def test_the_blind_robot_never_looks(camera, looks):
+    """Without a camera, or with ``max_looks`` 0, the step is the paper's blind one."""
+    parameters = dataclasses.replace(SUPERVISOR, max_looks=looks)
+    world = LookingWorld(hole_shift=(0.0005, 0.0, 0.0), parameters=parameters, camera=camera)
+    outcome = world.run_step(_step(world))
+    assert outcome.success, outcome.message
+    assert not world.looks
+
+
+def test_a_frame_nobody_asked_for_is_refused_and_changes_nothing():
+    world = LookingWorld()
+    with pytest.raises(Exception, match='no look is under way'):
+        world.sequencer.frame_seen(_sighting(world.theta, np.zeros(3), 0.0), 0.0, 0.001, 0.0)
+
+
+# ---------------------------------------------------------------------- locate
+def _looks_at(hole, centres, assumed_height, sigma=1e-6):
+    looks = []
+    for centre in centres:
+        sight = hole - centre
+        seen = centre + sight * (assumed_height - centre[2]) / sight[2]
+        looks.append(Sighting(seen, sight[:2] / sight[2], np.zeros(2), sigma, '', ''))
+    return looks
+
+
+def test_one_look_places_the_hole_on_its_line_of_sight_at_the_height_known_before():
+    hole = np.array([0.01, 0.5, 0.0])
+    looks = _looks_at(hole, [np.array([0.055, 0.5, 0.035])], assumed_height=0.0)
+    position, covariance = locate(looks, height=0.0, height_std=0.002)
+    np.testing.assert_allclose(position, hole, atol=1e-9)
+    assert covariance[2, 2] == pytest.approx(0.002 ** 2, rel=1e-6), 'one look: no height'
+
+
+def test_two_lines_of_sight_measure_a_height_the_map_had_wrong():
+    hole = np.array([0.01, 0.5, 0.003])  # 3 mm above where the map has it
+    centres = [np.array([0.055, 0.5, 0.035]), np.array([0.055, 0.5, 0.050])]
+    looks = _looks_at(hole, centres, assumed_height=0.0)
+    one, _ = locate(looks[:1], height=0.0, height_std=0.002)
+    assert np.linalg.norm(one[:2] - hole[:2]) > 0.002, 'one look is fooled by the height'
+    both, covariance = locate(looks, height=0.0, height_std=0.002)
+    np.testing.assert_allclose(both, hole, atol=1e-5)
+    assert math.sqrt(covariance[2, 2]) < 2e-4
