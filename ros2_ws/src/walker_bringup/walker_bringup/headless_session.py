@@ -125,7 +125,7 @@ class HeadlessBackend:
               f'{result.cpu_time:.1f} s of CPU ({speed(result.cpu_time):.1f} x real time on '
               'one core)')
         fields = result.json_fields('target', 'reached', 'message', 'path', 'timed_out',
-                                    'wall_time', 'loop')
+                                    'wall_time', 'loop', 'looks')
         fields['grip_monitor'] = {'states': result.grip_states,
                                   'no_gripper_attached': result.grip_losses}
         write_json(rows, self.out / 'summary.json', {**fields, 'runner': result.runner})

@@ -150,3 +150,19 @@ def test_walks_on_one_truss_sum_their_grip_monitors():
     assert combined_summary([first, second])['grip_monitor'] == {
         'states': 22, 'no_gripper_attached': 1}
     assert 'grip_monitor' not in combined_summary([first, {'steps': [], 'reached': True}])
+
+
+def test_the_run_row_carries_the_looks_and_each_approachs_last_vision_error(small_spec):
+    plan = plan_run(small_spec, 0)
+    looks = [{'seen': True, 'error': 0.002, 'final': False},
+             {'seen': True, 'error': 0.00008, 'final': True},
+             {'seen': False, 'error': None, 'final': True},
+             {'seen': True, 'error': 0.00012, 'final': True}]
+    summary = {'steps': [], 'reached': True, 'message': '', 'looks': looks}
+    run = run_rows('c', plan, summary)[-1]
+    assert (run['looks'], run['looks_unseen']) == (4, 1)
+    assert run['vision_errors'] == [0.00008, 0.00012]
+    blind = run_rows('c', plan, {'steps': [], 'reached': True, 'message': ''})[-1]
+    assert blind['looks'] is None and blind['vision_errors'] is None
+    both = combined_summary([summary, {'steps': [], 'reached': True, 'looks': looks[:1]}])
+    assert both['looks'] == looks + looks[:1]

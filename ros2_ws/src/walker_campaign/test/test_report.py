@@ -94,3 +94,19 @@ def test_a_campaign_without_sweeps_or_results_still_reports(write_spec, tmp_path
     report = make_campaign_report(path, tmp_path / 'report')
     assert set(report.figures) == {'outcomes', 'distributions'}
     assert '0 of 0' in report.markdown.read_text()
+
+
+def test_the_report_shows_the_vision_error_of_the_runs_that_looked(results_path, tmp_path):
+    rows = [json.loads(line) for line in results_path.read_text().splitlines()]
+    runs = [r for r in rows if r.get('kind') == 'run']
+    assert 'vision_error' not in analyse(read_results(results_path)).step_quantiles
+    runs[0].update(looks=5, looks_unseen=1, vision_errors=[1e-4, 3e-4])
+    runs[1].update(looks=2, looks_unseen=0, vision_errors=[2e-4])
+    path = tmp_path / 'results.jsonl'
+    path.write_text(''.join(json.dumps(r) + '\n' for r in rows))
+    analysis = analyse(read_results(path))
+    assert analysis.step_quantiles['vision_error'][0.5] == pytest.approx(2e-4)
+    assert analysis.jams['looks through the wrist camera'] == 7
+    assert analysis.jams['looks that did not see the hole'] == 1
+    text = make_campaign_report(path, tmp_path / 'report', tolerance=0.002).markdown.read_text()
+    assert '| vision error [mm] | 0.2 |' in text.replace('0.20', '0.2')

@@ -49,7 +49,7 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
         '(locally, or on a cluster with --address), resume it, and write its report.')
     parser.add_argument('spec', help='the campaign spec (YAML; docs/campaigns.md), or the name '
                                      'of a shipped one (default_walk, ka_filter_sweep, '
-                                     'truss_as_built, truss_twice)')
+                                     'truss_as_built, truss_as_built_camera, truss_twice)')
     parser.add_argument('--out', default=None,
                         help='output directory (default: runs/campaigns/<name>)')
     parser.add_argument('--address', default=None,

@@ -72,6 +72,9 @@ class WalkSummary:
     grip_states, grip_losses : int
         The grip monitor (headless): the plant's gripper-state messages, and those with no
         gripper attached (a grip loss: the walker let go of the truss).
+    looks : tuple of dict
+        The wrist camera's looks against the plant's truth (headless;
+        :func:`walker_headless.shell.look_record`).
     """
 
     target: str
@@ -95,6 +98,7 @@ class WalkSummary:
     survey: dict | None = None
     grip_states: int = 0
     grip_losses: int = 0
+    looks: tuple[dict, ...] = ()
 
     @property
     def code(self) -> int:

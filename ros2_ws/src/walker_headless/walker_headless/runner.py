@@ -137,7 +137,8 @@ def _result(target: str, shell: WalkShell, loop: RobotLoop, started: float,
         steps_taken=ended.steps_taken if ended is not None else 0,
         duration=ended.duration if ended is not None else 0.0,
         wall_time=time.monotonic() - started, runner=Runner.HEADLESS,
-        reports=tuple(shell.reports), phases=tuple(shell.phases), sim_time=loop.time,
+        reports=tuple(shell.reports), phases=tuple(shell.phases), looks=tuple(shell.looks),
+        sim_time=loop.time,
         periods=loop.stamp // loop.period_ns, grip_states=loop.grip_states,
         grip_losses=loop.grip_losses)
 

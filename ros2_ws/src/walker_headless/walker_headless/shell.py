@@ -15,10 +15,12 @@ carries out its commands on the loop's cores, as the node does over ROS
 * every :data:`~walker_supervisor.core.runner.WATCH_PERIOD`: the watchdog, on simulated time
   (the only clock there is);
 * its commands: the mode to the five controllers and the planner's hold, a gripper command to
-  the plant core, planner requests to :class:`~walker_headless.planner.HeadlessPlanner`; the
-  phase and the step reports to the bag and the walk's records, the feedback to ``progress``,
-  its notices to ``say``. The answers come back as the node's do, after the commands of the
-  call that asked for them, and take no simulated time (the graph holds its clock for them).
+  the plant core, a look to the plant core's wrist camera (the frame is answered once its
+  exposure latency has passed), planner requests to
+  :class:`~walker_headless.planner.HeadlessPlanner`; the phase and the step reports to the bag
+  and the walk's records, the feedback to ``progress``, its notices to ``say``. The answers
+  come back as the node's do, after the commands of the call that asked for them, and take
+  no simulated time (the graph holds its clock for them).
 
 What the node has and the loop has not is ignored: a planner client made anew, the
 ``control_mode`` publisher made anew, the step-state file of a restart, an operator's jog.
@@ -27,11 +29,12 @@ What the node has and the loop has not is ignored: a planner client made anew, t
 from __future__ import annotations
 
 import collections
+import math
 from collections.abc import Callable
 
 from walker_supervisor.core.commands import (
-    CancelFollow, DecideNow, Feedback, FollowMotion, GoalEnded, GripperRequest, Notice,
-    PhaseRecord, PlanMotion, SetControlMode, StepRecord, StopOrphanStream)
+    CancelFollow, DecideNow, Feedback, FollowMotion, GoalEnded, GripperRequest, LookRequest,
+    Notice, PhaseRecord, PlanMotion, SetControlMode, StepRecord, StopOrphanStream)
 from walker_supervisor.core.goals import GoalRefusedError
 from walker_supervisor.core.reports import phase_fields, report_fields
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
@@ -40,7 +43,29 @@ from walker_headless import records
 from walker_headless.loop import RobotLoop, stamp_seconds
 from walker_headless.planner import HeadlessPlanner
 
-__all__ = ['WalkShell']
+__all__ = ['WalkShell', 'look_record']
+
+
+def look_record(look, frame) -> dict:
+    """Return a look of the runner against the frame's truth, as ``summary.json`` keeps it.
+
+    ``look`` is the runner's :class:`~walker_supervisor.core.sighting.LookResult`, ``frame``
+    the plant's :class:`~walker_sim.core.wrist_camera.CameraFrame`. In the gripper's frame at
+    the frame's instant: ``error`` [m] is the distance between the hole's axis as the looks so
+    far located it (what the step aims at) and as it really was, ``frame_error`` [m] the same
+    of this frame alone, at the height the step assumed (both None when not seen);
+    ``spread`` [m] the located hole's stated standard deviation.
+    """
+    truth = frame.mouth_in_gripper[:2]
+
+    def distance(offset):
+        return None if offset is None else float(math.hypot(*(offset - truth)))
+
+    return {'time': look.exposure_time, 'gripper': look.gripper, 'node': look.node,
+            'seen': look.found, 'reason': look.reason, 'error': distance(look.located),
+            'frame_error': distance(look.measured),
+            'spread': look.spread if math.isfinite(look.spread) else None,
+            'offset': float(math.hypot(*frame.mouth_in_gripper[:2])), 'final': look.final}
 
 
 class WalkShell:
@@ -88,6 +113,9 @@ class WalkShell:
         self._next_tick = self._next_watch = 0  # [ns]
         self._poses: list = []  # (stamp [s], tip position [m]) since the last sample
         self._map_version = -1  # the truss map's version last drawn
+        self._frames: list = []  # wrist camera frames asked for and not yet ready
+        #: every look the runner took, against the plant's truth (:func:`look_record`)
+        self.looks: list[dict] = []
 
     @property
     def done(self) -> bool:
@@ -109,6 +137,13 @@ class WalkShell:
             self._poses.append((stamp_seconds(stamp), state.poses[state.tip].position))
         for ticket, completed, message in self.planner.take_ended():
             self._carry_out(runner.follow_done(ticket, completed, message, now))
+        for frame in [f for f in self._frames if f.ready_time <= now]:
+            self._frames.remove(frame)
+            runner.last_look = None
+            commands = runner.frame_seen(frame.gripper, frame.image, frame.exposure_time, now)
+            if runner.last_look is not None:
+                self.looks.append(look_record(runner.last_look, frame))
+            self._carry_out(commands)
         if loop.grippers_out:
             self._carry_out(runner.gripper_states(loop.gripper_readings(), now, now))
         if stamp >= self._next_tick:  # the node's timer, on its grid of simulated time
@@ -184,6 +219,8 @@ class WalkShell:
             elif isinstance(command, GripperRequest):
                 answer = loop.plant.command_gripper(command.gripper, command.action)
                 answers.append(lambda a=answer: runner.gripper_answered(*a, now))
+            elif isinstance(command, LookRequest):
+                self._frames.append(loop.plant.camera_frame(command.gripper))
             elif isinstance(command, CancelFollow):
                 self.planner.cancel(command.ticket)
             elif isinstance(command, DecideNow):

@@ -192,6 +192,15 @@ def compare_walks(runs: list[dict[str, Any]]) -> list[WalkFigures]:
     return figures
 
 
+def _looks(runs: list[dict[str, Any]]) -> dict[str, int]:
+    """Return the wrist cameras' counts over the runs that looked (none: nothing to say)."""
+    looked = [r for r in runs if r.get('looks')]
+    if not looked:
+        return {}
+    return {'looks through the wrist camera': sum(r['looks'] for r in looked),
+            'looks that did not see the hole': sum(r.get('looks_unseen') or 0 for r in looked)}
+
+
 def _grip_losses(runs: list[dict[str, Any]]) -> dict[str, int]:
     """Return the grip monitor's counts over the runs that carry them (none: nothing to say)."""
     monitored = [r for r in runs if r.get('grip_losses') is not None]
@@ -209,6 +218,7 @@ def analyse(results: Results) -> Analysis:
     walked = [r for r in runs if r['outcome'] != 'error']
     outcomes = collections.Counter(r['outcome'] for r in runs)
     ratios, errors = _values(steps, 'bound_ratio'), _values(steps, 'tip_error')
+    vision = [e for r in walked for e in r.get('vision_errors') or []]
     jam_steps = [s for s in steps if s.get('jams')]
     draw_columns = [c for d in results.header.get('dispersions', []) for c in d['columns']]
     sensitivities = rank_correlations(
@@ -224,12 +234,15 @@ def analyse(results: Results) -> Analysis:
         rate=Rate.of(sum(r['reached'] for r in walked), len(walked)),
         outcomes=dict(outcomes), step_ratios=ratios, tip_errors=errors,
         step_quantiles={'bound_ratio': quantiles(ratios, (0.5, 0.9, 0.99, 1.0)),
-                        'tip_error': quantiles(errors, (0.5, 0.9, 0.99, 1.0))},
+                        'tip_error': quantiles(errors, (0.5, 0.9, 0.99, 1.0)),
+                        **({'vision_error': quantiles(vision, (0.5, 0.9, 0.95, 0.99, 1.0))}
+                           if vision else {})},
         safe_holds=_causes(runs, 'failed'), errors=_causes(runs, 'error'),
         jams={'jammed screw-ins': sum(s['jams'] for s in jam_steps),
               'steps with a jam': len(jam_steps),
               'runs with a jam': len({s['index'] for s in jam_steps}),
               'steps': len(steps),
+              **_looks(runs),
               **_grip_losses(runs)},
         sensitivities=sensitivities, points=_points(results), failed_runs=failed,
         walks=compare_walks(runs))

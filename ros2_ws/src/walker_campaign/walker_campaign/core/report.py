@@ -87,6 +87,12 @@ def markdown(analysis: Analysis, figure_names: dict[str, str], results_path: Pat
     lines += _table(['figure', 'median', 'p90', 'p99', 'max'], [
         ['step time / bound'] + [_num(quant['bound_ratio'][q]) for q in (0.5, 0.9, 0.99, 1.0)],
         ['tip error [mm]'] + [_num(quant['tip_error'][q], 1e3) for q in (0.5, 0.9, 0.99, 1.0)]])
+    if 'vision_error' in quant:
+        vision = quant['vision_error']
+        lines += ['Vision error: where the looks located each hole before the descent, against '
+                  "the plant's truth, in the gripper's frame:", '']
+        lines += _table(['figure', 'median', 'p90', 'p95', 'p99', 'max'], [
+            ['vision error [mm]'] + [_num(vision[q], 1e3) for q in (0.5, 0.9, 0.95, 0.99, 1.0)]])
     lines += [f'![distributions]({figure_names["distributions"]})', '']
     lines += ['## Jams and safe holds', '']
     lines += _table(['', 'count'], [[k, str(v)] for k, v in analysis.jams.items()])

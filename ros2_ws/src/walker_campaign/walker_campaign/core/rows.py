@@ -17,7 +17,9 @@ one summary of its walks (:func:`combined_summary`): its step rows carry ``walk`
 its run row is reached when every walk reached, and adds ``walk<k>.<figure>`` for each walk
 (:data:`WALK_FIGURES`: reached, steps, probes, jams, walk time and its ratio to the bound).
 
-The run row carries the grip monitor's count from the summary's ``grip_monitor``:
+The run row carries the wrist camera's figures when the walk looked (``looks``,
+``looks_unseen``, ``vision_errors``: :func:`_look_figures`), and the grip monitor's count
+from the summary's ``grip_monitor``:
 ``grip_states`` (the plant's gripper-state messages) and ``grip_losses`` (those with no
 gripper attached: the walker let go of the truss); both ``None`` for a summary without one
 (the graph's, or results written before the count existed).
@@ -127,6 +129,20 @@ def _grip_monitor(summary: Mapping[str, Any]) -> dict[str, int | None]:
             'grip_losses': int(monitor.get('no_gripper_attached') or 0)}
 
 
+def _look_figures(looks: list[Mapping[str, Any]]) -> dict[str, Any]:
+    """Return the run row's wrist camera figures (all None for a walk that never looked).
+
+    ``looks`` and ``looks_unseen`` (frames that did not show the hole), and ``vision_errors``
+    [m]: for each approach's last look, how far the hole the looks located was from the
+    truth (the summary's ``looks``, :func:`walker_headless.shell.look_record`).
+    """
+    if not looks:
+        return {'looks': None, 'looks_unseen': None, 'vision_errors': None}
+    return {'looks': len(looks), 'looks_unseen': sum(not look.get('seen') for look in looks),
+            'vision_errors': [float(look['error']) for look in looks
+                              if look.get('final') and look.get('error') is not None]}
+
+
 def run_rows(campaign: str, plan: RunPlan, summary: Mapping[str, Any],
              execution: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
     """Return the rows of a walk: one per step, then the run's (which marks the run as done).
@@ -156,7 +172,8 @@ def run_rows(campaign: str, plan: RunPlan, summary: Mapping[str, Any],
         outcome = 'failed'
         cause = failed_step['cause'] if failed_step else cause_of(message)
     run = {'kind': RUN, **identity, 'outcome': outcome, 'reached': reached, 'cause': cause,
-           'message': message, **_summary_figures(steps), **_grip_monitor(summary)}
+           'message': message, **_summary_figures(steps), **_grip_monitor(summary),
+           **_look_figures(summary.get('looks') or [])}
     for number, walk in enumerate(summary.get('walks') or [], start=1):
         figures = _summary_figures([s for s in steps if s.get('walk') == number])
         run[f'walk{number}.reached'] = bool(walk.get('reached'))
@@ -183,7 +200,9 @@ def combined_summary(summaries: list[Mapping[str, Any]]) -> dict[str, Any]:
                 'no_gripper_attached': sum(int(m.get('no_gripper_attached') or 0)
                                            for m in monitors)}
                if all(isinstance(m, Mapping) for m in monitors) else None)
+    looks = [look for summary in summaries for look in summary.get('looks') or []]
     return {'steps': steps, 'reached': all(bool(s.get('reached')) for s in summaries),
+            **({'looks': looks} if looks else {}),
             **({'grip_monitor': monitor} if monitor is not None else {}),
             'message': str(short.get('message') or ''),
             'timed_out': any(bool(s.get('timed_out')) for s in summaries),

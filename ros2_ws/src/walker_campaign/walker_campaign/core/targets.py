@@ -11,7 +11,8 @@ stands for every number it covers. Which parameters a spec may touch is decided 
   simulation itself (rates, timeouts), the timing every node shares, or the seed the campaign
   owns;
 * a **sweep** changes the *model*'s settings the lab tunes: ``control.*``, ``planner.*`` and
-  ``supervisor.*``, every node given the swept value.
+  ``supervisor.*``, every node given the swept value; and the equipment the lab fits the robot
+  with, which the model and the truth share: ``gripper.camera.*`` (the wrist cameras).
 """
 
 from __future__ import annotations
@@ -32,8 +33,9 @@ __all__ = ['ParameterTarget', 'catalogue', 'TRUTH_PREFIXES', 'TUNABLE_PREFIXES',
 #: What a dispersion may change: the robot, truss and grippers as they really are.
 TRUTH_PREFIXES = ('robot.geometry.', 'robot.mass.', 'robot.drive.', 'robot.flexibility.',
                   'truss.', 'gripper.', 'sim.imperfections.')
-#: What a sweep may change: the settings of the controllers, the planner and the supervisor.
-TUNABLE_PREFIXES = ('control.', 'planner.', 'supervisor.')
+#: What a sweep may change: the settings of the controllers, the planner and the supervisor,
+#: and the wrist cameras the grippers carry.
+TUNABLE_PREFIXES = ('control.', 'planner.', 'supervisor.', 'gripper.camera.')
 #: The seed of the plant's imperfections: set by the campaign for every run.
 IMPERFECTION_SEED = 'sim.imperfections.seed'
 _KEY = re.compile(r'^([A-Za-z0-9_.*?]+)(?:\[(\d+|\*)\])?$')
@@ -174,8 +176,9 @@ def tunable_target(key: Any, nominal: Mapping[str, Any], where: str) -> Paramete
     if spec is None:
         raise SpecError(f"{where}: {name!r} is not a parameter of the walker's file")
     if not name.startswith(TUNABLE_PREFIXES):
-        raise SpecError(f'{where}: {name} is not a setting of the controllers, the planner or '
-                        f'the supervisor ({", ".join(p + "*" for p in TUNABLE_PREFIXES)}); '
-                        'the truth is dispersed, not swept')
+        tunable = ', '.join(p + '*' for p in TUNABLE_PREFIXES)
+        raise SpecError(f'{where}: {name} is not a setting of the controllers, the planner, '
+                        f'the supervisor or the cameras ({tunable}); the truth is dispersed, '
+                        'not swept')
     element = None if index is None else _elements(name, index, nominal, spec, where)[0]
     return ParameterTarget(name, element, spec)
