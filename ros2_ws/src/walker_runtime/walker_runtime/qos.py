@@ -18,6 +18,10 @@ offer. So every node takes its profiles from here:
   in the receiver's queue before its callback took it (publication is synchronous: each
   command leaves the supervisor as it is published).
 * :data:`CLOCK_QOS`: ``/clock``: reliable, keep last 1.
+* :data:`IMAGE_QOS`: the wrist cameras' ``image_raw`` and ``camera_info``: reliable, keep last
+  1. A frame of hundreds of kilobytes travels in UDP fragments that can overflow a reader's
+  socket buffer on a loaded machine: one fragment lost loses a best-effort frame whole, where
+  reliable delivery sends it again. The newest only, so a slow reader never stalls the plant.
 * :func:`latched_qos`: latched with a history (the phase, the step reports).
 * :data:`TF_QOS` and :data:`TF_STATIC_QOS`: ``/tf`` and ``/tf_static`` as tf2_ros offers them
   (``DynamicBroadcasterQoS``: reliable, keep last 100; ``StaticBroadcasterQoS``: reliable,
@@ -30,7 +34,7 @@ from __future__ import annotations
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 __all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'MODE_SUBSCRIPTION_QOS',
-           'CLOCK_QOS', 'TF_QOS', 'TF_STATIC_QOS', 'latched_qos']
+           'CLOCK_QOS', 'IMAGE_QOS', 'TF_QOS', 'TF_STATIC_QOS', 'latched_qos']
 
 
 def latched_qos(depth: int) -> QoSProfile:
@@ -58,6 +62,9 @@ LATCHED_QOS = latched_qos(1)
 MODE_QOS = latched_qos(1)
 MODE_SUBSCRIPTION_QOS = latched_qos(10)
 CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
+IMAGE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                        reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
 TF_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,

@@ -1,4 +1,9 @@
-"""The cameras' topics: REP 104 messages, rendered only while heard, none without cameras."""
+"""The cameras' topics and triggers: REP 104 messages, frames on request, none without cameras.
+
+Streaming (``sim.camera.frame_rate`` above 0) renders while an image is heard; at 0 nothing is
+rendered but what a trigger asks for, one frame a call, sent once its exposure latency has
+passed.
+"""
 
 import numpy as np
 import pytest
@@ -6,7 +11,9 @@ import pytest
 from walker_core.camera import CameraModel
 from walker_core.parameter_schema import replace_in_section
 from walker_sim.camera_publishers import (
-    CameraPublishers, camera_info_msg, image_msg, image_topic, info_topic)
+    CameraPublishers, camera_info_msg, image_msg, image_topic, info_topic, trigger_service)
+
+PERIOD_NS = 2_000_000  # [ns] a control period (500 Hz)
 
 
 class FakePublisher:
@@ -23,14 +30,46 @@ class FakePublisher:
 
 
 class FakeNode:
-    """Only what the publishers ask of a node: publishers that count their subscribers."""
+    """What the cameras ask of a node: publishers that count their subscribers; services."""
 
     def __init__(self):
         self.publishers = {}
+        self.services = {}
 
     def create_publisher(self, message_type, topic, qos):
         self.publishers[topic] = FakePublisher(topic)
         return self.publishers[topic]
+
+    def create_service(self, service_type, name, callback):
+        self.services[name] = (service_type, callback)
+
+    def call(self, name):
+        """Call a service as the executor would; return its response."""
+        service_type, callback = self.services[name]
+        return callback(service_type.Request(), service_type.Response())
+
+
+class DrawnPlant:
+    """Renders a blank frame per request, ready ``latency`` [s] after it shows (no renderer)."""
+
+    def __init__(self, model, latency):
+        self.model, self.latency = model, latency
+        self.rendered = []
+        self.time = 0.0  # [s]
+
+    def camera_frame(self, gripper):
+        from walker_sim.core.wrist_camera import CameraFrame
+
+        self.rendered.append((gripper, self.time))
+        image = np.zeros((self.model.height, self.model.width, 3), dtype=np.uint8)
+        return CameraFrame(gripper, image, self.time, self.latency, 'n1_1', np.zeros(3))
+
+
+def run_plant(cameras, plant, stamps):
+    """Publish the states of ``stamps`` [ns], the plant's clock following them."""
+    for stamp in stamps:
+        plant.time = stamp * 1e-9
+        cameras.publish(plant, stamp)
 
 
 class FakePlant:
@@ -54,10 +93,10 @@ def test_a_robot_without_cameras_gets_no_camera_topic(params):
     node = FakeNode()
     cameras = CameraPublishers(node, params, 2.0)
     cameras.publish(None, 0)  # nothing to publish, nothing asked of the plant
-    assert node.publishers == {}
+    assert node.publishers == {} and node.services == {}
 
 
-def test_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(seeing, sim):
+def test_streamed_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(seeing, sim):
     from walker_sim.core.plant import WalkerPlant
 
     plant = WalkerPlant(seeing, sim)
@@ -70,7 +109,7 @@ def test_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(seeing, sim
         node = FakeNode()
         cameras = CameraPublishers(node, seeing, 2.0)
         node.publishers[image_topic('b')].subscribers = 1
-        for stamp_ms in range(0, 1001, 2):  # one plant second of control periods
+        for stamp_ms in range(0, 1101, 2):  # 1.1 plant seconds of control periods
             cameras.publish(watched, stamp_ms * 1_000_000)
         assert watched.rendered == ['b'] * 3  # at 0, 0.5 and 1.0 s: 2 Hz
         images = node.publishers[image_topic('b')].sent
@@ -80,6 +119,53 @@ def test_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(seeing, sim
         assert images[1].header.stamp.sec == 0 and images[1].header.stamp.nanosec == 500_000_000
     finally:
         plant.close()
+
+
+@pytest.mark.parametrize('frame_rate', [0.0, 2.0])
+def test_a_trigger_renders_one_frame_at_the_next_step_and_sends_it_once_ready(seeing, frame_rate):
+    """One frame a call, of the plant at the next state, stamped then, sent a latency later."""
+    model = CameraModel.from_parameters(seeing.gripper.camera)
+    node, plant = FakeNode(), DrawnPlant(model, latency=0.009)
+    cameras = CameraPublishers(node, seeing, frame_rate)
+    assert set(node.services) == {trigger_service('a'), trigger_service('b')}
+    run_plant(cameras, plant, range(0, 10 * PERIOD_NS, PERIOD_NS))
+    plant.rendered.clear()  # what streaming (2 Hz, nobody listening: nothing) did
+    response = node.call(trigger_service('b'))
+    assert response.success and 'next plant step' in response.message
+    images = node.publishers[image_topic('b')].sent
+    infos = node.publishers[info_topic('b')].sent
+    exposure = 10 * PERIOD_NS
+    run_plant(cameras, plant, [exposure, exposure + 4 * PERIOD_NS])
+    assert plant.rendered == [('b', exposure * 1e-9)]  # at the next state, once
+    assert images == [] and infos == []  # not ready: 9 ms after the exposure
+    run_plant(cameras, plant, range(exposure + 5 * PERIOD_NS, exposure + 50 * PERIOD_NS,
+                                    PERIOD_NS))
+    assert plant.rendered == [('b', exposure * 1e-9)]
+    assert len(images) == len(infos) == 1  # at the first state at or after 9 ms: once
+    for message in (images[0], infos[0]):
+        assert (message.header.stamp.sec, message.header.stamp.nanosec) == (0, exposure)
+        assert message.header.frame_id == 'camera_b_optical'
+    assert node.publishers[image_topic('a')].sent == []
+    # a call per frame: two calls, two frames; one each for both cameras asked at once
+    node.call(trigger_service('a'))
+    run_plant(cameras, plant, [100 * PERIOD_NS])
+    node.call(trigger_service('a'))
+    node.call(trigger_service('b'))
+    run_plant(cameras, plant, range(101 * PERIOD_NS, 120 * PERIOD_NS, PERIOD_NS))
+    assert [gripper for gripper, _ in plant.rendered] == ['b', 'a', 'a', 'b']
+    assert len(node.publishers[image_topic('a')].sent) == 2 and len(images) == 2
+
+
+def test_without_streaming_a_subscriber_gets_no_frame_untriggered(seeing):
+    """``sim.camera.frame_rate`` 0: nothing rendered for subscribers, however long they listen."""
+    model = CameraModel.from_parameters(seeing.gripper.camera)
+    node, plant = FakeNode(), DrawnPlant(model, latency=0.0)
+    cameras = CameraPublishers(node, seeing, 0.0)
+    for gripper in 'ab':
+        node.publishers[image_topic(gripper)].subscribers = 1
+    run_plant(cameras, plant, range(0, 2_000 * PERIOD_NS, PERIOD_NS))  # 4 s of plant time
+    assert plant.rendered == []
+    assert all(publisher.sent == [] for publisher in node.publishers.values())
 
 
 def test_the_messages_follow_rep_104(seeing, sim):

@@ -440,3 +440,56 @@ def test_turning_the_wait_for_decisions_off_lets_a_held_plant_step_on_at_once(ro
         future = client.call_async(SetParameters.Request(parameters=[off]))
         assert probe.spin_until(future.done, 10.0) and future.result().results[0].successful
         assert probe.spin_until(lambda: max(states) > 100 * PERIOD_NS, 10.0), plant.output
+
+
+def test_a_camera_trigger_sends_one_frame_of_the_next_step_and_none_streams(ros_env, probe):
+    """Sim time, cameras on: a frame a trigger, of a state the plant published, none unasked.
+
+    A subscriber listens to the image all along; with ``sim.camera.frame_rate`` 0 (the
+    default) nothing is rendered for it until the trigger. The frame is exposed at a state the
+    plant stepped to after the trigger was taken, and image and calibration carry that stamp.
+    """
+    from rclpy.qos import ReliabilityPolicy
+    from sensor_msgs.msg import CameraInfo, Image, JointState
+    from std_srvs.srv import Trigger
+
+    from walker_runtime.qos import IMAGE_QOS
+    from walker_sim.messages import COMMAND_QOS, SENSOR_QOS
+
+    node = probe.node
+    states, images, infos = [], [], []
+    efforts = node.create_publisher(JointState, f'{NAMESPACE}/effort_commands', COMMAND_QOS)
+
+    def answer(message):  # five controllers that command no torque
+        states.append(stamp_ns(message.header.stamp))
+        efforts.publish(JointState(header=message.header, name=JOINTS, effort=[0.0] * 5))
+
+    node.create_subscription(JointState, f'{NAMESPACE}/joint_states', answer, SENSOR_QOS)
+    node.create_subscription(Image, f'{NAMESPACE}/camera_b/image_raw', images.append,
+                             IMAGE_QOS)
+    node.create_subscription(CameraInfo, f'{NAMESPACE}/camera_b/camera_info', infos.append,
+                             IMAGE_QOS)
+    trigger = node.create_client(Trigger, f'{NAMESPACE}/camera_b/trigger')
+    with start_plant(ros_env, 'sim.clock_mode:=sim_time', 'sim.lockstep_timeout:=30.0',
+                     'gripper.camera.enabled:=true') as plant:
+        assert probe.spin_until(lambda: len(states) >= 100 and trigger.service_is_ready(),
+                                START_TIMEOUT + 60), plant.output
+        probe.spin_until(lambda: len(states) >= 600, 10.0)  # a second of plant time, heard
+        assert images == [] and infos == [], 'a frame nobody asked for'
+        reliable = ReliabilityPolicy.RELIABLE
+        assert [e.qos_profile.reliability for e in node.get_publishers_info_by_topic(
+            f'{NAMESPACE}/camera_b/image_raw')] == [reliable]
+        asked_after = states[-1]
+        future = trigger.call_async(Trigger.Request())
+        assert probe.spin_until(future.done, 10.0), plant.output
+        assert future.result().success and 'next plant step' in future.result().message
+        assert probe.spin_until(lambda: images and infos, 30.0), plant.output
+        probe.spin_for(1.0)  # more steps, no more frames
+    image, = images  # one frame a call
+    info, = infos
+    exposure = stamp_ns(image.header.stamp)
+    assert exposure > asked_after and exposure in states  # a state stepped to after the call
+    assert stamp_ns(info.header.stamp) == exposure
+    assert (image.encoding, image.width, image.height) == ('rgb8', 400, 300)
+    assert image.header.frame_id == info.header.frame_id == 'camera_b_optical'
+    assert len(image.data) == 3 * 400 * 300

@@ -1,27 +1,38 @@
-"""The wrist cameras' topics of the plant node (ROS layer): images and calibration, when heard.
+"""The wrist cameras' topics and triggers of the plant node (ROS layer): frames on request.
 
 For each gripper ``g`` whose robot carries cameras (``gripper.camera.enabled``), the plant
-publishes ``camera_<g>/image_raw`` (``sensor_msgs/Image``, ``rgb8``) and
-``camera_<g>/camera_info`` (``sensor_msgs/CameraInfo``, plumb-bob, REP 104) in the frame
-``camera_<g>_optical``, at ``sim.camera.frame_rate`` of plant time, and only while a
-subscriber listens to the image: a frame is rendered for nobody else (its cost:
-docs/perception.md). Each message is stamped with the frame's exposure, the instant it shows.
-A robot without cameras gets no publisher at all.
+serves ``camera_<g>/trigger`` (``std_srvs/srv/Trigger``) and publishes ``camera_<g>/image_raw``
+(``sensor_msgs/Image``, ``rgb8``) and ``camera_<g>/camera_info`` (``sensor_msgs/CameraInfo``,
+plumb-bob, REP 104) in the frame ``camera_<g>_optical``. A trigger is answered at once; the
+frame is rendered at the plant's next published state (in sim time inside the lock-step, so it
+shows the plant at a step), and image and calibration are sent at the first state at or after
+the frame's ``ready_time`` (its exposure latency later), stamped with the exposure, the instant
+the image shows. Streaming is opt-in: with ``sim.camera.frame_rate`` above 0 a frame is also
+rendered at that rate of plant time while a subscriber listens to the image; at 0 (the default)
+a frame is rendered only when triggered, for a frame costs hundreds of control periods
+(docs/perception.md). A robot without cameras gets no publisher and no service at all.
 """
 
 from __future__ import annotations
 
+from functools import partial
+
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
+from std_srvs.srv import Trigger
 
 from walker_core.camera import PLUMB_BOB, CameraModel, optical_frame_name
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.listened import ListenedPublisher
+from walker_runtime.qos import IMAGE_QOS
 from walker_sim.core.outputs import StampedRate
 from walker_sim.core.wrist_camera import CameraFrame
-from walker_sim.messages import SENSOR_QOS, time_msg
+from walker_sim.messages import time_msg
 
-__all__ = ['CameraPublishers', 'image_msg', 'camera_info_msg', 'image_topic', 'info_topic']
+__all__ = ['CameraPublishers', 'image_msg', 'camera_info_msg', 'image_topic', 'info_topic',
+           'trigger_service']
+
+_NS_PER_S = 1_000_000_000
 
 
 def image_topic(gripper: str) -> str:
@@ -32,6 +43,11 @@ def image_topic(gripper: str) -> str:
 def info_topic(gripper: str) -> str:
     """Return a gripper's camera calibration topic (relative)."""
     return f'camera_{gripper}/camera_info'
+
+
+def trigger_service(gripper: str) -> str:
+    """Return the service that asks a gripper's camera for one frame (relative)."""
+    return f'camera_{gripper}/trigger'
 
 
 def image_msg(frame: CameraFrame, stamp: int) -> Image:
@@ -60,7 +76,7 @@ def camera_info_msg(model: CameraModel, gripper: str, stamp: int) -> CameraInfo:
 
 
 class CameraPublishers:
-    """The cameras' publishers of a plant node, or none when the robot has no camera.
+    """The cameras' publishers and triggers of a plant node, or none without cameras.
 
     Parameters
     ----------
@@ -68,28 +84,54 @@ class CameraPublishers:
     params : WalkerParameters
         The model: ``gripper.camera.*``.
     frame_rate : float
-        [Hz] Frames per second of plant time while heard (``sim.camera.frame_rate``).
+        [Hz] Frames per second of plant time while heard (``sim.camera.frame_rate``); 0: a
+        frame only when triggered.
     """
 
     def __init__(self, node: Node, params, frame_rate: float) -> None:
         camera = params.gripper.camera
         self._model = CameraModel.from_parameters(camera) if camera.enabled else None
-        self._rate = StampedRate(frame_rate)
+        self._rate = StampedRate(frame_rate) if frame_rate > 0.0 else None
         self._images: dict[str, ListenedPublisher] = {}
         self._infos = {}
+        self._asked: set[str] = set()  # triggered, rendered at the next published state
+        self._rendered: list[tuple[int, int, CameraFrame]] = []  # (ready, exposure [ns], frame)
         if self._model is None:
             return
         for gripper in GRIPPERS:
             self._images[gripper] = ListenedPublisher(
-                node.create_publisher(Image, image_topic(gripper), SENSOR_QOS))
+                node.create_publisher(Image, image_topic(gripper), IMAGE_QOS))
             self._infos[gripper] = node.create_publisher(CameraInfo, info_topic(gripper),
-                                                         SENSOR_QOS)
+                                                         IMAGE_QOS)
+            node.create_service(Trigger, trigger_service(gripper),
+                                partial(self._on_trigger, gripper))
+
+    def _on_trigger(self, gripper: str, request: Trigger.Request,
+                    response: Trigger.Response) -> Trigger.Response:
+        """Take a trigger: one frame of ``gripper``'s camera at the next published state."""
+        self._asked.add(gripper)
+        response.success = True
+        response.message = f'a frame of camera {gripper} comes at the next plant step'
+        return response
 
     def publish(self, plant, stamp: int) -> None:
-        """Render and publish the heard cameras' frames when due at ``stamp`` [ns]."""
-        heard = [g for g, publisher in self._images.items() if publisher.heard]
-        if not heard or not self._rate.due(stamp):
+        """Render the frames asked for or due at ``stamp`` [ns]; send those ready by then."""
+        asked, self._asked = self._asked, set()
+        if self._rate is not None:
+            heard = [g for g, publisher in self._images.items() if publisher.heard]
+            if heard and self._rate.due(stamp):
+                asked.update(heard)
+        for gripper in sorted(asked):
+            frame = plant.camera_frame(gripper)
+            self._rendered.append((stamp + round(frame.latency * _NS_PER_S), stamp, frame))
+        if not self._rendered:
             return
-        for gripper in heard:
-            self._images[gripper].publish(image_msg(plant.camera_frame(gripper), stamp))
-            self._infos[gripper].publish(camera_info_msg(self._model, gripper, stamp))
+        waiting = []
+        for ready, exposure, frame in self._rendered:
+            if ready <= stamp or stamp < exposure:  # ready, or the plant's time went back
+                self._images[frame.gripper].publisher.publish(image_msg(frame, exposure))
+                self._infos[frame.gripper].publish(
+                    camera_info_msg(self._model, frame.gripper, exposure))
+            else:
+                waiting.append((ready, exposure, frame))
+        self._rendered = waiting

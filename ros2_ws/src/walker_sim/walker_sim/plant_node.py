@@ -17,8 +17,8 @@ messages and clocks, and calls the core. Interfaces (relative to the node's name
   stamped with the state they answer) and, in sim time, ``supervisor/decided_until``
   (``rosgraph_msgs/Clock``: with ``sim.wait_for_decisions`` no state is stepped to past it);
 * serves ``gripper_command`` (``walker_msgs/srv/GripperCommand``): answers at once with the
-  gripper's new state (SCREWING, UNSCREWING, JAMMED, or the refusal); the screw-in or unscrew
-  completes ``gripper.screw_time`` later, as ``gripper_states`` reports.
+  gripper's new state (SCREWING, UNSCREWING, JAMMED, or the refusal), the turn done
+  ``gripper.screw_time`` later (``gripper_states``); cameras: :mod:`walker_sim.camera_publishers`.
 
 Clock modes (``sim.clock_mode``): ``real_time`` steps on a steady wall-clock timer, like
 hardware, stamping with the system clock; ``sim_time`` publishes ``/clock`` and is lock-stepped
@@ -312,7 +312,7 @@ class PlantNode(Node):
         accelerations, joint_states = self._out.state(state, stamp)
         if self._pose_rate.due(stamp):
             self._out.poses(state, self.plant.bending(), stamp)
-        self._cameras.publish(self.plant, stamp)  # only while an image is heard
+        self._cameras.publish(self.plant, stamp)  # frames triggered (or streamed) only
         self._publish_grippers(state)
         self._last_sent = self._steady_now()
         self.lockstep.begin(stamp, self._last_sent)

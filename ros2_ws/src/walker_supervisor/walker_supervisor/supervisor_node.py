@@ -16,7 +16,8 @@ it reports. Interfaces (relative to the node's namespace):
   same messages, a latched history), ``control_mode`` (latched), ``step_reports``
   (walker_msgs/StepReport, one per step, latched history) and
   ``/diagnostics``; subscriptions: :mod:`walker_supervisor.inputs`; clients of the planner and
-  the plant: :mod:`walker_supervisor.links`;
+  the plant: :mod:`walker_supervisor.links`; the wrist cameras' triggers and images (a look of
+  the runner): :mod:`walker_supervisor.camera_link`;
 * the truss map starts from ``supervisor.truss_survey_file`` where that file exists and is
   written to it as it changes, at the latest before a goal's result is sent.
 """
@@ -39,6 +40,7 @@ from walker_runtime.qos import LATCHED_QOS, MODE_QOS, latched_qos
 from walker_runtime.realtime import log_realtime_request
 from walker_runtime.spinning import destroy_actions
 from walker_runtime.watched_subscription import RenewablePublisher
+from walker_supervisor.camera_link import CameraLink
 from walker_supervisor.clocks import Clocks
 from walker_supervisor.core.commands import (
     DecideNow, Feedback, ForgetRecordedStep, GoalEnded, Notice, PhaseRecord, RecordStep,
@@ -104,6 +106,8 @@ class SupervisorNode(Node):
         self.report_pub = self.create_publisher(StepReport, 'step_reports', _REPORTS)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.links = SupervisorLinks(self, self.runner, self.clocks, self._answer)
+        self.cameras = CameraLink(self, self.runner, self.clocks, self._answer,
+                                  self.params.gripper.camera.enabled)
         self.inputs = SupervisorInputs(self, self.runner, self.clocks, self._execute)
         self._goal_handle = None
         self._goal_ended: rclpy.task.Future | None = None  # the result of the walk under way
@@ -160,6 +164,8 @@ class SupervisorNode(Node):
         for command in commands:
             if self.links.handles(command):
                 self.links.execute(command)
+            elif self.cameras.handles(command):
+                self.cameras.execute(command)
             elif isinstance(command, SetControlMode):
                 self.mode_pub.publish(mode_message(command, self.clocks.stamp(),
                                                     self.get_fully_qualified_name()))

@@ -57,8 +57,9 @@ class CameraRendering:
         'the most a frame is ready after the instant it shows (drawn uniformly up to it)', 's',
         0.0, 1.0, source='chosen: a camera read out at 30 Hz')
     frame_rate: float = parameter(
-        "rate of each camera's image_raw and camera_info while subscribed (plant time)", 'Hz',
-        0.1, 100.0, source='chosen: a frame costs a few hundred control periods of rendering')
+        "rate of each camera's frames while its image is subscribed (plant time); 0: only "
+        'triggered', 'Hz', 0.0, 100.0,
+        source='chosen: none streamed, a frame costs a few hundred control periods of rendering')
 
     def __post_init__(self) -> None:
         if len(self.sun_direction) != 3:
