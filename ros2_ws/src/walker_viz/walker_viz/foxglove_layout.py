@@ -6,6 +6,9 @@
 * a 3D panel in the ``truss`` frame: the robot from ``robot_description`` moved by TF, the
   transforms, the markers (truss, target node, planned tip path) and the truss map's markers
   (each node surveyed or nominal, its uncertainty ellipsoid);
+* below it, each gripper's wrist camera (``camera_<g>/image_raw``, calibrated by
+  ``camera_<g>/camera_info``), side by side: the last frame the plant sent (a robot without
+  cameras has no such topic, and the panels stay empty);
 * a plot of every joint controller's position error [rad] (``controllers/<joint>/state``);
 * the step phases as state transitions (``phase``), beside the controllers' mode
   (``control_mode``).
@@ -19,7 +22,7 @@ import sys
 import foxglove.layouts as fl
 from walker_msgs.msg import ControlMode, StepPhase
 
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 from walker_viz.core.robot_tree import WORLD_FRAME
 
 __all__ = ['walker_layout', 'layout_json', 'main']
@@ -34,6 +37,13 @@ def _states(message: type,
     return fl.StateTransitionsDiscreteCustomStates(states=[
         fl.StateTransitionsDiscreteCustomState(value=str(getattr(message, name)), label=name)
         for name in names])
+
+
+def _camera(ns: str, gripper: str) -> fl.ImagePanel:
+    """Return the Image panel of ``gripper``'s wrist camera in the namespace ``ns``."""
+    return fl.ImagePanel(title=f'camera {gripper}', config=fl.ImageConfig(
+        image_mode=fl.ImageModeConfig(image_topic=f'{ns}/camera_{gripper}/image_raw',
+                                      calibration_topic=f'{ns}/camera_{gripper}/camera_info')))
 
 
 def walker_layout(namespace: str = '/walker') -> fl.Layout:
@@ -65,8 +75,12 @@ def walker_layout(namespace: str = '/walker') -> fl.Layout:
                                               value=f'{ns}/control_mode.mode', label='mode',
                                               timestamp_method='headerStamp',
                                               custom_states=_states(ControlMode, _MODES))]))
+    cameras = fl.SplitContainer(direction='row', items=[
+        fl.SplitItem(proportion=1, content=_camera(ns, gripper)) for gripper in GRIPPERS])
     return fl.Layout(content=fl.SplitContainer(direction='row', items=[
-        fl.SplitItem(proportion=3, content=scene),
+        fl.SplitItem(proportion=3, content=fl.SplitContainer(direction='column', items=[
+            fl.SplitItem(proportion=2, content=scene),
+            fl.SplitItem(proportion=1, content=cameras)])),
         fl.SplitItem(proportion=2, content=fl.SplitContainer(direction='column', items=[
             fl.SplitItem(proportion=2, content=errors),
             fl.SplitItem(proportion=1, content=phases)]))]))
