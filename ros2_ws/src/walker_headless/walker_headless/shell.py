@@ -46,26 +46,33 @@ from walker_headless.planner import HeadlessPlanner
 __all__ = ['WalkShell', 'look_record']
 
 
-def look_record(look, frame) -> dict:
-    """Return a look of the runner against the frame's truth, as ``summary.json`` keeps it.
+def look_record(look, truths: dict) -> dict:
+    """Return a look of the runner against the plant's truth, as ``summary.json`` keeps it.
 
-    ``look`` is the runner's :class:`~walker_supervisor.core.sighting.LookResult`, ``frame``
-    the plant's :class:`~walker_sim.core.wrist_camera.CameraFrame`. In the gripper's frame at
-    the frame's instant: ``error`` [m] is the distance between the hole's axis as the looks so
-    far located it (what the step aims at) and as it really was, ``frame_error`` [m] the same
-    of this frame alone, at the height the step assumed (both None when not seen);
-    ``spread`` [m] the located hole's stated standard deviation.
+    ``look`` is the runner's :class:`~walker_supervisor.core.sighting.LookResult`, ``truths``
+    the true hole's axis in the gripper's frame [m] (x, y) at each frame's instant [s] (the
+    plant's :class:`~walker_sim.core.wrist_camera.CameraFrame`). Each frame's error is taken in
+    the gripper's frame at its instant and the frames' errors are weighted as the look weighs
+    them (the links' ringing moves the gripper and the hole it sees alike): ``error`` [m] is
+    that of the hole as the looks so far located it (what the step aims at), ``frame_error``
+    [m] that of the frames alone, at the height the step assumed (both None when not seen);
+    ``spread`` [m] is the located hole's stated standard deviation and ``offset`` [m] the true
+    hole's distance from the gripper's axis.
     """
-    truth = frame.mouth_in_gripper[:2]
+    def error(name: str):
+        pairs = [(f.weight, getattr(f, name) - truths[f.exposure_time]) for f in look.frames
+                 if getattr(f, name) is not None]
+        if not pairs:
+            return None
+        total = sum(w for w, _ in pairs)
+        return float(math.hypot(*sum(w * e for w, e in pairs) / total))
 
-    def distance(offset):
-        return None if offset is None else float(math.hypot(*(offset - truth)))
-
-    return {'time': look.exposure_time, 'gripper': look.gripper, 'node': look.node,
-            'seen': look.found, 'reason': look.reason, 'error': distance(look.located),
-            'frame_error': distance(look.measured),
+    first = look.frames[0]
+    return {'time': first.exposure_time, 'gripper': look.gripper, 'node': look.node,
+            'frames': len(look.frames), 'seen': look.found, 'reason': look.reason,
+            'error': error('located'), 'frame_error': error('measured'),
             'spread': look.spread if math.isfinite(look.spread) else None,
-            'offset': float(math.hypot(*frame.mouth_in_gripper[:2])), 'final': look.final}
+            'offset': float(math.hypot(*truths[first.exposure_time])), 'final': look.final}
 
 
 class WalkShell:
@@ -114,6 +121,7 @@ class WalkShell:
         self._poses: list = []  # (stamp [s], tip position [m]) since the last sample
         self._map_version = -1  # the truss map's version last drawn
         self._frames: list = []  # wrist camera frames asked for and not yet ready
+        self._truths: dict = {}  # the true hole in the gripper's frame, by frame instant
         #: every look the runner took, against the plant's truth (:func:`look_record`)
         self.looks: list[dict] = []
 
@@ -139,10 +147,11 @@ class WalkShell:
             self._carry_out(runner.follow_done(ticket, completed, message, now))
         for frame in [f for f in self._frames if f.ready_time <= now]:
             self._frames.remove(frame)
+            self._truths[frame.exposure_time] = frame.mouth_in_gripper[:2]
             runner.last_look = None
             commands = runner.frame_seen(frame.gripper, frame.image, frame.exposure_time, now)
             if runner.last_look is not None:
-                self.looks.append(look_record(runner.last_look, frame))
+                self.looks.append(look_record(runner.last_look, self._truths))
             self._carry_out(commands)
         if loop.grippers_out:
             self._carry_out(runner.gripper_states(loop.gripper_readings(), now, now))

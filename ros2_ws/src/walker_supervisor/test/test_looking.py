@@ -17,10 +17,11 @@ from walker_supervisor.core.commands import LookRequest, Notice, TrajectoryReque
 from walker_supervisor.core.looking import LOOK_WAIT
 from walker_supervisor.core.route import possible_steps
 from walker_supervisor.core.sequencer import StepSequencer
-from walker_supervisor.core.sighting import Sighting, locate
+from walker_supervisor.core.sighting import Sighting, combine, frame_weights, locate
 
 MOUNT = CameraModel.from_parameters(PARAMS.gripper.camera).mount
 LATENCY = 0.03  # [s] a frame is ready this long after it was asked for
+INTERVAL = math.pi / PARAMS.robot.flexibility.joint1_mode  # [s] between a look's frames
 
 
 def _sighting(theta, hole, assumed_height, sigma=2e-5):
@@ -43,7 +44,9 @@ class LookingWorld(World):
     def __init__(self, hole_shift=(0.0, 0.0, 0.0), frames='seen', height_std=0.002,
                  parameters=SUPERVISOR, camera=True, **options):
         super().__init__(**options)
-        self.sequencer = StepSequencer(parameters, KIN, self.stance.base_gripper, camera=camera)
+        self.sequencer = StepSequencer(parameters, KIN, self.stance.base_gripper, camera=camera,
+                                       frame_interval=INTERVAL)
+        self.parameters = parameters
         self.hole_shift = np.asarray(hole_shift, dtype=float)
         self.frames, self.height_std = frames, height_std
         self.frames_due = []  # (time, request) of frames asked for
@@ -75,6 +78,13 @@ class LookingWorld(World):
                                                    self.height_std, self.now))
         super().advance()
 
+    @property
+    def looks_taken(self):
+        """Looks asked for: each asks for ``look_frames`` frames."""
+        frames = self.parameters.look_frames
+        assert len(self.looks) % frames == 0
+        return len(self.looks) // frames
+
     def requests(self, purpose):
         return [c for c in self.log if isinstance(c, TrajectoryRequest) and c.purpose == purpose]
 
@@ -94,17 +104,24 @@ def test_a_hole_off_its_estimate_and_height_is_located_and_the_descent_goes_down
     assert len(lifts) == 1, 'one look from higher measures the height'
     assert lifts[0].goal_point[2] > lifts[0].start_point[2]
     np.testing.assert_allclose(lifts[0].goal_point[:2], lifts[0].start_point[:2], atol=1e-9)
-    assert len(world.looks) >= 2
+    assert world.looks_taken >= 2
     descent = world.requests('insertion')[-1]
     np.testing.assert_allclose(descent.goal_point, world.hole, atol=5e-5)
     located = world.sequencer.targets.point_to
     np.testing.assert_allclose(located, world.hole, atol=5e-5)
 
 
+def test_a_looks_frames_are_half_a_period_of_the_link_mode_apart():
+    world = LookingWorld(hole_shift=(0.002, 0.0, 0.0))
+    world.run_step(_step(world))
+    times = np.array([t for t, _, _ in world.looks]).reshape(-1, SUPERVISOR.look_frames)
+    np.testing.assert_allclose(np.diff(times, axis=1), INTERVAL, atol=0.011)  # a tick
+
+
 def test_each_look_waits_for_the_arm_at_rest():
     world = LookingWorld(hole_shift=(0.002, 0.0, 0.0))
     world.run_step(_step(world))
-    for time, _, _ in world.looks:
+    for time, _, _ in world.looks[::SUPERVISOR.look_frames]:
         still_since = max(t for t, stage in world.stages if t < time and stage != 'settling'
                           and stage != 'looking')
         assert time - still_since >= SUPERVISOR.look_settle_time - 1e-9
@@ -114,7 +131,7 @@ def test_a_hole_where_the_map_has_it_to_its_height_is_confirmed_by_one_look():
     world = LookingWorld(height_std=1e-5)  # a surveyed node's height, nothing off
     outcome = world.run_step(_step(world))
     assert outcome.success, outcome.message
-    assert len(world.looks) == 1
+    assert world.looks_taken == 1
     assert not world.requests('look_lift') and not world.requests('fine')
 
 
@@ -122,7 +139,7 @@ def test_a_hole_not_seen_goes_on_blind_at_the_estimate():
     world = LookingWorld(frames='unseen')
     outcome = world.run_step(_step(world))
     assert outcome.success, outcome.message
-    assert len(world.looks) == 1
+    assert world.looks_taken == 1
     assert any('not seen (out of view' in m for m in world.notices('warning'))
     np.testing.assert_allclose(world.requests('insertion')[-1].goal_point,
                                world.targets.point_to, atol=1e-12)
@@ -132,10 +149,10 @@ def test_a_camera_that_sends_no_frame_is_waited_for_a_bounded_time_then_the_step
     world = LookingWorld(frames='none')
     outcome = world.run_step(_step(world))
     assert outcome.success, outcome.message
-    assert len(world.looks) == 1
+    assert world.looks_taken == 1
     assert any('no frame from the camera' in m for m in world.notices('warning'))
     descent = next(t for t, r in world.requested if r.purpose == 'insertion')
-    assert descent - world.looks[0][0] == pytest.approx(LOOK_WAIT, abs=0.05)
+    assert descent - world.looks[-1][0] == pytest.approx(LOOK_WAIT, abs=0.05)
 
 
 @pytest.mark.parametrize('camera, looks', [(False, 4), (True, 0)])
@@ -181,3 +198,33 @@ def test_two_lines_of_sight_measure_a_height_the_map_had_wrong():
     both, covariance = locate(looks, height=0.0, height_std=0.002)
     np.testing.assert_allclose(both, hole, atol=1e-5)
     assert math.sqrt(covariance[2, 2]) < 2e-4
+
+
+# ---------------------------------------------------------------------- a look's frames
+@pytest.mark.parametrize('detuning, left', [(1.0, 1e-12), (0.85, 0.055), (1.15, 0.055)])
+def test_a_looks_frames_cancel_the_links_ringing_within_15_percent_of_its_mode(detuning,
+                                                                                left):
+    """Three frames half a period apart, weighted 1:2:1: the ringing's residue is cos^2."""
+    omega = detuning * PARAMS.robot.flexibility.joint1_mode
+    hole, amplitude = np.array([0.01, 0.5, 0.0]), 5e-4
+    worst = 0.0
+    for phase in np.linspace(0.0, 2 * math.pi, 24):
+        frames = []
+        for k in range(3):
+            swing = amplitude * math.sin(omega * k * INTERVAL + phase)
+            seen = hole + np.array([0.0, swing, 0.0])
+            frames.append(Sighting(seen, np.zeros(2), seen[:2], 1e-5, '', ''))
+        worst = max(worst, abs(combine(frames).hole[1] - hole[1]))
+    assert worst <= left * amplitude + 1e-12
+    assert worst >= 0.9 * left * amplitude - 1e-12, "the residue is the theory's, not less"
+
+
+def test_the_frames_that_saw_the_hole_are_weighted_and_a_look_that_saw_nothing_is_not_seen():
+    assert frame_weights(3).tolist() == [0.25, 0.5, 0.25]
+    assert frame_weights(1).tolist() == [1.0]
+    seen = Sighting(np.ones(3), np.zeros(2), np.ones(2), 1e-5, '', 'seen')
+    unseen = Sighting(None, None, None, math.inf, 'occluded', 'a bar')
+    np.testing.assert_allclose(combine([unseen, seen, seen]).hole, np.ones(3))
+    assert combine([unseen, unseen]).reason == 'occluded'
+    with pytest.raises(ValueError, match='at least one frame'):
+        frame_weights(0)

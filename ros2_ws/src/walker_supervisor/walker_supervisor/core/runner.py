@@ -149,12 +149,14 @@ class WalkRunner:
         self.kinematics = WalkerKinematics.from_parameters(params)
         self.truss = Truss.from_parameters(params)
         self.sequencer = StepSequencer(settings, self.kinematics, 'a', params.gripper.screw_time,
-                                       bool(params.gripper.camera.enabled))
+                                       bool(params.gripper.camera.enabled),
+                                       math.pi / params.robot.flexibility.joint1_mode)
         #: places the holes the moving gripper's camera sees (:mod:`.looking`)
         self.sighter = HoleSighter(params)
         self._joint_history = JointHistory()
         #: the last look taken (None before any), for a report against the plant's truth
         self.last_look: LookResult | None = None
+        self._look_frames: list = []  # (instant [s], gripper pose, Sighting) of the look
         #: the truss map and the step targets planned on it
         self.mapped = MapPlanning(self.kinematics, self.truss, settings,
                                   params.gripper.insertion_position_tolerance,
@@ -319,8 +321,8 @@ class WalkRunner:
         """Take the frame a :class:`LookRequest` asked for: RGB ``image`` of ``exposure_time``.
 
         The hole is placed through the joints measured at the tick nearest the frame's
-        instant (:class:`~walker_supervisor.core.sighting.HoleSighter`); the map takes it, and
-        the step goes on from what it showed.
+        instant (:class:`~walker_supervisor.core.sighting.HoleSighter`); once the look has its
+        frames, the map takes the hole they located, and the step goes on from what they showed.
         """
         sequencer = self.sequencer
         step, targets = sequencer.step, sequencer.targets
@@ -341,13 +343,18 @@ class WalkRunner:
         except (ValueError, SequencerError) as error:
             self._emit(Notice(f'frame of camera {gripper} ignored: {error}', 'warning'))
             return self._flush()
+        taken = sequencer.look_frames_taken
+        self._look_frames = (self._look_frames + [
+            (exposure_time, self.kinematics.forward_transform(roles), sighting)])[-taken:]
         located = sequencer.take_located()
         if located is not None:
             self.mapped.map.sight(step.to_node, targets.frame, step.base_node, self.kinematics,
                                   roles, *located)
-        self.last_look = look_result(gripper, step.to_node, exposure_time, sighting, located,
-                                     self.kinematics.forward_transform(roles),
-                                     not sequencer.looking)
+        weights = sequencer.take_look_done()
+        if weights is not None:
+            self.last_look = look_result(gripper, step.to_node, sequencer.last_look,
+                                         self._look_frames, weights, located,
+                                         not sequencer.looking)
         self._execute(commands, now)
         return self._flush()
 

@@ -63,11 +63,16 @@ class StepSequencer:
     camera : bool
         The grippers carry wrist cameras (``gripper.camera.enabled``): the step looks before
         it descends (:mod:`.looking`).
+    frame_interval : float
+        [s] Between two frames of one look: half the period of the link's mode whose ringing
+        the frames' weighted mean cancels (:mod:`.looking`).
     """
 
     def __init__(self, parameters: SupervisorParameters, kinematics: WalkerKinematics,
-                 base_gripper: str = 'a', screw_time: float = 0.5, camera: bool = False) -> None:
-        self._run = StepRun(parameters, kinematics, base_gripper, screw_time, camera)
+                 base_gripper: str = 'a', screw_time: float = 0.5, camera: bool = False,
+                 frame_interval: float = 0.0) -> None:
+        self._run = StepRun(parameters, kinematics, base_gripper, screw_time, camera,
+                            frame_interval)
         self._progress = PhaseProgress()
 
     # ------------------------------------------------------------------ queries
@@ -177,6 +182,21 @@ class StepSequencer:
     def looking(self) -> bool:
         """True while the step means to look again before its descent."""
         return looking.wanted(self._run)
+
+    @property
+    def look_frames_taken(self) -> int:
+        """Frames of the look under way (or of the last look) taken so far."""
+        return len(self._run.looks.frames)
+
+    @property
+    def last_look(self) -> Sighting | None:
+        """What the last look's frames showed together (None before a look has ended)."""
+        return self._run.looks.last
+
+    def take_look_done(self) -> list[float] | None:
+        """Return, once, the frames' weights of the look that ended since the last call."""
+        done, self._run.looks.done = self._run.looks.done, None
+        return done
 
     def take_located(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Return, once, the hole the step's looks located since the last call (or None).

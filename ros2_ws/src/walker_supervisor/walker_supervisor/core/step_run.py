@@ -123,6 +123,15 @@ class Looks:
         runner's map takes it.
     raised : bool
         The point above the hole has gone up for a look along a steeper line of sight.
+    frames : list of Sighting
+        What each frame of the look under way showed, in order.
+    asked : int
+        Frames of the look under way asked for.
+    done : list of float or None
+        The weights of the frames of the look that ended since the walk runner last asked
+        (None: none ended).
+    last : Sighting or None
+        What the last look's frames showed together.
     """
 
     due: bool = False
@@ -132,6 +141,10 @@ class Looks:
     sightings: list[Sighting] = dataclasses.field(default_factory=list)
     located: tuple[np.ndarray, np.ndarray] | None = None
     raised: bool = False
+    frames: list[Sighting] = dataclasses.field(default_factory=list)
+    asked: int = 0
+    done: list[float] | None = None
+    last: Sighting | None = None
 
 
 class StepRun:
@@ -146,10 +159,13 @@ class StepRun:
         [s] a screw-in or unscrew (``gripper.screw_time``).
     camera : bool
         The grippers carry wrist cameras (``gripper.camera.enabled``).
+    frame_interval : float
+        [s] Between two frames of one look (:mod:`.looking`).
     """
 
     def __init__(self, parameters: SupervisorParameters, kinematics: WalkerKinematics,
-                 base_gripper: str, screw_time: float, camera: bool = False) -> None:
+                 base_gripper: str, screw_time: float, camera: bool = False,
+                 frame_interval: float = 0.0) -> None:
         self.parameters = parameters
         self.kinematics = kinematics
         self.base_gripper = base_gripper
@@ -188,6 +204,7 @@ class StepRun:
         self.height_shift = 0.0
         # the grippers carry wrist cameras; the looks of the step's approach (:mod:`.looking`)
         self.camera = camera
+        self.frame_interval = float(frame_interval)
         self.looks = Looks()
 
     # ------------------------------------------------------------------ where the tip is
