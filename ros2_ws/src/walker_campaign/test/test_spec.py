@@ -1,6 +1,7 @@
 """The campaign spec: what it reads, and every way it refuses a bad one, naming the field."""
 
 import pytest
+import yaml
 
 from walker_campaign.core.errors import SpecError
 from walker_campaign.core.spec import load_spec
@@ -125,12 +126,75 @@ def test_a_missing_or_broken_spec_file_is_refused(tmp_path):
         load_spec(tmp_path / 'list.yaml')
 
 
-@pytest.mark.parametrize('name', ['default_walk', 'ka_filter_sweep'])
+SHIPPED = ['default_walk', 'ka_filter_sweep', 'truss_as_built', 'truss_twice',
+           'truss_as_built_camera', 'default_walk_camera', 'truss_as_built_4mm_camera']
+
+
+@pytest.mark.parametrize('name', SHIPPED)
 def test_the_shipped_specs_are_valid(name):
     from walker_campaign.core.spec import shipped_spec
 
     spec = load_spec(shipped_spec(name))
     assert spec.name == name
+
+
+def test_the_shipped_specs_are_all_tested():
+    from walker_campaign.core.spec import shipped_spec
+
+    folder = shipped_spec('default_walk').parent
+    assert sorted(p.stem for p in folder.glob('*.yaml')) == sorted(SHIPPED)
+
+
+def test_a_camera_spec_is_its_base_with_the_cameras_on_run_for_run():
+    """default_walk_camera meets default_walk's truths run for run, the cameras on."""
+    from walker_campaign.core.plan import plan_run
+    from walker_campaign.core.spec import shipped_spec
+
+    blind, camera = (load_spec(shipped_spec(n)) for n in ('default_walk', 'default_walk_camera'))
+    assert camera.seed == blind.seed and camera.runs == blind.runs
+    assert [d.name for d in camera.dispersions] == [d.name for d in blind.dispersions]
+    for index in (0, 7):
+        truth = dict(plan_run(camera, index).truth_values)
+        assert truth.pop('gripper.camera.enabled') is True  # the plant renders the frames
+        assert truth == plan_run(blind, index).truth_values
+        assert plan_run(camera, index).model_values['gripper.camera.enabled'] is True
+    wide = load_spec(shipped_spec('truss_as_built_4mm_camera'))
+    placement = {d.name: d for d in wide.dispersions}['node_placement']
+    assert repr(placement.distribution) != repr(
+        {d.name: d for d in camera.dispersions}['node_placement'].distribution)
+
+
+def test_a_spec_that_extends_another_changes_only_what_it_says(write_spec, tmp_path):
+    from walker_core.robot_parameters import default_parameter_file
+
+    (tmp_path / 'mine.yaml').write_text(default_parameter_file().read_text())
+    sensor = {'parameter': 'sim.imperfections.joint_noise', 'values': [0.00002]}
+    write_spec(base(params_file='mine.yaml', dispersions={'friction': FRICTION, 'noise': sensor},
+                    sweeps={'control.filter.corner[0]': [5.0, 6.0]}), name='first', load=False)
+    (tmp_path / 'sub').mkdir()
+    (tmp_path / 'sub' / 'second.yaml').write_text(yaml.safe_dump({
+        'extends': '../first.yaml', 'runs': 9, 'route': {'walk_timeout': 60},
+        'dispersions': {'friction': None, 'noise': dict(sensor, values=[0.00004])},
+        'sweeps': {'gripper.camera.enabled': [True]}}))
+    first, second = load_spec(tmp_path / 'first.yaml'), load_spec(tmp_path / 'sub/second.yaml')
+    assert second.name == 'second' and second.runs == 9 and second.seed == first.seed
+    assert second.target == first.target and second.walk_timeout == 60
+    assert second.params_file == (tmp_path / 'mine.yaml').resolve()  # beside the base
+    assert [d.name for d in second.dispersions] == ['noise']
+    assert [s.target.key for s in second.sweeps] == ['control.filter.corner[0]',
+                                                     'gripper.camera.enabled']
+
+
+@pytest.mark.parametrize('extends, words', [
+    ('nothing.yaml', 'no campaign spec file'),
+    ('loop.yaml', 'a cycle of campaign specs'),
+    (3, 'extends: expected a spec file'),
+])
+def test_a_bad_extends_is_refused_naming_it(tmp_path, extends, words):
+    (tmp_path / 'loop.yaml').write_text(yaml.safe_dump(base(extends='loop.yaml')))
+    (tmp_path / 'child.yaml').write_text(yaml.safe_dump(base(extends=extends)))
+    with pytest.raises(SpecError, match=words):
+        load_spec(tmp_path / 'child.yaml')
 
 
 @pytest.mark.parametrize('changes, words', [

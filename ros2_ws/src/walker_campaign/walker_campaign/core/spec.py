@@ -2,6 +2,8 @@
 
 ::
 
+    extends: default_walk.yaml     # optional: start from another spec, change what differs
+                                   # (walker_campaign.core.spec_file)
     name: friction_and_modes       # optional; default: the file's name
     seed: 1                        # the campaign's seed (an integer >= 0)
     runs: 200                      # dispersed walks per grid point (without sweeps: in all)
@@ -42,13 +44,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import yaml
 
 from walker_core.parameter_schema import ParameterError
 from walker_core.truss import Truss, UnknownNodeError
 from walker_campaign.core.distributions import KINDS, Distribution, distribution_from_spec
 from walker_campaign.core.errors import SpecError
 from walker_campaign.core.parameter_sets import check_model, check_truth, load_nominal
+from walker_campaign.core.spec_file import read_spec_mapping
 from walker_campaign.core.survey import load_campaign_survey
 from walker_campaign.core.targets import ParameterTarget, truth_targets, tunable_target
 
@@ -278,12 +280,7 @@ def load_spec(path: str | Path) -> CampaignSpec:
         The file cannot be read or is not a valid spec; the message names the field.
     """
     path = Path(path)
-    try:
-        mapping = yaml.safe_load(path.read_text())
-    except OSError as error:
-        raise SpecError(f'cannot read campaign spec {path}: {error.strerror}') from None
-    except yaml.YAMLError as error:
-        raise SpecError(f'campaign spec {path} is not valid YAML: {error}') from None
+    mapping = read_spec_mapping(path, find_base=shipped_spec)
     return parse_spec(mapping, path.stem, path.resolve().parent)
 
 
