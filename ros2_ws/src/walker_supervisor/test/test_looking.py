@@ -118,28 +118,56 @@ def test_a_looks_frames_are_half_a_period_of_the_link_mode_apart():
     np.testing.assert_allclose(np.diff(times, axis=1), INTERVAL, atol=0.011)  # a tick
 
 
-def test_each_look_waits_for_the_arm_at_rest():
+def _descent_time(world):
+    return next(t for t, r in world.requested if r.purpose == 'insertion')
+
+
+def test_the_first_look_costs_no_wait_and_every_other_waits_for_the_arm_at_rest():
+    blind = LookingWorld(hole_shift=(0.002, 0.0, 0.0), camera=False)
+    blind.run_step(_step(blind))
     world = LookingWorld(hole_shift=(0.002, 0.0, 0.0))
     world.run_step(_step(world))
-    for time, _, _ in world.looks[::SUPERVISOR.look_frames]:
+    firsts = [time for time, _, _ in world.looks[::SUPERVISOR.look_frames]]
+    assert len(firsts) >= 2
+    # the first where the blind walker would start its descent, the arm not at rest yet
+    assert firsts[0] <= _descent_time(blind) + 1e-9
+    for time in firsts[1:]:
         still_since = max(t for t, stage in world.stages if t < time and stage != 'settling'
                           and stage != 'looking')
         assert time - still_since >= SUPERVISOR.look_settle_time - 1e-9
 
 
-def test_a_hole_where_the_map_has_it_to_its_height_is_confirmed_by_one_look():
-    world = LookingWorld(height_std=1e-5)  # a surveyed node's height, nothing off
+def test_a_look_on_arrival_that_finds_the_hole_elsewhere_is_set_aside_for_one_at_rest():
+    world = LookingWorld(hole_shift=(0.002, 0.0, 0.0))
+    outcome = world.run_step(_step(world))
+    assert outcome.success, outcome.message
+    assert any('look on arrival is set aside' in m for m in world.notices('info'))
+    # the looks the hole was located from are those at rest (a lift's look among them)
+    assert len(world.sequencer._run.looks.sightings) == world.looks_taken - 1
+
+
+@pytest.mark.parametrize('height_std', [1e-5, 0.002])
+def test_a_hole_where_the_map_has_it_is_confirmed_by_one_look(height_std):
+    """Surveyed or not, a hole where the map has it is confirmed by one look.
+
+    A hole lower and off along the line of sight looks the same to one look, and the descent
+    feels the height.
+    """
+    world = LookingWorld(height_std=height_std)
     outcome = world.run_step(_step(world))
     assert outcome.success, outcome.message
     assert world.looks_taken == 1
     assert not world.requests('look_lift') and not world.requests('fine')
+    assert _descent_time(world) - world.looks[0][0] \
+        == pytest.approx((SUPERVISOR.look_frames - 1) * INTERVAL + LATENCY, abs=0.025)
 
 
 def test_a_hole_not_seen_goes_on_blind_at_the_estimate():
     world = LookingWorld(frames='unseen')
     outcome = world.run_step(_step(world))
     assert outcome.success, outcome.message
-    assert world.looks_taken == 1
+    assert world.looks_taken == 2, 'not seen on arrival, looked at again at rest'
+    assert any('not seen on arrival' in m for m in world.notices('info'))
     assert any('not seen (out of view' in m for m in world.notices('warning'))
     np.testing.assert_allclose(world.requests('insertion')[-1].goal_point,
                                world.targets.point_to, atol=1e-12)

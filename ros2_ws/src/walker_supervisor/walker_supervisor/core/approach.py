@@ -46,14 +46,17 @@ def fine_settling(run: StepRun, now: float, velocities: np.ndarray) -> list:
     """
     if run.stage == Stage.LOOKING:
         return looking.waiting(run, now)
+    descend = _may_descend(run, velocities)
     if looking.wanted(run):
-        # a look waits for the arm at rest: the camera sees the gripper where its flexible
-        # links put it, the joints say where it would be rigid; the links ring on for a while
-        # after the joints are still
-        if run.settled(now, velocities, run.parameters.look_settle_time):
-            return looking.look(run, now)
+        # the first look is taken where the blind walker would descend: it confirms a hole
+        # where the map has it at no more cost than its frames; any other waits for the arm
+        # at rest, the links' ringing decayed (the joints say where the gripper would be
+        # rigid, the camera sees it where the flexible links put it)
+        at_rest = run.settled(now, velocities, run.parameters.look_settle_time)
+        if at_rest or (descend and looking.on_arrival(run)):
+            return looking.look(run, now, arriving=not at_rest)
         return []
-    if _may_descend(run, velocities):
+    if descend:
         # the descent need not wait for the tip to come to rest: the insertion settles at the
         # mouth and checks the tip against the axis again before it screws in
         return transitions.enter_insertion(run, now)

@@ -1,8 +1,9 @@
 """LOOKING, in FINE above the hole: the wrist camera aligns the gripper before the descent.
 
 Where the blind walker would descend (:func:`~walker_supervisor.core.approach.fine_settling`),
-a gripper that carries a camera looks first (``max_looks`` > 0), once the joints have been
-still for ``look_settle_time``: it asks for ``look_frames`` frames
+a gripper that carries a camera looks first (``max_looks`` > 0): the approach's first look at
+once (:func:`on_arrival`), any other once the joints have been still for ``look_settle_time``.
+A look asks for ``look_frames`` frames
 (:class:`~walker_supervisor.core.commands.LookRequest`), ``frame_interval`` apart, and waits in
 ``Stage.LOOKING`` for them, at most :data:`LOOK_WAIT` after the last. The joints do not see the
 links ring (the joint-1 link's mode, 18 rad/s, damped 2.5-7.5 %, swings the tip half a
@@ -11,10 +12,14 @@ weighted, cancel it in their mean (:func:`~walker_supervisor.core.sighting.combi
 look shows (:class:`~walker_supervisor.core.sighting.Sighting`, each frame placed by the walk
 runner through the joints at its instant) decides:
 
-* the hole located within ``look_alignment`` of where the step aims, and to a fraction of it:
-  confirmed, and the step goes on as the blind one would (descend once the tip is over the
-  hole: the descent closes the last of the tip's error, and the insertion checks it against
-  the axis at the mouth);
+* the hole located within ``look_alignment`` of where the step aims: confirmed, and the step
+  goes on as the blind one would (descend once the tip is over the hole: the descent closes
+  the last of the tip's error, and the insertion checks it against the axis at the mouth). A
+  look from the approach height alone cannot tell a hole in place from one lower and off
+  along its line of sight; the descent feels the height;
+* a look taken on arrival that does not confirm the hole (or did not see it) is set aside:
+  before the arm is at rest the links put the gripper a few tenths of a millimetre off where
+  its joints say, too much to measure the height with; the step looks again at rest;
 * a hole located to more than :data:`LOOK_SPREAD` of ``look_alignment`` (one look cannot tell
   the node's height: the camera looks 52 degrees off the gripper's axis, so a millimetre of
   height moves the hole 1.3 mm along its line of sight): the step's targets move onto the hole
@@ -51,8 +56,8 @@ from walker_supervisor.core.step_geometry import (
     probe_targets, raised_approach, shifted_targets)
 from walker_supervisor.core.step_run import Looks, StepRun
 
-__all__ = ['Looks', 'LOOK_WAIT', 'LOOK_SPREAD', 'LOOK_HEIGHT', 'wanted', 'look', 'waiting', 'seen',
-           'height_felt']
+__all__ = ['Looks', 'LOOK_WAIT', 'LOOK_SPREAD', 'LOOK_HEIGHT', 'wanted', 'on_arrival', 'look',
+           'waiting', 'seen', 'height_felt']
 
 #: [s] A frame not back this long after it was asked for: the descent goes on blind.
 LOOK_WAIT = 2.0
@@ -69,10 +74,20 @@ def wanted(run: StepRun) -> bool:
     return run.camera and run.looks.due and run.looks.taken < run.parameters.max_looks
 
 
-def look(run: StepRun, now: float) -> list:
-    """Ask for the first frame of a look through the moving gripper's camera; wait in LOOKING."""
+def on_arrival(run: StepRun) -> bool:
+    """Return True if the approach's first look may be taken before the arm is at rest."""
+    return run.looks.taken == 0
+
+
+def look(run: StepRun, now: float, arriving: bool = False) -> list:
+    """Ask for the first frame of a look through the moving gripper's camera; wait in LOOKING.
+
+    ``arriving``: taken on arrival, the arm not at rest yet (:func:`seen` keeps it only if it
+    confirms the hole where the step aims).
+    """
     looks = run.looks
     looks.taken += 1
+    looks.arriving = arriving
     looks.asked_at = now
     looks.height_shift = run.height_shift
     looks.frames, looks.asked = [], 1
@@ -119,14 +134,16 @@ def seen(run: StepRun, now: float, sighting: Sighting, height: float, height_std
     looks.asked_at = None
     run.stage = Stage.SETTLING
     gripper = run.step.moving_gripper
+    arriving, looks.arriving = looks.arriving, False
     if not sighting.found:
+        if arriving:
+            return [Notice(f'camera of gripper {gripper}: hole of {run.step.to_node} not seen '
+                           f'on arrival ({sighting.reason}); it looks again at rest', 'info')]
         looks.due = False
         return [Notice(f'camera of gripper {gripper}: hole of {run.step.to_node} not seen '
                        f'({sighting.reason}: {sighting.detail}); the descent goes on blind',
                        'warning')]
-    looks.sightings.append(sighting)
-    position, covariance = locate(looks.sightings, height, height_std)
-    looks.located = (position, covariance)
+    position, covariance = locate(looks.sightings + [sighting], height, height_std)
     moved = float(np.hypot(*(position[:2] - run.targets.point_to[:2])))
     spread = math.sqrt(max(float(np.linalg.eigvalsh(covariance[:2, :2]).max()), 0.0))
     higher = spread > LOOK_SPREAD * run.parameters.look_alignment and not looks.raised
@@ -136,9 +153,19 @@ def seen(run: StepRun, now: float, sighting: Sighting, height: float, height_std
                     f'its mouth {(position[2] - run.targets.point_to[2]) * 1e3:+.2f} mm; '
                     f'look {looks.taken}', 'info')
     precise = spread <= LOOK_SPREAD * run.parameters.look_alignment
-    if moved <= run.parameters.look_alignment and precise:
-        looks.due = False  # confirmed: the step aims at the hole seen
+    if moved <= run.parameters.look_alignment and (precise or not looks.raised):
+        # confirmed: the hole is where the step aims, to what this look can tell (one look
+        # from the approach height cannot tell the height: a hole lower by as much as it is
+        # off along the line of sight looks the same; the descent feels the height, and a
+        # jam looks again with it)
+        looks.sightings.append(sighting)
+        looks.located, looks.due = (position, covariance), False
         return [notice]
+    if arriving:  # the ringing links put the gripper off its joints' place: look at rest
+        return [notice, Notice(f'camera of gripper {gripper}: the look on arrival is set '
+                               'aside; it looks again at rest', 'info')]
+    looks.sightings.append(sighting)
+    looks.located = (position, covariance)
     if not _centre_on(run, position, higher):
         looks.due = False
         return [notice, Notice('the hole seen is out of reach; the descent goes on blind',

@@ -116,8 +116,9 @@ class SupervisorParameters:
         source='chosen: a look, one from higher for the height, one to confirm, one more'
         ).metadata)
     look_settle_time: float = dataclasses.field(default=0.3, metadata=parameter(
-        'time the joints must be still before a look through the wrist camera', 's', 0.0, 10.0,
-        read_only=False, source='chosen: as settle_time; the frames average the ringing out'
+        "time the joints must be still before a look after the approach's first", 's',
+        0.0, 10.0, read_only=False,
+        source='chosen: as settle_time; the links ring on after the joints are still'
         ).metadata)
     look_frames: int = dataclasses.field(default=3, metadata=parameter(
         "frames of one look, half a period of the model's joint-1 mode apart, binomially weighted",

@@ -123,6 +123,8 @@ class Looks:
         runner's map takes it.
     raised : bool
         The point above the hole has gone up for a look along a steeper line of sight.
+    arriving : bool
+        The look under way was taken on arrival, the arm not yet at rest.
     frames : list of Sighting
         What each frame of the look under way showed, in order.
     asked : int
@@ -141,6 +143,7 @@ class Looks:
     sightings: list[Sighting] = dataclasses.field(default_factory=list)
     located: tuple[np.ndarray, np.ndarray] | None = None
     raised: bool = False
+    arriving: bool = False
     frames: list[Sighting] = dataclasses.field(default_factory=list)
     asked: int = 0
     done: list[float] | None = None
