@@ -1,7 +1,7 @@
 """The headless runner walks as the sim-time graph does: the same steps, times and errors.
 
 The same two steps (gripper b n2_1 -> n1_2 about a, then gripper a n1_1 -> n2_2 about b: both
-bases, both roles of every joint) walked by ``run_all.py --headless`` and by ``run_all.py
+bases, both roles of every joint), with the wrist cameras looking before each descent, walked by ``run_all.py --headless`` and by ``run_all.py
 --sim-time`` (the graph as separate processes over DDS in an isolated domain) with the
 supervisor in the lock-step (``sim.wait_for_decisions``: the plant steps no further than the
 supervisor has decided), from the same parameter file. They must agree: the same route,
@@ -48,6 +48,9 @@ DISPLACED_TARGET = 'n1_2'
 DISPLACED_NODES = ('n1_1', 'n2_1', 'n1_2')  # the start stance and the target
 PLACEMENT, PLACEMENT_SEED = 0.0015, 191  # [m], seed
 SURVEYED_OFF_ROUTE = 'n4_3'  # the node the given survey knows, off the route
+# the two steps are walked with the wrist cameras: each looks before its descent, the graph's
+# plant rendering the frames its supervisor triggers, the headless loop's the runner's
+CAMERAS_ON = (r'enabled: false( +# chosen: the paper)', r'enabled: true\1')
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(2 * RUN_TIMEOUT + 120.0)]
 
@@ -78,7 +81,7 @@ def _parameter_file(path, *replacements):
 def walks(tmp_path_factory):
     """Walk the graph and headless from one parameter file; return their summaries."""
     tmp = tmp_path_factory.mktemp('parity')
-    params = _parameter_file(tmp / 'walker.yaml')
+    params = _parameter_file(tmp / 'walker.yaml', CAMERAS_ON)
     with isolated_domain() as domain:
         graph = _run_all(['--sim-time', '--params-file', str(params)], tmp / 'graph',
                          ros_environment(domain))
@@ -95,6 +98,16 @@ def test_both_take_the_same_route_with_the_same_steps(walks):
     keys = ('index', 'gripper', 'from_node', 'to_node', 'sweep', 'success', 'attempts')
     assert [{k: s[k] for k in keys} for s in graph['steps']] == \
         [{k: s[k] for k in keys} for s in headless['steps']]
+
+
+def test_both_look_before_each_descent(walks):
+    """The headless walk's looks; the graph's are in its FINE phases, as long as the headless's
+    (a look adds 0.38 s to a 0.26 s fine motion: more than the phases' 5 % of the step)."""
+    finals = [look for look in walks['headless']['looks'] if look['final']]
+    assert [look['node'] for look in finals] == PATH
+    assert all(look['seen'] for look in finals)
+    for step in walks['graph']['steps']:
+        assert step['phase_durations']['fine'] > 0.5, step['phase_durations']
 
 
 def test_every_step_and_phase_takes_the_same_time_within_five_percent(walks):
