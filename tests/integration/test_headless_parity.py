@@ -1,10 +1,11 @@
 """The headless runner walks as the sim-time graph does: the same steps, times and errors.
 
 The same two steps (gripper b n2_1 -> n1_2 about a, then gripper a n1_1 -> n2_2 about b: both
-bases, both roles of every joint), with the wrist cameras looking before each descent, walked by ``run_all.py --headless`` and by ``run_all.py
---sim-time`` (the graph as separate processes over DDS in an isolated domain) with the
-supervisor in the lock-step (``sim.wait_for_decisions``: the plant steps no further than the
-supervisor has decided), from the same parameter file. They must agree: the same route,
+bases, both roles of every joint), with the wrist cameras looking before each descent,
+walked by ``run_all.py --headless`` and by ``run_all.py --sim-time`` (the graph as separate
+processes over DDS in an isolated domain) with the supervisor in the lock-step
+(``sim.wait_for_decisions``: the plant steps no further than the supervisor has decided),
+from the same parameter file. They must agree: the same route,
 steps and phase sequence, every step's time within 5 %, every phase's within 5 % of its
 step's, the tip errors at insertion within 0.3 mm, and bags of the same topics and types.
 
@@ -101,8 +102,12 @@ def test_both_take_the_same_route_with_the_same_steps(walks):
 
 
 def test_both_look_before_each_descent(walks):
-    """The headless walk's looks; the graph's are in its FINE phases, as long as the headless's
-    (a look adds 0.38 s to a 0.26 s fine motion: more than the phases' 5 % of the step)."""
+    """Both walks look before each descent.
+
+    The headless walk's looks are in its summary; the graph's are in its FINE phases, as long
+    as the headless's (a look adds 0.38 s to a 0.26 s fine motion: more than the phases' 5 %
+    of the step).
+    """
     finals = [look for look in walks['headless']['looks'] if look['final']]
     assert [look['node'] for look in finals] == PATH
     assert all(look['seen'] for look in finals)
