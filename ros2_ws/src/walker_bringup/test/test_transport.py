@@ -95,3 +95,60 @@ def test_a_node_with_the_profile_is_reached_over_udp_only(ros_env):
     assert any(name.startswith('dds.shm.') for name in default), default
     chosen = _receive_threads(udp_loopback_environment(ros_env))
     assert chosen and all(name.startswith('dds.udp.') for name in chosen), chosen
+
+
+# Sends 20 trajectories as large as a long coarse motion's (1,500 points of five joints, about
+# 190 kB: fragments over UDP), each waited for as the planner waits
+# (walker_planner.setpoints.ACK_WAIT), and prints how many were not acknowledged in time.
+_TALKER = """
+import sys, time
+import rclpy
+from rclpy.duration import Duration
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from walker_runtime.qos import COMMAND_QOS
+from walker_planner.setpoints import ACK_WAIT
+rclpy.init()
+node = rclpy.create_node('transport_trajectory_probe')
+publisher = node.create_publisher(JointTrajectory, 'probe_trajectory', COMMAND_QOS)
+deadline = time.monotonic() + 30.0
+while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
+    time.sleep(0.05)
+time.sleep(0.5)
+late = 0
+for k in range(20):
+    message = JointTrajectory(joint_names=['j1', 'j2', 'j3', 'j4', 'j5'])
+    message.points = [JointTrajectoryPoint(positions=[0.001 * k] * 5, velocities=[0.1] * 5,
+                                           accelerations=[0.2] * 5) for _ in range(1500)]
+    publisher.publish(message)
+    late += not publisher.wait_for_all_acked(Duration(seconds=ACK_WAIT))
+    time.sleep(0.2)
+print('late', late, flush=True)
+node.destroy_node()
+rclpy.try_shutdown()
+"""
+_LISTENER = """
+import rclpy
+from trajectory_msgs.msg import JointTrajectory
+from walker_runtime.qos import COMMAND_QOS
+rclpy.init()
+node = rclpy.create_node('transport_trajectory_listener')
+node.create_subscription(JointTrajectory, 'probe_trajectory', lambda message: None, COMMAND_QOS)
+print('ready', flush=True)
+rclpy.spin(node)
+"""
+
+
+def test_a_whole_trajectory_over_udp_is_acknowledged_within_the_planners_wait(ros_env):
+    """A fragment lost on loopback is sent again at the next heartbeat: 0.1 s, not 3 s."""
+    env = udp_loopback_environment(ros_env)
+    listener = subprocess.Popen([sys.executable, '-c', _LISTENER], env=env,
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+    try:
+        assert listener.stdout.readline().strip() == 'ready'
+        talker = subprocess.run([sys.executable, '-c', _TALKER], env=env, timeout=120,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    finally:
+        listener.kill()
+        listener.wait(timeout=20)
+    assert talker.stdout.strip().splitlines()[-1] == 'late 0', talker.stdout
