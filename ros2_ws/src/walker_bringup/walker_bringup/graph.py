@@ -10,7 +10,8 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.camera import RECORDED_CAMERA_TOPICS, camera_topic
+from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
 from walker_supervisor.core.survey_file import SURVEY_FILE_NAME
 
 __all__ = ['NodeSpec', 'StartStance', 'walker_graph', 'walker_namespace', 'start_stances',
@@ -31,13 +32,15 @@ SURVEY_FILE_PARAMETER = 'supervisor.truss_survey_file'
 #: uses. The high-rate inner-loop topics (effort_commands, joint_accelerations, the setpoint
 #: streams) are left out: the controller states carry the setpoints and efforts at
 #: ``control.state_rate``, and recording every message of the 500 Hz loop would take about a
-#: core of CPU on its own.
+#: core of CPU on its own. The wrist cameras' topics exist only with cameras, and their frames
+#: only when a look asks for one (``sim.camera.frame_rate`` 0: docs/perception.md).
 RECORDED_TOPICS = ('joint_states', 'tip_pose', 'gripper_a_pose', 'gripper_b_pose',
                    'gripper_states', 'phase', 'phase_history', 'goal_rejections',
                    'step_reports', 'control_mode',
                    'controllers/*/state', 'planned_trajectory', 'robot_description',
                    'markers', 'truss_map_markers', '/tf', '/tf_static', '/diagnostics',
-                   '/clock')
+                   '/clock',
+                   *(camera_topic(g, name) for g in GRIPPERS for name in RECORDED_CAMERA_TOPICS))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -29,10 +29,25 @@ import numpy as np
 from walker_core.parameter_schema import ParameterError, parameter
 
 __all__ = ['CameraParameters', 'CameraModel', 'PlumbBob', 'mount_transform', 'mount_rpy',
-           'optical_frame_name', 'PLUMB_BOB']
+           'optical_frame_name', 'camera_topic', 'PLUMB_BOB', 'IMAGE', 'CAMERA_INFO',
+           'TRUE_HOLE', 'HOLE', 'RECORDED_CAMERA_TOPICS']
 
 #: ``sensor_msgs/CameraInfo.distortion_model`` of the camera (its five coefficients are zero).
 PLUMB_BOB = 'plumb_bob'
+
+# The topics of a gripper's camera, ``camera_<g>/<name>`` (:func:`camera_topic`):
+#: the frames (``sensor_msgs/Image``, the plant's)
+IMAGE = 'image_raw'
+#: their calibration (``sensor_msgs/CameraInfo``, the plant's)
+CAMERA_INFO = 'camera_info'
+#: where each frame's hole really is (``geometry_msgs/PointStamped``, the plant's simulation
+#: truth)
+TRUE_HOLE = 'true_hole'
+#: where each frame's hole was measured (``geometry_msgs/PointStamped``, the supervisor's)
+HOLE = 'hole'
+#: What a walk's bag holds of each camera: the frames of the looks with the truth and the
+#: measurement beside each.
+RECORDED_CAMERA_TOPICS = (IMAGE, CAMERA_INFO, TRUE_HOLE, HOLE)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,6 +98,14 @@ class CameraParameters:
 def optical_frame_name(gripper: str) -> str:
     """Return the TF frame of a gripper's camera (REP 104 optical frame)."""
     return f'camera_{gripper}_optical'
+
+
+def camera_topic(gripper: str, name: str) -> str:
+    """Return a topic of a gripper's camera, relative to the robot's namespace.
+
+    ``name`` is one of :data:`IMAGE`, :data:`CAMERA_INFO`, :data:`TRUE_HOLE`, :data:`HOLE`.
+    """
+    return f'camera_{gripper}/{name}'
 
 
 def mount_transform(position, aim_distance: float) -> np.ndarray:

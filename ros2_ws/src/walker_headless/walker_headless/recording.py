@@ -99,16 +99,12 @@ class WalkRecording:
         self.namespace = namespace
         self._store = _typestore()
         self.types = self._store.types
-        self.names = {relative: relative if relative.startswith('/')
-                      else f'{namespace.rstrip("/")}/{relative}' for relative in TOPICS}
+        self.names: dict[str, str] = {}
+        self._topic_types: dict[str, str] = {}
         self.writer = BagWriter(bag_dir, max_chunk_size=CHUNK_SIZE,
                                 custom_data={'clock': 'sim_time'})
         try:
-            for relative, (type_name, qos) in TOPICS.items():
-                self.writer.add_topic(
-                    TopicMetadata(self.names[relative], type_name, (qos,),
-                                  type_description_hash(type_name)),
-                    message_definition(type_name))
+            self.add_topics(TOPICS)
         except BaseException:
             self.writer.close()
             raise
@@ -118,6 +114,22 @@ class WalkRecording:
                              for joint in PHYSICAL_JOINT_NAMES}
         self._transforms: dict[tuple, TransformsEncoder] = {}  # frames -> its encoder
         self._write = self.writer.write
+
+    def add_topics(self, topics: dict[str, tuple[str, QosProfile]]) -> None:
+        """Add topics: relative (or absolute) name -> (type, offered QoS), as :data:`TOPICS`.
+
+        Raises
+        ------
+        MessageDefinitionError
+            If a type's definition is not installed.
+        """
+        for relative, (type_name, qos) in topics.items():
+            name = relative if relative.startswith('/') \
+                else f'{self.namespace.rstrip("/")}/{relative}'
+            self.writer.add_topic(TopicMetadata(name, type_name, (qos,),
+                                                type_description_hash(type_name)),
+                                  message_definition(type_name))
+            self.names[relative], self._topic_types[relative] = name, type_name
 
     @property
     def path(self) -> Path:
@@ -179,7 +191,7 @@ class WalkRecording:
     # ------------------------------------------------------------------ on change
     def serialize(self, relative: str, message, stamp: int) -> None:
         """Write ``message`` (a rosbags message of its topic's type) on a topic at ``stamp``."""
-        type_name = TOPICS[relative][0]
+        type_name = self._topic_types[relative]
         self._write(self.names[relative], bytes(self._store.serialize_cdr(message, type_name)),
                     stamp)
 

@@ -18,9 +18,11 @@ carries out its commands on the loop's cores, as the node does over ROS
   the plant core, a look to the plant core's wrist camera (the frame is answered once its
   exposure latency has passed), planner requests to
   :class:`~walker_headless.planner.HeadlessPlanner`; the phase and the step reports to the bag
-  and the walk's records, the feedback to ``progress``, its notices to ``say``. The answers
-  come back as the node's do, after the commands of the call that asked for them, and take
-  no simulated time (the graph holds its clock for them).
+  and the walk's records, each frame of a look (with its truth) and the hole it showed to the
+  bag (:class:`~walker_headless.camera_recording.CameraRecording`), the feedback to
+  ``progress``, its notices to ``say``. The answers come back as the node's do, after the
+  commands of the call that asked for them, and take no simulated time (the graph holds its
+  clock for them).
 
 What the node has and the loop has not is ignored: a planner client made anew, the
 ``control_mode`` publisher made anew, the step-state file of a restart, an operator's jog.
@@ -32,14 +34,16 @@ import collections
 import math
 from collections.abc import Callable
 
+from walker_core.camera import CameraModel
 from walker_supervisor.core.commands import (
-    CancelFollow, DecideNow, Feedback, FollowMotion, GoalEnded, GripperRequest, LookRequest,
-    Notice, PhaseRecord, PlanMotion, SetControlMode, StepRecord, StopOrphanStream)
+    CancelFollow, DecideNow, Feedback, FollowMotion, GoalEnded, GripperRequest, HoleSighted,
+    LookRequest, Notice, PhaseRecord, PlanMotion, SetControlMode, StepRecord, StopOrphanStream)
 from walker_supervisor.core.goals import GoalRefusedError
 from walker_supervisor.core.reports import phase_fields, report_fields
 from walker_supervisor.core.runner import TICK_PERIOD, WATCH_PERIOD, WalkRunner
 
 from walker_headless import records
+from walker_headless.camera_recording import CameraRecording
 from walker_headless.loop import RobotLoop, stamp_seconds
 from walker_headless.planner import HeadlessPlanner
 
@@ -57,7 +61,10 @@ def look_record(look, truths: dict) -> dict:
     that of the hole as the looks so far located it (what the step aims at), ``frame_error``
     [m] that of the frames alone, at the height the step assumed (both None when not seen);
     ``spread`` [m] is the located hole's stated standard deviation and ``offset`` [m] the true
-    hole's distance from the gripper's axis.
+    hole's distance from the gripper's axis. ``last_frame`` is the look's last frame (the one a
+    walk report shows at a screw-in): its instant ``time`` [s] (its image's stamp), the hole's
+    axis from the gripper's axis that frame alone ``measured`` [m] (x, y; None when not seen)
+    and the ``true`` one [m] (x, y).
     """
     def error(name: str):
         pairs = [(f.weight, getattr(f, name) - truths[f.exposure_time]) for f in look.frames
@@ -67,12 +74,16 @@ def look_record(look, truths: dict) -> dict:
         total = sum(w for w, _ in pairs)
         return float(math.hypot(*sum(w * e for w, e in pairs) / total))
 
-    first = look.frames[0]
+    first, last = look.frames[0], look.frames[-1]
     return {'time': first.exposure_time, 'gripper': look.gripper, 'node': look.node,
             'frames': len(look.frames), 'seen': look.found, 'reason': look.reason,
             'error': error('located'), 'frame_error': error('measured'),
             'spread': look.spread if math.isfinite(look.spread) else None,
-            'offset': float(math.hypot(*truths[first.exposure_time])), 'final': look.final}
+            'offset': float(math.hypot(*truths[first.exposure_time])), 'final': look.final,
+            'last_frame': {
+                'time': last.exposure_time,
+                'measured': None if last.measured is None else [float(v) for v in last.measured],
+                'true': [float(v) for v in truths[last.exposure_time]]}}
 
 
 class WalkShell:
@@ -124,6 +135,9 @@ class WalkShell:
         self._truths: dict = {}  # the true hole in the gripper's frame, by frame instant
         #: every look the runner took, against the plant's truth (:func:`look_record`)
         self.looks: list[dict] = []
+        camera = configuration.walker.gripper.camera
+        self._camera_bag = CameraRecording(loop.recording, CameraModel.from_parameters(camera)) \
+            if loop.recording is not None and camera.enabled else None
 
     @property
     def done(self) -> bool:
@@ -148,6 +162,8 @@ class WalkShell:
         for frame in [f for f in self._frames if f.ready_time <= now]:
             self._frames.remove(frame)
             self._truths[frame.exposure_time] = frame.mouth_in_gripper[:2]
+            if self._camera_bag is not None:
+                self._camera_bag.frame(stamp, frame)
             runner.last_look = None
             commands = runner.frame_seen(frame.gripper, frame.image, frame.exposure_time, now)
             if runner.last_look is not None:
@@ -230,6 +246,9 @@ class WalkShell:
                 answers.append(lambda a=answer: runner.gripper_answered(*a, now))
             elif isinstance(command, LookRequest):
                 self._frames.append(loop.plant.camera_frame(command.gripper))
+            elif isinstance(command, HoleSighted):
+                if self._camera_bag is not None:
+                    self._camera_bag.hole(loop.stamp, command)
             elif isinstance(command, CancelFollow):
                 self.planner.cancel(command.ticket)
             elif isinstance(command, DecideNow):

@@ -247,3 +247,10 @@ def test_the_report_says_what_the_bag_lacks_losses_and_a_recorders_downtime(tmp_
 
 def test_a_bag_that_lacks_nothing_says_nothing_of_it(report):
     assert 'What the bag lacks' not in report.markdown.read_text()
+
+
+def test_a_walk_without_camera_frames_says_nothing_of_cameras(report):
+    assert 'camera' not in report.markdown.read_text().lower()
+    assert 'camera' not in report.summary.lower()
+    assert 'screw_in_frames' not in json.loads(report.json.read_text())
+    assert report.content.screw_ins == ()

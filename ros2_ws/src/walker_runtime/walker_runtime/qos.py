@@ -22,6 +22,7 @@ offer. So every node takes its profiles from here:
   1. A frame of hundreds of kilobytes travels in UDP fragments that can overflow a reader's
   socket buffer on a loaded machine: one fragment lost loses a best-effort frame whole, where
   reliable delivery sends it again. The newest only, so a slow reader never stalls the plant.
+  The points beside each frame (``true_hole``, ``hole``) share it.
 * :func:`latched_qos`: latched with a history (the phase, the step reports).
 * :data:`TF_QOS` and :data:`TF_STATIC_QOS`: ``/tf`` and ``/tf_static`` as tf2_ros offers them
   (``DynamicBroadcasterQoS``: reliable, keep last 100; ``StaticBroadcasterQoS``: reliable,

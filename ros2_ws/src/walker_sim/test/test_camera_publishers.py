@@ -104,7 +104,7 @@ def test_streamed_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(se
         node, watched = FakeNode(), FakePlant(plant)
         CameraPublishers(node, seeing, 2.0).publish(watched, 0)
         assert set(node.publishers) == {image_topic(g) for g in 'ab'} | {
-            info_topic(g) for g in 'ab'}
+            info_topic(g) for g in 'ab'} | {f'camera_{g}/true_hole' for g in 'ab'}
         assert watched.rendered == []  # nobody listens
         node = FakeNode()
         cameras = CameraPublishers(node, seeing, 2.0)
@@ -189,3 +189,27 @@ def test_the_messages_follow_rep_104(seeing, sim):
     in_gripper = model.mount[:3, :3] @ point + model.mount[:3, 3]
     np.testing.assert_allclose(projection[:2] / projection[2], model.project(in_gripper)[0],
                                atol=1e-9)
+
+
+def test_each_frame_comes_with_the_true_hole_of_its_instant_in_the_grippers_frame(seeing):
+    """``camera_<g>/true_hole``: the simulation's truth beside each image, at its stamp."""
+    import dataclasses
+
+    from walker_core.camera import TRUE_HOLE, camera_topic
+
+    mouth = np.array([0.0012, -0.0007, -0.031])
+
+    class TruthPlant(DrawnPlant):
+        def camera_frame(self, gripper):
+            return dataclasses.replace(super().camera_frame(gripper), mouth_in_gripper=mouth)
+
+    model = CameraModel.from_parameters(seeing.gripper.camera)
+    node, plant = FakeNode(), TruthPlant(model, latency=0.0)
+    cameras = CameraPublishers(node, seeing, 0.0)
+    node.call(trigger_service('b'))
+    run_plant(cameras, plant, [7 * PERIOD_NS, 8 * PERIOD_NS])
+    image, = node.publishers[image_topic('b')].sent
+    truth, = node.publishers[camera_topic('b', TRUE_HOLE)].sent
+    assert truth.header.stamp == image.header.stamp and truth.header.frame_id == 'gripper_b'
+    assert [truth.point.x, truth.point.y, truth.point.z] == mouth.tolist()
+    assert node.publishers[camera_topic('a', TRUE_HOLE)].sent == []

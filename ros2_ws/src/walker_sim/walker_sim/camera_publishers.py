@@ -3,7 +3,9 @@
 For each gripper ``g`` whose robot carries cameras (``gripper.camera.enabled``), the plant
 serves ``camera_<g>/trigger`` (``std_srvs/srv/Trigger``) and publishes ``camera_<g>/image_raw``
 (``sensor_msgs/Image``, ``rgb8``) and ``camera_<g>/camera_info`` (``sensor_msgs/CameraInfo``,
-plumb-bob, REP 104) in the frame ``camera_<g>_optical``. A trigger is answered at once; the
+plumb-bob, REP 104) in the frame ``camera_<g>_optical``, with the simulation's truth of each frame
+on ``camera_<g>/true_hole`` (``geometry_msgs/PointStamped``: where the hole really is, in the
+gripper's frame, :func:`~walker_sim.messages.true_hole_msg`). A trigger is answered at once; the
 frame is rendered at the plant's next published state (in sim time inside the lock-step, so it
 shows the plant at a step), and image and calibration are sent at the first state at or after
 the frame's ``ready_time`` (its exposure latency later), stamped with the exposure, the instant
@@ -17,17 +19,18 @@ from __future__ import annotations
 
 from functools import partial
 
+from geometry_msgs.msg import PointStamped
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
 from std_srvs.srv import Trigger
 
-from walker_core.camera import PLUMB_BOB, CameraModel, optical_frame_name
+from walker_core.camera import PLUMB_BOB, TRUE_HOLE, CameraModel, camera_topic, optical_frame_name
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.listened import ListenedPublisher
 from walker_runtime.qos import IMAGE_QOS
 from walker_sim.core.outputs import StampedRate
 from walker_sim.core.wrist_camera import CameraFrame
-from walker_sim.messages import time_msg
+from walker_sim.messages import time_msg, true_hole_msg
 
 __all__ = ['CameraPublishers', 'image_msg', 'camera_info_msg', 'image_topic', 'info_topic',
            'trigger_service']
@@ -94,6 +97,7 @@ class CameraPublishers:
         self._rate = StampedRate(frame_rate) if frame_rate > 0.0 else None
         self._images: dict[str, ListenedPublisher] = {}
         self._infos = {}
+        self._truths = {}
         self._asked: set[str] = set()  # triggered, rendered at the next published state
         self._rendered: list[tuple[int, int, CameraFrame]] = []  # (ready, exposure [ns], frame)
         if self._model is None:
@@ -103,6 +107,8 @@ class CameraPublishers:
                 node.create_publisher(Image, image_topic(gripper), IMAGE_QOS))
             self._infos[gripper] = node.create_publisher(CameraInfo, info_topic(gripper),
                                                          IMAGE_QOS)
+            self._truths[gripper] = node.create_publisher(
+                PointStamped, camera_topic(gripper, TRUE_HOLE), IMAGE_QOS)
             node.create_service(Trigger, trigger_service(gripper),
                                 partial(self._on_trigger, gripper))
 
@@ -132,6 +138,7 @@ class CameraPublishers:
                 self._images[frame.gripper].publisher.publish(image_msg(frame, exposure))
                 self._infos[frame.gripper].publish(
                     camera_info_msg(self._model, frame.gripper, exposure))
+                self._truths[frame.gripper].publish(true_hole_msg(frame, exposure))
             else:
                 waiting.append((ready, exposure, frame))
         self._rendered = waiting

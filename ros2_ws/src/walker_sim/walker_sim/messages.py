@@ -8,11 +8,12 @@ line of conversion and one call into the core. The QoS profiles are those of
 from __future__ import annotations
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PointStamped, PoseStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from walker_core.joint_roles import GRIPPERS, PHYSICAL_JOINT_NAMES
+from walker_core.urdf import GRIPPER_LINKS
 from walker_runtime.qos import CLOCK_QOS, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS
 from walker_msgs.msg import GripperState, GripperStates, JointAccelerations
 from walker_sim.core.plant import GripperReport, PlantState, Pose
@@ -20,7 +21,7 @@ from walker_sim.core.plant import GripperReport, PlantState, Pose
 __all__ = [
     'SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'CLOCK_QOS', 'TRUSS_FRAME', 'time_msg',
     'stamp_ns', 'joint_state_msg', 'flexible_joint_state_msg', 'accelerations_msg', 'pose_msg',
-    'gripper_state_msg', 'gripper_states_msg', 'clock_msg',
+    'gripper_state_msg', 'gripper_states_msg', 'clock_msg', 'true_hole_msg',
 ]
 
 #: Frame of every pose the plant publishes: the truss (world) frame.
@@ -110,3 +111,20 @@ def gripper_states_msg(state: PlantState, stamp: int) -> GripperStates:
 def clock_msg(stamp: int) -> Clock:
     """``rosgraph_msgs/Clock`` of a time in integer nanoseconds."""
     return Clock(clock=time_msg(stamp))
+
+
+def true_hole_msg(frame, stamp: int) -> PointStamped:
+    """``camera_<g>/true_hole`` of a wrist camera's frame, stamped ``stamp`` [ns]: the truth.
+
+    Where the hole nearest the gripper's axis really is at the frame's instant
+    (:attr:`~walker_sim.core.wrist_camera.CameraFrame.mouth_in_gripper`), in the gripper's frame
+    ``gripper_<g>`` [m]: what the simulation knows and a camera's user does not, published as
+    the true gripper poses are, for a report or a test to compare a measurement with.
+    """
+    message = PointStamped()
+    message.header.stamp = time_msg(stamp)
+    message.header.frame_id = GRIPPER_LINKS[frame.gripper]
+    message.point.x, message.point.y, message.point.z = (
+        float(v) for v in frame.mouth_in_gripper)
+    return message
+

@@ -8,12 +8,13 @@ look, and how the image becomes the array the hole finder takes.
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import Image
 from std_srvs.srv import Trigger
 
 from walker_runtime.qos import IMAGE_QOS
 from walker_supervisor.camera_link import CameraLink, image_array
-from walker_supervisor.core.commands import LookRequest, Notice
+from walker_supervisor.core.commands import HoleSighted, LookRequest, Notice
 from walker_supervisor.core.looking import LOOK_WAIT
 
 WIDTH, HEIGHT = 8, 6
@@ -53,12 +54,25 @@ class FakeLogger:
         self.warnings.append(text)
 
 
+class FakePublisher:
+    def __init__(self):
+        self.sent = []
+
+    def publish(self, message):
+        self.sent.append(message)
+
+
 class FakeNode:
-    """What the link asks of a node: service clients, subscriptions, a logger."""
+    """What the link asks of a node: service clients, subscriptions, publishers, a logger."""
 
     def __init__(self):
-        self.clients, self.subscriptions = {}, {}
+        self.clients, self.subscriptions, self.publishers = {}, {}, {}
         self.logger = FakeLogger()
+
+    def create_publisher(self, message_type, topic, qos):
+        assert message_type is PointStamped and qos == IMAGE_QOS
+        self.publishers[topic] = FakePublisher()
+        return self.publishers[topic]
 
     def create_client(self, service_type, name):
         assert service_type is Trigger
@@ -116,7 +130,7 @@ def link():
 def test_a_robot_without_cameras_has_neither_trigger_nor_image_subscription():
     node = FakeNode()
     link = CameraLink(node, FakeRunner(), FakeClocks(0.0), [].extend, enabled=False)
-    assert node.clients == {} and node.subscriptions == {}
+    assert node.clients == {} and node.subscriptions == {} and node.publishers == {}
     link.execute(LookRequest('a', 0.0))  # logged, nothing else
     assert len(node.logger.warnings) == 1 and 'no such camera' in node.logger.warnings[0]
 
@@ -185,3 +199,16 @@ def test_image_array_refuses_a_message_too_short_for_its_rows():
     message.data = bytes(message.data)[:-1]
     with pytest.raises(ValueError, match='rows of'):
         image_array(message)
+
+
+def test_the_hole_a_frame_showed_is_published_in_the_grippers_frame_at_its_stamp(link):
+    """``camera_<g>/hole``: the supervisor's measurement, beside the plant's truth."""
+    point = np.array([0.0011, -0.0004, -0.0302])
+    sighted = HoleSighted('b', 12.502, point)
+    assert link.handles(sighted)
+    link.execute(sighted)
+    message, = link.node.publishers['camera_b/hole'].sent
+    assert (message.header.stamp.sec, message.header.stamp.nanosec) == (12, 502_000_000)
+    assert message.header.frame_id == 'gripper_b'
+    assert [message.point.x, message.point.y, message.point.z] == point.tolist()
+    assert link.node.publishers['camera_a/hole'].sent == []

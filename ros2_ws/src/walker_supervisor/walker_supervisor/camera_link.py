@@ -8,6 +8,12 @@ carried out as every answer's. A trigger whose service is not discovered, a fram
 that never comes cost nothing here: the runner goes on blind after
 :data:`~walker_supervisor.core.looking.LOOK_WAIT`, and the look is forgotten then. A robot
 without cameras (``gripper.camera.enabled`` false) has neither subscription nor client.
+
+Each frame that showed the hole (the runner's :class:`~walker_supervisor.core.commands.
+HoleSighted`) is published on ``camera_<g>/hole`` (``geometry_msgs/PointStamped``, stamped with
+the frame's exposure, in the gripper's frame ``gripper_<g>``: x, y the hole's axis from the
+gripper's axis as that frame measured it, z the face's height the step assumed), beside the
+plant's ``camera_<g>/true_hole`` of the same stamp, reliable, keep last 1 as the images.
 """
 
 from __future__ import annotations
@@ -15,17 +21,19 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from geometry_msgs.msg import PointStamped
 from rclpy.node import Node
 from sensor_msgs.msg import Image
 from std_srvs.srv import Trigger
 
+from walker_core.camera import HOLE, IMAGE, camera_topic
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.qos import IMAGE_QOS
 from walker_supervisor.clocks import Clocks
-from walker_supervisor.core.commands import LookRequest
+from walker_supervisor.core.commands import HoleSighted, LookRequest
 from walker_supervisor.core.looking import LOOK_WAIT
 from walker_supervisor.core.runner import WalkRunner
-from walker_supervisor.messages import seconds, stamp_nanoseconds
+from walker_supervisor.messages import hole_message, seconds, stamp_nanoseconds
 
 __all__ = ['CameraLink', 'image_array', 'RGB8']
 
@@ -73,21 +81,32 @@ class CameraLink:
                  answer: Callable[[list], None], enabled: bool) -> None:
         self._node, self._runner, self._clocks, self._answer = node, runner, clocks, answer
         self._triggers = {}
+        self._holes = {}
         self._pending: dict[str, float] = {}  # gripper -> since [s]: the frame a look awaits
         if not enabled:
             return
         for gripper in GRIPPERS:
             self._triggers[gripper] = node.create_client(Trigger, f'camera_{gripper}/trigger')
-            node.create_subscription(Image, f'camera_{gripper}/image_raw',
+            node.create_subscription(Image, camera_topic(gripper, IMAGE),
                                      lambda message, g=gripper: self._on_image(g, message),
                                      IMAGE_QOS)
+            self._holes[gripper] = node.create_publisher(
+                PointStamped, camera_topic(gripper, HOLE), IMAGE_QOS)
 
     def handles(self, command) -> bool:
         """Return True for a command this object carries out."""
-        return isinstance(command, LookRequest)
+        return isinstance(command, (LookRequest, HoleSighted))
 
-    def execute(self, command: LookRequest) -> None:
-        """Trigger the gripper's camera and wait for its frame (or for nothing: see above)."""
+    def execute(self, command: LookRequest | HoleSighted) -> None:
+        """Trigger the gripper's camera and wait for its frame (or for nothing: see above).
+
+        A :class:`HoleSighted` is published on ``camera_<g>/hole``.
+        """
+        if isinstance(command, HoleSighted):
+            publisher = self._holes.get(command.gripper)
+            if publisher is not None:
+                publisher.publish(hole_message(command))
+            return
         client = self._triggers.get(command.gripper)
         if client is None:
             self._node.get_logger().warning(

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from walker_msgs.action import Step, WalkTo
@@ -18,15 +19,17 @@ from walker_msgs.srv import PlanTrajectory
 
 from walker_core.gripper_state import GripperState, reported_state
 from walker_core.joint_roles import PHYSICAL_JOINT_NAMES
+from walker_core.urdf import GRIPPER_LINKS
 from walker_planner.conversions import chained_message
 from walker_supervisor.core.commands import (
-    Feedback, GoalEnded, PhaseRecord, SetControlMode, StepRecord)
+    Feedback, GoalEnded, HoleSighted, PhaseRecord, SetControlMode, StepRecord)
 from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.prepared_motions import PlanAnswer, stream_lead
 from walker_supervisor.core.reports import phase_fields, report_fields
 
 __all__ = ['MODES', 'joint_arrays', 'gripper_readings', 'gripper_state_code',
            'controller_report', 'seconds', 'mode_message', 'phase_message', 'report_message',
+           'hole_message',
            'feedback_message', 'result_message', 'plan_request_message', 'plan_answer',
            'join_answers', 'diagnostics_message']
 
@@ -110,6 +113,16 @@ def report_message(record: StepRecord, stamp) -> StepReport:
     """Return the ``step_reports`` message of a step that ended."""
     message = StepReport(**report_fields(record))
     message.header.stamp = stamp
+    return message
+
+
+def hole_message(record: HoleSighted) -> PointStamped:
+    """Return the ``camera_<g>/hole`` message of a frame: the hole in the gripper's frame."""
+    message = PointStamped()
+    stamp = message.header.stamp
+    stamp.sec, stamp.nanosec = divmod(round(record.exposure_time * 1e9), 1_000_000_000)
+    message.header.frame_id = GRIPPER_LINKS[record.gripper]
+    message.point.x, message.point.y, message.point.z = (float(v) for v in record.point)
     return message
 
 

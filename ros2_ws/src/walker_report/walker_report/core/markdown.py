@@ -12,6 +12,7 @@ from pathlib import Path
 from walker_bag.core.losses import loss_lines
 from walker_report.core.analysis import JointStats
 from walker_report.core.animation import AnimationResult
+from walker_report.core.camera_figure import caption, title
 from walker_report.core.steps import PHASES, format_markdown
 
 __all__ = ['write_markdown']
@@ -41,6 +42,31 @@ def _joint_rows(joints: list[JointStats]) -> list[list[str]]:
                      '-' if not math.isfinite(j.final_error) else f'{j.final_error * 1e3:.2f}',
                      str(j.stale)])
     return rows
+
+
+def _camera_lines(content, figures: dict[str, Path]) -> list[str]:
+    """Return the wrist camera's section: each screw-in's last frame (no frame: no section)."""
+    if not content.screw_ins:
+        return []
+    lines = ['## The wrist camera before each screw-in', '',
+             "Each step's last frame before its descent (the last of the look the descent went "
+             "for), as the moving gripper's camera took it. Drawn over it through the nominal "
+             'camera model: the hole the supervisor measured in this frame (solid, its centre '
+             "a cross), the true hole (dashed: the simulation's truth, recorded beside each "
+             "frame) and the gripper's axis where it meets the face. Offsets are the hole's axis "
+             "from the gripper's axis, x and y in the gripper's frame, in mm.", '']
+    lines += _table(['step', 'node', 'camera', 'frame s', 'measured x, y mm', 'true x, y mm',
+                     'apart mm'], [
+        [str(f.step), f.to_node, f.gripper, f'{f.time:.2f}',
+         'not seen' if f.measured is None else
+         f'{f.measured[0] * 1e3:+.2f}, {f.measured[1] * 1e3:+.2f}',
+         '-' if f.true is None else f'{f.true[0] * 1e3:+.2f}, {f.true[1] * 1e3:+.2f}',
+         _mm(f.error)] for f in content.screw_ins]) + ['']
+    for frame in content.screw_ins:
+        name = f'camera_step_{frame.step:02d}'
+        if name in figures:
+            lines += [f'![{title(frame)}]({figures[name].name})', '', f'*{caption(frame)}*', '']
+    return lines
 
 
 def write_markdown(path: Path, content, figures: dict[str, Path],
@@ -114,6 +140,7 @@ def write_markdown(path: Path, content, figures: dict[str, Path],
          _mm(float(span.report.message.residual_vibration)) if span.report else '-']
         for span in content.spans if (v := content.vibrations.get(span.number))]) + ['']
 
+    lines += _camera_lines(content, figures)
     lines += ['## Animation', '']
     if animation is not None:
         plan = animation.plan

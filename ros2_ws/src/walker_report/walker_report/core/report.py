@@ -17,6 +17,8 @@ What it writes into the output directory:
 ``vibration.png``         tip vibration near each target
 ``steps.png``             the per-step table as an image
 ``step_NN.png``           one figure per step
+``camera_step_NN.png``    with wrist cameras: the last frame before step NN's screw-in, the
+                          hole measured and the true one drawn over it
 ``walk.gif``              the animation (``walk_final.png``: its last frame, larger)
 ========================  ================================================================
 """
@@ -30,17 +32,19 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from walker_core.camera import CameraModel
 from walker_core.parameter_file import ParameterFile, default_parameter_file
 from walker_core.parameter_schema import ParameterError
 from walker_core.robot_parameters import WalkerParameters
 from walker_core.settling import SETTLING_PREFIX, SettlingWindow
 from walker_core.truss import Truss
-from walker_report.core import figures
+from walker_report.core import camera_figure, figures
 from walker_report.core.analysis import (
     JointLimits, JointStats, PhaseInterval, StepSpan, TargetVibration, joint_limits,
     joint_stats, phase_intervals, step_spans, target_vibration)
 from walker_report.core.animation import AnimationOptions, AnimationResult, render_animation
 from walker_report.core.errors import ReportError
+from walker_report.core.screw_in_frames import ScrewInFrame, screw_in_frames
 from walker_report.core.steps import StepRow, format_table, rows_from_reports, write_json
 from walker_report.core.walk_data import TOPICS, WalkData, load_walk
 
@@ -50,6 +54,7 @@ __all__ = ['ReportOptions', 'ReportContent', 'ReportResult', 'default_output_dir
 #: ``progress(stage, done, total)``: what the report is doing and how far it is.
 Progress = Callable[[str, int, int], None]
 _STEP_FIGURE = 'step_{:02d}.png'
+_CAMERA_FIGURE = 'camera_step_{:02d}.png'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,7 +90,11 @@ class ReportOptions:
 
 @dataclasses.dataclass(frozen=True)
 class ReportContent:
-    """Everything the report shows, computed from the bag (no files)."""
+    """Everything the report shows, computed from the bag (no files).
+
+    ``screw_ins`` are the camera's last frame before each screw-in (none without camera
+    frames in the bag), ``camera`` the nominal camera model they are drawn with.
+    """
 
     walk: WalkData
     params_file: Path
@@ -99,6 +108,8 @@ class ReportContent:
     limits: JointLimits
     joints: list[JointStats]
     notes: list[str]
+    camera: CameraModel | None = None
+    screw_ins: tuple[ScrewInFrame, ...] = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -155,7 +166,8 @@ def prepare_output(out: Path) -> Path:
     if not os.access(out, os.W_OK | os.X_OK):
         raise ReportError(f'the output directory {out} is not writable')
     # A former report's files that this one may not write again (fewer steps, no animation).
-    for stale in [*out.glob('step_[0-9][0-9].png'), out / 'walk.gif', out / 'walk_final.png']:
+    for stale in [*out.glob('step_[0-9][0-9].png'), *out.glob('camera_step_[0-9][0-9].png'),
+                  out / 'walk.gif', out / 'walk_final.png']:
         if stale.is_file():
             stale.unlink()
     return out
@@ -190,7 +202,8 @@ def analyse(walk: WalkData, params_file: Path, params, settle_time: float) -> Re
         if span.number not in vibrations:
             notes.append(f'{span.label} never began insertion: no vibration near its target')
     return ReportContent(walk, params_file, truss, params.gripper.insertion_position_tolerance,
-                         settle_time, intervals, spans, rows, vibrations, limits, joints, notes)
+                         settle_time, intervals, spans, rows, vibrations, limits, joints, notes,
+                         CameraModel.from_parameters(params.gripper.camera))
 
 
 def make_report(bag: str | Path, out: str | Path | None = None,
@@ -241,6 +254,9 @@ def make_report(bag: str | Path, out: str | Path | None = None,
     if walk.bag.message_count == 0:
         raise ReportError(f'the bag {walk.bag.path} holds no message: nothing to report')
     content = analyse(walk, params_file, params, settle_time)
+    content = dataclasses.replace(content, screw_ins=tuple(screw_in_frames(
+        walk, content.spans,
+        progress=lambda done, total: say('reading the camera frames', done, total))))
     out = prepare_output(Path(out) if out is not None else default_output_dir(walk.bag.path))
     written = _draw(out, content, say)
     animation = None
@@ -278,6 +294,10 @@ def _draw(out: Path, content: ReportContent, say: Progress) -> dict[str, Path]:
                      lambda p, s=span: figures.step_figure(
                          p, s, walk, content.truss, content.tolerance,
                          content.vibrations.get(s.number))))
+    for frame in content.screw_ins:
+        jobs.append((Path(_CAMERA_FIGURE.format(frame.step)).stem,
+                     lambda p, f=frame: camera_figure.screw_in_figure(
+                         p, f, content.camera, content.tolerance)))
     written = {}
     for k, (name, draw) in enumerate(jobs):
         say('drawing the figures', k, len(jobs))
@@ -324,6 +344,9 @@ def _json_extra(content: ReportContent, written: dict[str, Path],
             'delay': animation.plan.delay, 'speedup': animation.plan.speedup,
             'seconds': animation.seconds},
         'notes': content.notes,
+        **({'screw_in_frames': [
+            {**frame.numbers(), 'figure': _CAMERA_FIGURE.format(frame.step)}
+            for frame in content.screw_ins]} if content.screw_ins else {}),
     }
 
 
@@ -344,5 +367,9 @@ def summary_text(content: ReportContent) -> str:
         lines.append('peak torque / limit: ' + ', '.join(
             f'{j.joint.removesuffix("_joint")} {j.peak_effort:.1f}/{j.torque_limit:g} N m'
             + (f' ({j.saturated} clamped)' if j.saturated else '') for j in content.joints))
+    if content.screw_ins:
+        lines.append('the wrist camera before each screw-in: ' + '; '.join(
+            f'step {f.step} -> {f.to_node} {camera_figure.caption(f)}'
+            for f in content.screw_ins))
     lines += [f'note: {note}' for note in content.notes]
     return '\n'.join(lines)

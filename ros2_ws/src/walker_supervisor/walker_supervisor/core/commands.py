@@ -13,7 +13,7 @@ step's trajectory commands into planner requests): :class:`SetControlMode`,
 :class:`CancelFollow`, :class:`RenewPlannerClient`, :class:`StopOrphanStream`, :class:`RecordStep`,
 :class:`ForgetRecordedStep`, :class:`StopJog`, :class:`RenewModePublisher`,
 :class:`DecideNow`, :class:`Notice`; and the records to publish: :class:`PhaseRecord`,
-:class:`StepRecord`, :class:`Feedback`, :class:`GoalEnded`.
+:class:`StepRecord`, :class:`HoleSighted`, :class:`Feedback`, :class:`GoalEnded`.
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ __all__ = [
     'SetControlMode', 'GripperRequest', 'TrajectoryRequest', 'PrepareTrajectory',
     'CancelTrajectory', 'LookRequest', 'Notice', 'PlanMotion', 'FollowMotion', 'CancelFollow',
     'RenewPlannerClient', 'StopOrphanStream', 'RecordStep', 'ForgetRecordedStep', 'StopJog',
-    'RenewModePublisher', 'DecideNow', 'PhaseRecord', 'StepRecord', 'Feedback', 'GoalEnded',
-    'LEVELS',
+    'RenewModePublisher', 'DecideNow', 'PhaseRecord', 'StepRecord', 'HoleSighted', 'Feedback',
+    'GoalEnded', 'LEVELS',
 ]
 
 #: Levels of a :class:`Notice`, as a logger's.
@@ -337,6 +337,29 @@ class StepRecord:
         """Step time over its time-optimal bound (0 without a bound)."""
         return (self.outcome.duration / self.time_optimal_bound
                 if self.time_optimal_bound > 0 else 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class HoleSighted:
+    """The hole one frame of a look showed (``geometry_msgs/PointStamped``, ``camera_<g>/hole``).
+
+    Only a frame that showed the hole gives one.
+
+    Attributes
+    ----------
+    gripper : str
+        Whose camera.
+    exposure_time : float
+        [s] The frame's instant (its image's stamp).
+    point : ndarray, shape (3,)
+        [m] The hole's mouth in the gripper's frame at that instant: x, y the hole's axis
+        from the gripper's axis as this frame alone measured it, z the face's height the step
+        assumed (negative: below the gripper).
+    """
+
+    gripper: str
+    exposure_time: float
+    point: np.ndarray
 
 
 @dataclasses.dataclass(frozen=True)

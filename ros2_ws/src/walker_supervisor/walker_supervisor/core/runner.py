@@ -46,8 +46,8 @@ planner (``call`` is the planner core's request; answer :meth:`plan_answered` wi
 :class:`FollowMotion` (answer :meth:`follow_accepted`, then :meth:`follow_done` when the stream
 ends); :class:`LookRequest` to the moving gripper's wrist camera (answer :meth:`frame_seen`
 with the frame once it is ready); :class:`CancelFollow` (stop that stream); the records
-(:class:`PhaseRecord`, :class:`StepRecord`, :class:`Feedback`, :class:`GoalEnded`) to
-publish; :class:`Notice` to log.
+(:class:`PhaseRecord`, :class:`StepRecord`, :class:`HoleSighted`, :class:`Feedback`,
+:class:`GoalEnded`) to publish; :class:`Notice` to log.
 A shell without ROS clients or files may ignore :class:`RenewPlannerClient`,
 :class:`RenewModePublisher`, :class:`StopOrphanStream`, :class:`RecordStep`,
 :class:`ForgetRecordedStep` and :class:`DecideNow`.
@@ -66,7 +66,7 @@ from walker_core.kinematics import KinematicsError, WalkerKinematics
 from walker_core.truss import Truss
 from walker_supervisor.core.adoption import AdoptionRefusedError, RecordedStep, adopt_step
 from walker_supervisor.core.commands import (
-    CancelTrajectory, DecideNow, ForgetRecordedStep, GripperRequest, Notice,
+    CancelTrajectory, DecideNow, ForgetRecordedStep, GripperRequest, HoleSighted, Notice,
     PrepareTrajectory, RecordStep, SetControlMode, StopJog, StopOrphanStream, TrajectoryRequest)
 from walker_supervisor.core.controller_watch import ControllerReport, ControllerWatch
 from walker_supervisor.core.goals import (
@@ -323,6 +323,7 @@ class WalkRunner:
         The hole is placed through the joints measured at the tick nearest the frame's
         instant (:class:`~walker_supervisor.core.sighting.HoleSighter`); once the look has its
         frames, the map takes the hole they located, and the step goes on from what they showed.
+        A frame that showed the hole gives a :class:`HoleSighted` to publish, first.
         """
         sequencer = self.sequencer
         step, targets = sequencer.step, sequencer.targets
@@ -343,9 +344,12 @@ class WalkRunner:
         except (ValueError, SequencerError) as error:
             self._emit(Notice(f'frame of camera {gripper} ignored: {error}', 'warning'))
             return self._flush()
+        pose = self.kinematics.forward_transform(roles)
+        if sighting.found:  # back in the gripper's frame: the offset and the height assumed
+            self._emit(HoleSighted(gripper, exposure_time,
+                                   np.linalg.solve(pose, np.append(sighting.hole, 1.0))[:3]))
         taken = sequencer.look_frames_taken
-        self._look_frames = (self._look_frames + [
-            (exposure_time, self.kinematics.forward_transform(roles), sighting)])[-taken:]
+        self._look_frames = (self._look_frames + [(exposure_time, pose, sighting)])[-taken:]
         located = sequencer.take_located()
         if located is not None:
             self.mapped.map.sight(step.to_node, targets.frame, step.base_node, self.kinematics,
