@@ -74,6 +74,29 @@ def test_rendered_holes_are_found_within_a_fifth_of_a_millimetre(finder):
     assert max(sigmas) < REQUIRED  # and it knows it is that good
 
 
+@pytest.mark.parametrize('nearer', [0.016, 0.018])
+def test_a_node_far_higher_than_assumed_is_found_on_the_line_of_sight(finder, nearer):
+    """A node placed centimetres high: its mouth looks far larger than at the height assumed.
+
+    The finder takes it at the height its size says; the line of sight through what it
+    measured passes within a fifth of a millimetre of the true mouth.
+    """
+    scene = cameras()
+    mount = CameraModel.from_parameters(PARAMS.gripper.camera).mount[:3, 3]
+    try:
+        for i, offset in enumerate(((0.002, -0.002), (-0.003, 0.001))):
+            frame = frame_over(scene, 'ab'[i], 'n2_1', offset, HEIGHT - nearer)
+            measurement = finder.find(frame.image, HEIGHT)
+            assert measurement.found, f'{measurement.reason}: {measurement.detail}'
+            assert measurement.height == pytest.approx(HEIGHT - nearer, rel=0.1)
+            seen = np.array([*measurement.offset, -measurement.height])
+            true = frame.mouth_in_gripper
+            along = mount + (seen - mount) * (true[2] - mount[2]) / (seen[2] - mount[2])
+            assert np.hypot(*(along[:2] - true[:2])) < REQUIRED
+    finally:
+        scene.close()
+
+
 def test_a_hole_in_the_grippers_hard_shadow_is_still_found(finder):
     """The sun behind the camera: the gripper's shadow covers the far side, hole and all."""
     scene = cameras(with_rendering(sun_direction=[1.0, 0.0, 1.0]))

@@ -26,7 +26,11 @@ across it), ambiguous (more than one mouth-shaped region).
 
 Assumed, and not checked from the image: the gripper's axis is normal to the face (the
 insertion's axis tolerance is 2 degrees) and the face's height below the gripper is known
-(``height_uncertainty`` widens the answer's uncertainty by what it is off).
+(``height_uncertainty`` widens the answer's uncertainty by what it is off). A single
+mouth-shaped region far larger than the mouth at that height (a node placed centimetres
+higher than assumed: 15 mm nearer from 30 mm makes the mouth 2.8 times its area) is taken as
+the mouth at the height its size says (:attr:`HoleMeasurement.height`): a point on the same
+line of sight, which is what a look measures.
 """
 
 from __future__ import annotations
@@ -60,6 +64,13 @@ _DARKNESS = 0.5
 _NOISE_MARGIN = 4.0
 # [px] Quantisation floor of a centre fitted to a pixel outline.
 _PIXEL_FLOOR = 0.05
+# A mouth-shaped region larger than the mouth at the face's height given is the mouth nearer
+# when, at the height its size says, its area is within this ratio of the model's, and that
+# height is within these factors of the one given (a node placed centimetres high; a member or
+# a shadow is no filled ellipse). Smaller ones are not taken: a speck would be a mouth far
+# below, and a node lower than the area's tolerance allows is met by the descent's overtravel.
+_RESIZED_RATIO = 1.3
+_HEIGHT_FACTORS = (0.4, 1.0)
 
 
 class Unseen(enum.StrEnum):
@@ -88,6 +99,10 @@ class HoleMeasurement:
         Why it was not found; None when found.
     detail : str
         A sentence for a log: what was seen.
+    height : float
+        [m] The face's distance below the gripper that ``offset`` is at: the one given, or,
+        for a mouth far nearer or farther than that, the one its size says (nan when not
+        found). Either is a point on the same line of sight.
     """
 
     offset: np.ndarray | None
@@ -95,6 +110,7 @@ class HoleMeasurement:
     pixel: tuple[float, float] | None
     reason: Unseen | None
     detail: str
+    height: float = math.nan
 
     @property
     def found(self) -> bool:
@@ -222,7 +238,7 @@ class HoleFinder:
             raise ValueError(f'the image must be {expected}, got {image.shape}')
         if not height > 0.0:
             raise ValueError(f'the face must be below the gripper, got a height of {height!r} m')
-        mouths, cut, misshapen = [], [], []
+        mouths, cut, misshapen, resized = [], [], [], []
         for region in self._dark_regions(image, height):
             hole = self._on_face(region.centre, height)
             if hole is None:
@@ -236,9 +252,18 @@ class HoleFinder:
                     cut.append(region)
             elif 1.0 / _AREA_RATIO <= ratio <= _AREA_RATIO and region.fill >= _FILL:
                 mouths.append(region)
-            elif (1.0 / _MISSHAPEN <= ratio <= _MISSHAPEN
-                  and region.inscribed >= _INSCRIBED * self._minor_radius(hole)):
-                misshapen.append((region, ratio))
+            else:
+                if region.fill >= _FILL and ratio > _AREA_RATIO:
+                    other = self._height_of_size(region, height)
+                    if other is not None:
+                        resized.append((region, other))
+                        continue
+                if (1.0 / _MISSHAPEN <= ratio <= _MISSHAPEN
+                        and region.inscribed >= _INSCRIBED * self._minor_radius(hole)):
+                    misshapen.append((region, ratio))
+        if not mouths and len(resized) == 1:
+            region, other = resized[0]
+            return self._measure(region, other, height_uncertainty, given=height)
         if len(mouths) > 1:
             where = ', '.join(f'({r.centre[0]:.0f}, {r.centre[1]:.0f})' for r in mouths)
             return _not_found(Unseen.AMBIGUOUS,
@@ -255,8 +280,38 @@ class HoleFinder:
             return _not_found(Unseen.OUT_OF_VIEW, "no dark disc of the mouth's size in view")
         return self._measure(mouths[0], height, height_uncertainty)
 
-    def _measure(self, region: _Region, height: float, height_uncertainty: float
-                 ) -> HoleMeasurement:
+    def _height_of_size(self, region: _Region, height: float) -> float | None:
+        """Return the face's height [m] at which a region is the mouth's size, or None.
+
+        The mouth's image grows as the inverse square of its distance: from ``height``, the
+        height is corrected by the square root of the area's ratio until the region is the
+        mouth's size there (:data:`_RESIZED_RATIO`), within :data:`_HEIGHT_FACTORS` of
+        ``height``.
+        """
+        low, high = _HEIGHT_FACTORS
+        other = height
+        for _ in range(8):
+            hole = self._on_face(region.centre, other)
+            if hole is None:
+                return None
+            expected = self._expected_area(hole)
+            if not math.isfinite(expected) or expected <= 0.0:
+                return None
+            ratio = region.area / expected
+            if abs(ratio - 1.0) < 0.01:
+                break
+            other /= math.sqrt(ratio)
+            if not low * height <= other <= high * height:
+                return None
+        return other if 1.0 / _RESIZED_RATIO <= ratio <= _RESIZED_RATIO else None
+
+    def _measure(self, region: _Region, height: float, height_uncertainty: float,
+                 given: float | None = None) -> HoleMeasurement:
+        """Measure the mouth of ``region`` on the face ``height`` [m] below the gripper.
+
+        ``given``: the height the caller assumed, when the region's size put the face at
+        ``height`` instead (said in the detail).
+        """
         fitted = np.array(region.centre)
         hole = self._on_face(fitted, height)
         for _ in range(2):  # the shift varies slowly with where the hole is
@@ -272,9 +327,12 @@ class HoleFinder:
             lower = self._on_face(pixel, height + height_uncertainty)
             if lower is not None:
                 sigma = math.hypot(sigma, float(np.linalg.norm(lower[:2] - hole[:2])))
-        return HoleMeasurement(
-            hole[:2].copy(), sigma, (float(pixel[0]), float(pixel[1])), None,
-            f'mouth at ({pixel[0]:.1f}, {pixel[1]:.1f}) px, {region.area:.0f} px^2')
+        detail = f'mouth at ({pixel[0]:.1f}, {pixel[1]:.1f}) px, {region.area:.0f} px^2'
+        if given is not None:
+            detail += (f'; by its size the face is {height * 1e3:.1f} mm below the gripper, '
+                       f'not {given * 1e3:.1f} mm')
+        return HoleMeasurement(hole[:2].copy(), sigma, (float(pixel[0]), float(pixel[1])),
+                               None, detail, float(height))
 
     @staticmethod
     def _centre_sigma(region: _Region) -> float:

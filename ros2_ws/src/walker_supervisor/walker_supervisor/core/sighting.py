@@ -170,7 +170,9 @@ class HoleSighter:
         if not measured.found:
             return Sighting(None, None, None, math.inf, str(measured.reason), measured.detail)
         offset = np.asarray(measured.offset, dtype=float)
-        hole = (pose @ np.array([offset[0], offset[1], -height, 1.0]))[:3]
+        # on the face's plane at the height the finder measured it at (the one assumed, or
+        # the one the mouth's size says): a point on the line of sight either way
+        hole = (pose @ np.array([offset[0], offset[1], -measured.height, 1.0]))[:3]
         sight = hole - (pose @ np.append(self._finder.model.mount[:3, 3], 1.0))[:3]
         return Sighting(hole, sight[:2] / sight[2], offset, float(measured.sigma), '',
                         measured.detail)
