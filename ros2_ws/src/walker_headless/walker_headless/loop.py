@@ -200,6 +200,10 @@ class RobotLoop:
         statuses = self.state.statuses
         return {g: (statuses[g].mode, statuses[g].node) for g in GRIPPERS}
 
+    def gripper_position_errors(self) -> dict[str, float]:
+        """Return gripper -> its tip's distance from the nearest hole's axis [m] (the plant's)."""
+        return {g: float(self.state.grippers[g].alignment.position_error) for g in GRIPPERS}
+
     def take_reports(self) -> dict[str, ControllerReport]:
         """Return each controller's newest state report since the last call (joint -> report)."""
         reports, self.reports = self.reports, {}

@@ -170,7 +170,8 @@ class WalkShell:
                 self.looks.append(look_record(runner.last_look, self._truths))
             self._carry_out(commands)
         if loop.grippers_out:
-            self._carry_out(runner.gripper_states(loop.gripper_readings(), now, now))
+            self._carry_out(runner.gripper_states(loop.gripper_readings(), now, now,
+                                                  loop.gripper_position_errors()))
         if stamp >= self._next_tick:  # the node's timer, on its grid of simulated time
             self._tick_due = True
             while self._next_tick <= stamp:

@@ -98,6 +98,7 @@ class World:
         self.end_delay = 0.0  # [s] the planner reports each motion's end this late
         self.unanswered = []  # PlanMotion and FollowMotion commands it did not answer
         self.jam = 0  # screw-ins that jam whatever the tip
+        self.position_errors = None  # gripper -> [m] the plant's tip-to-hole axis distances
         self.holes = {}  # node -> (x, y) [m]: its hole off its nominal place by this much
         self.planned = []  # (purpose, PlanAnswer) of every plan the planner answered
         self.silent = set()  # the sources the runner no longer hears: 'grippers', a joint
@@ -154,7 +155,8 @@ class World:
         runner.joint_states(self.positions, self.velocities, self.now)
         runner.tip_pose(self.now, self.tip())
         if 'grippers' not in self.silent:
-            self.execute(runner.gripper_states(self.grippers, self.now, self.now))
+            self.execute(runner.gripper_states(self.grippers, self.now, self.now,
+                                               self.position_errors))
         mode = self.rogue or self.mode
         self.execute(runner.controller_states(
             {joint: ControllerReport(self.now, False, mode == 'hold', mode,

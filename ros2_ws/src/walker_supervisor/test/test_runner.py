@@ -44,6 +44,20 @@ def test_a_walk_takes_its_steps_in_order_records_each_and_ends_with_its_result()
     assert world.runner.walk is None
 
 
+def test_the_insertion_error_is_the_plants_from_the_real_hole_when_it_says_it():
+    """On a truss as built the drawing's hole is not the real one: the plant's figure counts."""
+    world = World()
+    world.position_errors = {'a': 7e-4, 'b': 7e-4}  # the tip 0.7 mm from the real hole's axis
+    ended = world.goal('step', 'n1_2')
+    assert ended.status == 'succeeded', ended.message
+    (record,) = world.of(StepRecord)
+    assert record.insertion_error == pytest.approx(7e-4)
+    # and the figure from the drawing's hole without it
+    drawing = World()
+    drawing.goal('step', 'n1_2')
+    assert drawing.of(StepRecord)[0].insertion_error < 1e-6
+
+
 def test_a_walk_keeps_each_step_on_record_until_it_completes():
     world = World()
     world.goal('walk_to', 'n2_2')

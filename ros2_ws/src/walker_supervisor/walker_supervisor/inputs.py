@@ -32,7 +32,8 @@ from walker_supervisor.core.current_state import CurrentState
 from walker_supervisor.core.process_deaths import ProcessDeaths
 from walker_supervisor.core.runner import PLANT_GRIPPER_STATES, PLANT_JOINT_STATES, WalkRunner
 from walker_supervisor.messages import (
-    controller_report, gripper_readings, joint_arrays, seconds, stamp_nanoseconds)
+    controller_report, gripper_position_errors, gripper_readings, joint_arrays, seconds,
+    stamp_nanoseconds)
 
 __all__ = ['SupervisorInputs', 'RESUBSCRIBE_AFTER_TIMEOUTS']
 
@@ -159,7 +160,8 @@ class SupervisorInputs:
         for state in msg.grippers:
             self.gripper_messages[state.name] = state
         self._execute(self._runner.gripper_states(gripper_readings(msg), self._clocks.now(),
-                                                  self._clocks.steady()))
+                                                  self._clocks.steady(),
+                                                  gripper_position_errors(msg)))
 
     def resubscribe_silent(self) -> None:
         """Make anew the subscription of each source silent for long (see the module)."""

@@ -27,7 +27,8 @@ from walker_supervisor.core.controller_watch import ControllerReport
 from walker_supervisor.core.prepared_motions import PlanAnswer, stream_lead
 from walker_supervisor.core.reports import phase_fields, report_fields
 
-__all__ = ['MODES', 'joint_arrays', 'gripper_readings', 'gripper_state_code',
+__all__ = ['MODES', 'joint_arrays', 'gripper_readings', 'gripper_position_errors',
+           'gripper_state_code',
            'controller_report', 'seconds', 'mode_message', 'phase_message', 'report_message',
            'hole_message',
            'feedback_message', 'result_message', 'plan_request_message', 'plan_answer',
@@ -68,6 +69,11 @@ def gripper_readings(msg: GripperStates) -> dict[str, tuple[str, str]]:
     ``walker_core.gripper_state.UNKNOWN`` for a code the message does not define.
     """
     return {state.name: (reported_state(state.state), state.node) for state in msg.grippers}
+
+
+def gripper_position_errors(msg: GripperStates) -> dict[str, float]:
+    """Return gripper -> its tip's distance from the nearest hole's axis [m], as the plant says."""
+    return {state.name: float(state.position_error) for state in msg.grippers}
 
 
 def gripper_state_code(state: str) -> int:

@@ -116,15 +116,27 @@ class StepFigures:
             self.time_optimal_bound += time_optimal_bound
 
     def screw_in(self, hole: np.ndarray) -> None:
-        """Keep the tip's figures as the screw-in starts over ``hole`` [m].
+        """Keep the tip's figures as the screw-in starts over ``hole`` [m] (the drawing's).
 
         The error is the tip's horizontal distance from the hole's axis where it is as the
         screw-in starts (what the plant's thread checks), not a mean over the settle window,
-        which the ring biases when the window is short.
+        which the ring biases when the window is short. Until the plant says where the hole
+        really is (:meth:`plant_measured`), it is taken from the drawing's hole: on a truss as
+        built that holds the node's placement error too.
         """
         self.residual_vibration = self.vibration.amplitude()
         tip = self.vibration.latest()
         self.insertion_error = float(np.linalg.norm(tip[:2] - np.asarray(hole)[:2]))
+
+    def plant_measured(self, position_error: float) -> None:
+        """Take the plant's own insertion error [m]: the tip from the real hole's axis.
+
+        The plant reports it with the screw-in's start (``walker_msgs/GripperState``'s
+        ``position_error`` as the gripper starts screwing or jams): it replaces the error
+        from the drawing's hole.
+        """
+        if math.isfinite(position_error):
+            self.insertion_error = float(position_error)
 
     def record(self, step_index: int, step_count: int, step: PlannedStep,
                outcome: StepOutcome) -> StepRecord:

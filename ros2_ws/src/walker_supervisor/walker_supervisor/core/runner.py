@@ -235,14 +235,26 @@ class WalkRunner:
             self.measured.velocities = np.asarray(velocities, dtype=float)
 
     def gripper_states(self, states: Mapping[str, tuple[str, str]], now: float,
-                       steady: float) -> list:
-        """Take the plant's gripper states: gripper -> (state, node)."""
+                       steady: float, position_errors: Mapping[str, float] | None = None
+                       ) -> list:
+        """Take the plant's gripper states: gripper -> (state, node).
+
+        ``position_errors``: gripper -> its tip's distance from the nearest hole's axis [m]
+        as the plant measures it; the one of the step's gripper as it starts screwing in (or
+        jams) is the step's insertion error.
+        """
         self._steady = steady
         self.health.seen(PLANT_GRIPPER_STATES, steady)
         grippers = self.measured.grippers
         first, before = not grippers, dict(grippers)
         for name, (state, node) in states.items():
             grippers[name], self.measured.nodes[name] = state, node
+        step = self.sequencer.step
+        if position_errors and step is not None and self.sequencer.phase == Phase.INSERTION:
+            moving = step.moving_gripper
+            if grippers.get(moving) != before.get(moving) and grippers.get(moving) in (
+                    GripperState.SCREWING, GripperState.JAMMED):
+                self.figures.plant_measured(float(position_errors.get(moving, math.nan)))
         free = sorted(g for g in ('a', 'b') if grippers.get(g) != GripperState.ATTACHED)
         if first and free and self.sequencer.phase == Phase.IDLE:
             # a supervisor restarted in the middle of a step: nothing may move by itself, and
