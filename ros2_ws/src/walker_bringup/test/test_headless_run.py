@@ -71,3 +71,38 @@ def test_a_walks_truss_survey_starts_the_next_walk_and_a_bad_one_is_refused(tmp_
                  '--quiet', '--truss-survey', str(bad)]) == 2
     assert str(bad) in capsys.readouterr().out
     assert not (tmp_path / 'graph').exists(), 'a refused survey starts no graph'
+
+
+def test_a_parameter_given_on_the_command_line_reaches_every_node_and_the_headless_walk(
+        tmp_path, capsys):
+    from walker_bringup.run import session_options
+
+    args = parse_arguments(['-p', 'gripper.camera.enabled:=true',
+                            '--param', 'sim.imperfections.node_placement:=0.001'])
+    assert session_options(args).overrides == (('gripper.camera.enabled', 'true'),
+                                               ('sim.imperfections.node_placement', '0.001'))
+    code = main(['--headless', '--target', 'n1_2', '--out', str(tmp_path), '--no-record',
+                 '--quiet', '-p', 'gripper.camera.enabled:=true'])
+    assert code == 0, capsys.readouterr().out
+    summary = json.loads((tmp_path / 'summary.json').read_text())
+    assert summary['looks'] and all(look['node'] == 'n1_2' for look in summary['looks'])
+
+
+@pytest.mark.parametrize('given, words', [
+    ('gripper.camera.enabled=true', 'expected NAME:=VALUE'),
+    ('gripper.camera.enabled:=[1,', 'is not YAML'),
+])
+def test_a_malformed_parameter_is_refused_by_the_command_line(given, words, capsys):
+    with pytest.raises(SystemExit):
+        parse_arguments(['-p', given])
+    assert words in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('given, words', [
+    ('gripper.camera.enable:=true', 'gripper.camera.enable'),
+    ('gripper.camera.width:=-4', 'gripper.camera.width'),
+])
+def test_a_parameter_the_files_rules_refuse_starts_nothing(given, words, tmp_path, capsys):
+    code = main(['--headless', '--out', str(tmp_path / 'run'), '--quiet', '-p', given])
+    assert code == 2 and words in capsys.readouterr().out
+    assert not (tmp_path / 'run').exists()

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 
-__all__ = ['priority', 'port', 'non_negative_int', 'non_negative_float', 'positive_count']
+import yaml
+
+__all__ = ['priority', 'port', 'non_negative_int', 'non_negative_float', 'positive_count',
+           'parameter_assignment']
 
 
 def priority(text: str) -> int:
@@ -62,3 +66,22 @@ def positive_count(text: str) -> int:
     if count < 1:
         raise argparse.ArgumentTypeError(f'expected a positive number of walkers, got {text!r}')
     return count
+
+
+def parameter_assignment(text: str) -> tuple[str, str]:
+    """Return ``(name, value)`` of ``NAME:=VALUE``, as ``ros2 run``'s ``-p`` takes it.
+
+    The value is kept as typed (the graph's nodes get it as ``-p NAME:=VALUE``) and must be
+    YAML (``true``, ``0.002``, ``[0.4, 0.3, 1.0]``, ``sim_time``); the parameter files' rules
+    check the name and the value.
+    """
+    match = re.fullmatch(r'([A-Za-z_][A-Za-z0-9_.]*(?:\[\d+\])?):=(.+)', text.strip())
+    if match is None:
+        raise argparse.ArgumentTypeError(
+            f'expected NAME:=VALUE (e.g. gripper.camera.enabled:=true), got {text!r}')
+    try:
+        yaml.safe_load(match.group(2))
+    except yaml.YAMLError:
+        raise argparse.ArgumentTypeError(f'{match.group(1)}: the value {match.group(2)!r} is not '
+                                         'YAML') from None
+    return match.group(1), match.group(2).strip()

@@ -40,8 +40,15 @@ def session_options(args: argparse.Namespace) -> SessionOptions:
         if args.plant_params_file else None,
         foxglove_port=args.foxglove_port if args.foxglove else None,
         bag_split=(args.max_bag_size, args.max_bag_duration, args.max_bag_files),
-        walkers=args.walkers,
+        walkers=args.walkers, overrides=tuple(args.params),
         truss_survey=Path(args.truss_survey) if args.truss_survey else None)
+
+
+def parameter_overrides(args: argparse.Namespace) -> dict:
+    """Return ``--param`` values as the parameter files take them (name -> YAML value)."""
+    import yaml
+
+    return {name: yaml.safe_load(value) for name, value in args.params}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -63,19 +70,24 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from walker_config.core.configuration import load_configuration, load_plant
+    from walker_core.parameter_file import ParameterFile
     from walker_core.parameter_schema import ParameterError
     from walker_core.progress import ProgressLine
 
     say = ProgressLine(args.quiet, stream=sys.stdout)
     # Everything the command line names is checked before anything is started or written.
+    overrides = parameter_overrides(args)
     try:
-        configuration = load_configuration(args.params_file)
+        unknown = sorted(set(overrides) - set(ParameterFile.read(args.params_file).values))
+        if unknown:
+            raise ParameterError(f'--param {unknown[0]}: no such parameter in the file')
+        configuration = load_configuration(args.params_file, overrides)
     except ParameterError as error:
         say.error(f'[walker] error: {args.params_file or "the installed walker.yaml"}: {error}')
         return 2
     if args.plant_params_file is not None:
         try:
-            plant = load_plant(args.plant_params_file)
+            plant = load_plant(args.plant_params_file, overrides)
         except ParameterError as error:
             say.error(f'[walker] error: --plant-params-file {args.plant_params_file}: {error}')
             return 2

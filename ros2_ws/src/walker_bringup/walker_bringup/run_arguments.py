@@ -38,6 +38,10 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                         help="the plant's own parameter file (default: --params-file): the "
                              'robot as it really is, while the controllers, the planner and '
                              'the supervisor keep the model (a campaign run)')
+    parser.add_argument('--param', '-p', dest='params', action='append', default=[],
+                        type=types.parameter_assignment, metavar='NAME:=VALUE',
+                        help="a parameter's value over the files' for every node, as ros2 "
+                             "run's -p (repeatable; e.g. -p gripper.camera.enabled:=true)")
     parser.add_argument('--sim-time', action='store_true',
                         help='run on the plant clock, lock-stepped, as fast as the graph allows '
                              '(default: real time, like hardware)')

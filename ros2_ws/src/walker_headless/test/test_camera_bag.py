@@ -138,9 +138,11 @@ def test_the_report_shows_the_last_frame_before_each_screw_in_with_the_summarys_
             assert image.format == 'PNG' and image.width >= 800
         assert f']({shown["figure"]})' in text
         caption = (f'measured offset (x, y) ({last["measured"][0] * 1e3:+.2f}, '
-                   f'{last["measured"][1] * 1e3:+.2f}) mm, true ({last["true"][0] * 1e3:+.2f}, '
-                   f'{last["true"][1] * 1e3:+.2f}) mm')
+                   f'{last["measured"][1] * 1e3:+.2f}) mm at the height assumed')
         assert caption in text
+        assert (f'true ({last["true"][0] * 1e3:+.2f}, {last["true"][1] * 1e3:+.2f}) mm: '
+                f'{shown["error"] * 1e3:.2f} mm apart') in text
+        assert shown['error'] < 2e-4, 'what the frame saw, at the true face, is the true hole'
         heading = re.search(rf'step {shown["step"]} -> (\S+): camera (\w)', text)
         assert heading.groups() == (look['node'], look['gripper'])
     assert '## The wrist camera before each screw-in' in text

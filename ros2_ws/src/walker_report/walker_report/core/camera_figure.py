@@ -45,7 +45,10 @@ def caption(frame: ScrewInFrame) -> str:
     true = 'true offset not recorded' if frame.true is None else f'true {_mm(frame.true)}'
     if frame.measured is None:
         return f'hole not seen in this frame; {true}'
-    text = f'measured offset (x, y) {_mm(frame.measured)}, {true}'
+    text = f'measured offset (x, y) {_mm(frame.measured)} at the height assumed'
+    if frame.seen is not None:
+        text += f', {_mm(frame.seen)} at the true face'
+    text = f'{text}; {true}'
     return text if frame.true is None else f'{text}: {frame.error * 1e3:.2f} mm apart'
 
 

@@ -18,6 +18,11 @@ from walker_report.core.steps import PHASES, format_markdown
 __all__ = ['write_markdown']
 
 
+def _xy(point) -> str:
+    """x, y of a point [m] in mm; '-' when there is none."""
+    return '-' if point is None else f'{point[0] * 1e3:+.2f}, {point[1] * 1e3:+.2f}'
+
+
 def _mm(value: float) -> str:
     return '-' if not math.isfinite(value) else f'{value * 1e3:.2f}'
 
@@ -54,14 +59,15 @@ def _camera_lines(content, figures: dict[str, Path]) -> list[str]:
              'camera model: the hole the supervisor measured in this frame (solid, its centre '
              "a cross), the true hole (dashed: the simulation's truth, recorded beside each "
              "frame) and the gripper's axis where it meets the face. Offsets are the hole's axis "
-             "from the gripper's axis, x and y in the gripper's frame, in mm.", '']
-    lines += _table(['step', 'node', 'camera', 'frame s', 'measured x, y mm', 'true x, y mm',
-                     'apart mm'], [
+             "from the gripper's axis, x and y in the gripper's frame, in mm. A frame measures "
+             "a line of sight: the supervisor places it at the face's height the step assumed; "
+             'carried along it to the true face it is what the image said, and its distance '
+             'from the true hole is the vision error.', '']
+    lines += _table(['step', 'node', 'camera', 'frame s', 'measured x, y mm (height assumed)',
+                     'at the true face x, y mm', 'true x, y mm', 'apart mm'], [
         [str(f.step), f.to_node, f.gripper, f'{f.time:.2f}',
-         'not seen' if f.measured is None else
-         f'{f.measured[0] * 1e3:+.2f}, {f.measured[1] * 1e3:+.2f}',
-         '-' if f.true is None else f'{f.true[0] * 1e3:+.2f}, {f.true[1] * 1e3:+.2f}',
-         _mm(f.error)] for f in content.screw_ins]) + ['']
+         'not seen' if f.measured is None else _xy(f.measured), _xy(f.seen),
+         _xy(f.true), _mm(f.error)] for f in content.screw_ins]) + ['']
     for frame in content.screw_ins:
         name = f'camera_step_{frame.step:02d}'
         if name in figures:

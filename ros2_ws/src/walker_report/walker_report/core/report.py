@@ -256,7 +256,8 @@ def make_report(bag: str | Path, out: str | Path | None = None,
     content = analyse(walk, params_file, params, settle_time)
     content = dataclasses.replace(content, screw_ins=tuple(screw_in_frames(
         walk, content.spans,
-        progress=lambda done, total: say('reading the camera frames', done, total))))
+        progress=lambda done, total: say('reading the camera frames', done, total),
+        camera_centre=content.camera.mount[:3, 3] if content.camera is not None else None)))
     out = prepare_output(Path(out) if out is not None else default_output_dir(walk.bag.path))
     written = _draw(out, content, say)
     animation = None

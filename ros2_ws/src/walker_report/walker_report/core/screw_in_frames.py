@@ -59,6 +59,9 @@ class ScrewInFrame:
         the frame did not show it.
     true : ndarray, shape (3,), or None
         [m] Where the hole really was (the simulation's truth); None when not recorded.
+    camera_centre : ndarray, shape (3,), or None
+        [m] The camera's centre in the gripper's frame (the nominal mount), through which
+        :attr:`seen` carries the measurement to the true face.
     """
 
     step: int
@@ -69,13 +72,35 @@ class ScrewInFrame:
     image: np.ndarray
     measured: np.ndarray | None
     true: np.ndarray | None
+    camera_centre: np.ndarray | None = None
+
+    @property
+    def seen(self) -> np.ndarray | None:
+        """[m] The measured hole on its line of sight at the true face's height.
+
+        A frame measures a line of sight; the supervisor places it at the face's height the
+        step assumed (:attr:`measured`), which the truss as built may not have: carried along
+        the line to the true height it is what the image said, comparable with :attr:`true`.
+        None without the measurement, the truth or the camera's centre.
+        """
+        if self.measured is None or self.true is None or self.camera_centre is None:
+            return None
+        sight = self.measured - self.camera_centre
+        if abs(sight[2]) < 1e-9:
+            return None
+        return self.camera_centre + sight * (self.true[2] - self.camera_centre[2]) / sight[2]
 
     @property
     def error(self) -> float:
-        """[m] Horizontal distance of the measured hole from the true one (nan: either lacks)."""
+        """[m] Horizontal distance of what the frame saw from the true hole (nan: lacking).
+
+        Taken at the true face's height (:attr:`seen`) when the camera's centre is known, else
+        at the heights as they are.
+        """
         if self.measured is None or self.true is None:
             return math.nan
-        return float(math.hypot(*(self.measured[:2] - self.true[:2])))
+        seen = self.seen if self.seen is not None else self.measured
+        return float(math.hypot(*(seen[:2] - self.true[:2])))
 
     def numbers(self) -> dict:
         """Return the frame's numbers for ``report.json`` (points [m], None when lacking)."""
@@ -84,7 +109,8 @@ class ScrewInFrame:
 
         return {'step': self.step, 'to_node': self.to_node, 'gripper': self.gripper,
                 'time': self.time, 'stamp': self.stamp_ns * 1e-9,
-                'measured': point(self.measured), 'true': point(self.true),
+                'measured': point(self.measured), 'seen': point(self.seen),
+                'true': point(self.true),
                 'error': None if math.isnan(self.error) else self.error}
 
 
@@ -121,7 +147,8 @@ def _point_at(points: dict[int, np.ndarray], stamp: int) -> np.ndarray | None:
 
 
 def screw_in_frames(walk: WalkData, spans: list[StepSpan],
-                    progress: Callable[[int, int], None] | None = None) -> list[ScrewInFrame]:
+                    progress: Callable[[int, int], None] | None = None,
+                    camera_centre: np.ndarray | None = None) -> list[ScrewInFrame]:
     """Read the last camera frame before each step's screw-in from the walk's bag.
 
     Parameters
@@ -132,6 +159,8 @@ def screw_in_frames(walk: WalkData, spans: list[StepSpan],
         The steps; one frame for each that descended after its gripper's camera took one.
     progress : callable, optional
         ``progress(messages_read, messages_to_read)``.
+    camera_centre : ndarray, shape (3,), optional
+        [m] The camera's centre in the gripper's frame (:attr:`ScrewInFrame.camera_centre`).
 
     Returns
     -------
@@ -191,5 +220,6 @@ def screw_in_frames(walk: WalkData, spans: list[StepSpan],
         frames.append(ScrewInFrame(
             span.number, span.to_node, gripper, (stamp - walk.bag.start_ns) / 1e9, stamp,
             image, _point_at(points.get((gripper, HOLE), {}), stamp),
-            _point_at(points.get((gripper, TRUE_HOLE), {}), stamp)))
+            _point_at(points.get((gripper, TRUE_HOLE), {}), stamp),
+            None if camera_centre is None else np.asarray(camera_centre, dtype=float)))
     return frames
