@@ -209,13 +209,29 @@ class TeleopClient:
             Ctrl-C before the goal was accepted, or twice.
         """
         sender = self.goals[action]
+        monitor = GoalMonitor(self.node, self.namespace,
+                              f'the {"walk" if action == "walk_to" else "step"} to {target}')
+        try:
+            return self._watched_goal(sender, action, target, monitor, on_feedback, on_cancel)
+        finally:
+            monitor.close()
+
+    def _watched_goal(self, sender, action: str, target: str, monitor: GoalMonitor,
+                      on_feedback: Callable[[object], None], on_cancel: Callable[[], None]
+                      ) -> tuple[int, object]:
+        """:meth:`run_goal` with ``monitor`` made before the goal is sent."""
         if not self.spin_until(sender.client.server_is_ready, self.timeout):
             raise GraphUnavailableError(
                 f'the action {self.node.get_namespace().rstrip("/")}/{action} is not available '
                 f'(waited {self.timeout:g} s): {self.where()}')
         # the reason of a rejection is heard only once the rejections are matched
         self.spin_until(lambda: self.rejections.matched, min(self.timeout, _LATCHED_GRACE * 4))
-        sent = sender.send(sender.action_type.Goal(target_node=target), on_feedback)
+
+        def fed(feedback) -> None:
+            monitor.heard()
+            on_feedback(feedback)
+
+        sent = sender.send(sender.action_type.Goal(target_node=target), fed)
         if not self._wait_interruptible(sent.answer, None, self.timeout):
             raise GraphUnavailableError(f'the {action} goal was not answered within '
                                         f'{self.timeout:g} s: check with walkerctl status')
@@ -223,10 +239,9 @@ class TeleopClient:
             raise GoalRejectedError(action, target, self.rejections.reason(
                 action, target, sent.sent_at, lambda seconds: self.spin_until(lambda: False,
                                                                               seconds)))
+        monitor.heard()  # the acceptance: the silence counts from here
         handle = sent.handle()
         result = handle.get_result_async()
-        monitor = GoalMonitor(self.node, self.namespace,
-                              f'the {"walk" if action == "walk_to" else "step"} to {target}')
         probed: list = []
 
         def ended() -> bool:
@@ -245,8 +260,6 @@ class TeleopClient:
             self._wait_interruptible(ended, cancel)
         except GoalLostError as error:
             raise ServerLostError(str(error)) from None
-        finally:
-            monitor.close()
         wrapped = result.result() if result.done() else probed[0]
         return wrapped.status, wrapped.result
 

@@ -1,7 +1,10 @@
 """The ROS side of :class:`~walker_teleop.core.goal_watch.GoalWatch`: a goal's server watched.
 
-A client waiting for the result of a ``walk_to`` or ``step`` goal makes a :class:`GoalMonitor`
-and calls :meth:`GoalMonitor.check` between spins of its executor. The monitor subscribes to
+A client about to send a ``walk_to`` or ``step`` goal makes a :class:`GoalMonitor` (its
+subscription is matched while the goal is sent: over a thin link, matching a reader made later
+can take longer than the silence allowed), notes the goal's acceptance and each feedback with
+:meth:`GoalMonitor.heard` (the server's own messages: as good a sign of life as its status), and
+calls :meth:`GoalMonitor.check` between spins of its executor. The monitor subscribes to
 ``/diagnostics`` for the supervisor's status and asks for the goal's result again every
 :data:`~walker_teleop.core.goal_watch.PROBE_PERIOD` seconds; :meth:`~GoalMonitor.check` gives
 the goal's end if a probe brought it, and raises :class:`GoalLostError` (with the reason) once
@@ -56,7 +59,11 @@ class GoalMonitor:
 
     def _on_diagnostics(self, msg: DiagnosticArray) -> None:
         if any(status.name == self._status_name for status in msg.status):
-            self.watch.heard(self._clock())
+            self.heard()
+
+    def heard(self) -> None:
+        """Note that the server was heard now: its status, the goal's acceptance or feedback."""
+        self.watch.heard(self._clock())
 
     def check(self, handle, result) -> object | None:
         """Probe the goal's server; return the goal's end (its wrapped result) if a probe has it.
