@@ -169,6 +169,23 @@ def test_a_frame_exposed_at_the_instant_of_the_look_answers_it(link):
     assert [(g, e) for g, _, e, _ in link.runner.frames] == [('a', pytest.approx(3.2))]
 
 
+def test_frames_slower_than_a_looks_requests_answer_each_request_in_turn(link):
+    """A frame takes longer than ``frame_interval``: the next request comes before it."""
+    image_a = link.node.subscriptions['camera_a/image_raw']
+    link.execute(LookRequest('a', 3.0))
+    link.execute(LookRequest('a', 3.17))  # before the first frame is back
+    link.clocks.time = 3.2
+    image_a(image_message(pixels(1), 3_010_000_000))  # exposed for the first request
+    link.execute(LookRequest('a', 3.34))
+    link.clocks.time = 3.4
+    image_a(image_message(pixels(2), 3_180_000_000))
+    image_a(image_message(pixels(3), 3_181_000_000))  # a second frame of one request: not asked
+    link.clocks.time = 3.6
+    image_a(image_message(pixels(4), 3_350_000_000))
+    assert [e for _, _, e, _ in link.runner.frames] == pytest.approx([3.01, 3.18, 3.35])
+    assert link.node.clients['camera_a/trigger'].calls == 3
+
+
 def test_a_camera_not_discovered_is_logged_and_no_look_waits(link):
     node = link.node
     node.clients['camera_a/trigger'].ready = False

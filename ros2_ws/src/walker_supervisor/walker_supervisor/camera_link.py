@@ -4,7 +4,10 @@
 the gripper's ``camera_<g>/trigger`` (``std_srvs/srv/Trigger``) and hands the first image of
 that gripper's ``camera_<g>/image_raw`` stamped at or after the look's ``since`` to
 :meth:`~walker_supervisor.core.runner.WalkRunner.frame_seen`; the commands it gives back are
-carried out as every answer's. A trigger whose service is not discovered, a frame lost or one
+carried out as every answer's. The frames a gripper's looks await are queued in the order they
+were asked for: a frame takes longer to render than the frames of a look are apart
+(``frame_interval``), so the next request comes before the last frame, and each frame answers
+the oldest request it was exposed after. A trigger whose service is not discovered, a frame lost or one
 that never comes cost nothing here: the runner goes on blind after
 :data:`~walker_supervisor.core.looking.LOOK_WAIT`, and the look is forgotten then. A robot
 without cameras (``gripper.camera.enabled`` false) has neither subscription nor client.
@@ -18,6 +21,7 @@ plant's ``camera_<g>/true_hole`` of the same stamp, reliable, keep last 1 as the
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
@@ -82,7 +86,8 @@ class CameraLink:
         self._node, self._runner, self._clocks, self._answer = node, runner, clocks, answer
         self._triggers = {}
         self._holes = {}
-        self._pending: dict[str, float] = {}  # gripper -> since [s]: the frame a look awaits
+        # gripper -> since [s] of each frame its looks await, oldest first
+        self._pending: dict[str, deque[float]] = {gripper: deque() for gripper in GRIPPERS}
         if not enabled:
             return
         for gripper in GRIPPERS:
@@ -118,7 +123,7 @@ class CameraLink:
                 f'look with the camera of gripper {command.gripper} not taken: the plant '
                 f'{client.srv_name} service is not available')
             return
-        self._pending[command.gripper] = command.since
+        self._pending[command.gripper].append(command.since)
         client.call_async(Trigger.Request()).add_done_callback(
             lambda future, g=command.gripper: self._triggered(g, future))
 
@@ -130,17 +135,16 @@ class CameraLink:
                 f'{"no response" if response is None else response.message}')
 
     def _on_image(self, gripper: str, message: Image) -> None:
-        """Hand the frame a look awaits to the runner; ignore every other."""
-        since = self._pending.get(gripper)
-        if since is None:
-            return
+        """Hand the frame the oldest request awaits to the runner; ignore every other."""
+        pending = self._pending[gripper]
         now = self._clocks.now()
-        if now - since > LOOK_WAIT:  # the runner went on blind: nobody waits for it
-            del self._pending[gripper]
+        while pending and now - pending[0] > LOOK_WAIT:  # the runner went on blind
+            pending.popleft()
+        if not pending:
             return
-        if stamp_nanoseconds(message.header.stamp) < round(since * 1e9):
-            return  # exposed before the look: not the frame it asked for
-        del self._pending[gripper]
+        if stamp_nanoseconds(message.header.stamp) < round(pending[0] * 1e9):
+            return  # exposed before the oldest request: not a frame a look asked for
+        pending.popleft()
         try:
             image = image_array(message)
         except ValueError as error:
