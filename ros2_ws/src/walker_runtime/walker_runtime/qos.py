@@ -23,6 +23,12 @@ offer. So every node takes its profiles from here:
   socket buffer on a loaded machine: one fragment lost loses a best-effort frame whole, where
   reliable delivery sends it again. The newest only, so a slow reader never stalls the plant.
   The points beside each frame (``true_hole``, ``hole``) share it.
+* :data:`LOOK_IMAGE_QOS`: the plant's ``image_raw`` writer and the supervisor's reader: as
+  :data:`IMAGE_QOS` but keep last 5, every frame of one look (``look_frames``, at most 5).
+  A frame takes longer to render than a look's frames are apart, so two can be sent within
+  milliseconds: with one kept, the reader's newer frame replaced the older before its callback
+  took it, and the look waited for a frame it would never get. Keep last never blocks the
+  writer: a slow reader still cannot stall the plant.
 * :func:`latched_qos`: latched with a history (the phase, the step reports).
 * :data:`TF_QOS` and :data:`TF_STATIC_QOS`: ``/tf`` and ``/tf_static`` as tf2_ros offers them
   (``DynamicBroadcasterQoS``: reliable, keep last 100; ``StaticBroadcasterQoS``: reliable,
@@ -35,7 +41,7 @@ from __future__ import annotations
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 __all__ = ['SENSOR_QOS', 'COMMAND_QOS', 'LATCHED_QOS', 'MODE_QOS', 'MODE_SUBSCRIPTION_QOS',
-           'CLOCK_QOS', 'IMAGE_QOS', 'TF_QOS', 'TF_STATIC_QOS', 'latched_qos']
+           'CLOCK_QOS', 'IMAGE_QOS', 'LOOK_IMAGE_QOS', 'TF_QOS', 'TF_STATIC_QOS', 'latched_qos']
 
 
 def latched_qos(depth: int) -> QoSProfile:
@@ -68,6 +74,9 @@ CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
 IMAGE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                        reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
+LOOK_IMAGE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5,
+                            reliability=ReliabilityPolicy.RELIABLE,
+                            durability=DurabilityPolicy.VOLATILE)
 TF_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                     reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE)

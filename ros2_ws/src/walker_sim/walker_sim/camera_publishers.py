@@ -27,7 +27,7 @@ from std_srvs.srv import Trigger
 from walker_core.camera import PLUMB_BOB, TRUE_HOLE, CameraModel, camera_topic, optical_frame_name
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.listened import ListenedPublisher
-from walker_runtime.qos import IMAGE_QOS
+from walker_runtime.qos import IMAGE_QOS, LOOK_IMAGE_QOS
 from walker_sim.core.outputs import StampedRate
 from walker_sim.core.wrist_camera import CameraFrame
 from walker_sim.messages import time_msg, true_hole_msg
@@ -104,7 +104,7 @@ class CameraPublishers:
             return
         for gripper in GRIPPERS:
             self._images[gripper] = ListenedPublisher(
-                node.create_publisher(Image, image_topic(gripper), IMAGE_QOS))
+                node.create_publisher(Image, image_topic(gripper), LOOK_IMAGE_QOS))
             self._infos[gripper] = node.create_publisher(CameraInfo, info_topic(gripper),
                                                          IMAGE_QOS)
             self._truths[gripper] = node.create_publisher(

@@ -12,7 +12,7 @@ from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import Image
 from std_srvs.srv import Trigger
 
-from walker_runtime.qos import IMAGE_QOS
+from walker_runtime.qos import IMAGE_QOS, LOOK_IMAGE_QOS
 from walker_supervisor.camera_link import CameraLink, image_array
 from walker_supervisor.core.commands import HoleSighted, LookRequest, Notice
 from walker_supervisor.core.looking import LOOK_WAIT
@@ -80,7 +80,7 @@ class FakeNode:
         return self.clients[name]
 
     def create_subscription(self, message_type, topic, callback, qos):
-        assert message_type is Image and qos == IMAGE_QOS
+        assert message_type is Image and qos == LOOK_IMAGE_QOS  # every frame of a look
         self.subscriptions[topic] = callback
 
     def get_logger(self):

@@ -32,7 +32,7 @@ from std_srvs.srv import Trigger
 
 from walker_core.camera import HOLE, IMAGE, camera_topic
 from walker_core.joint_roles import GRIPPERS
-from walker_runtime.qos import IMAGE_QOS
+from walker_runtime.qos import IMAGE_QOS, LOOK_IMAGE_QOS
 from walker_supervisor.clocks import Clocks
 from walker_supervisor.core.commands import HoleSighted, LookRequest
 from walker_supervisor.core.looking import LOOK_WAIT
@@ -94,7 +94,7 @@ class CameraLink:
             self._triggers[gripper] = node.create_client(Trigger, f'camera_{gripper}/trigger')
             node.create_subscription(Image, camera_topic(gripper, IMAGE),
                                      lambda message, g=gripper: self._on_image(g, message),
-                                     IMAGE_QOS)
+                                     LOOK_IMAGE_QOS)
             self._holes[gripper] = node.create_publisher(
                 PointStamped, camera_topic(gripper, HOLE), IMAGE_QOS)
 
