@@ -71,7 +71,9 @@ class World:
         self.jams, self.refuse_unscrew, self.stall = jams, refuse_unscrew, stall_trajectories
         self.coarse_miss = coarse_miss  # [rad] J1 stops this short of the coarse goal
         self.descent_miss = descent_miss  # [rad] J1 stops this short of the descent's end
-        self.mouth_lines_miss = mouth_lines_miss  # lines at the mouth stop as short
+        # lines at the mouth stop as short (True), or short by this fraction of the last miss
+        self.mouth_lines_miss = float(mouth_lines_miss)
+        self.lines_since_descent = 0  # fine lines asked for since the last descent
         # ([rad], n): in the first n descents J1 runs this far off as the gripper goes down
         self.runaway, self.runaway_descents = descent_runaway
         # ([rad], n): the first n fine lines above the hole stop J1 this short of their end
@@ -103,6 +105,8 @@ class World:
                 self.gripper(command)
             elif isinstance(command, TrajectoryRequest):
                 self.requested.append((self.now, command))
+                self.lines_since_descent = 0 if command.purpose == 'insertion' else \
+                    self.lines_since_descent + (command.purpose == 'fine')
                 refusal = _vertical_line_refusal(command)
                 if refusal:  # as the planner refuses it
                     self.execute(self.sequencer.trajectory_done(False, refusal, self.now))
@@ -178,8 +182,10 @@ class World:
             missing = request.purpose == 'fine' and not at_mouth and self.fine_misses > 0
             if missing:
                 goal[0] -= self.fine_miss
-            if request.purpose == 'insertion' or (at_mouth and self.mouth_lines_miss):
+            if request.purpose == 'insertion':
                 goal[0] -= self.descent_miss
+            elif at_mouth and self.mouth_lines_miss:
+                goal[0] -= self.descent_miss * self.mouth_lines_miss ** self.lines_since_descent
             runaway = request.purpose == 'insertion' and self.runaway_descents > 0
             if runaway:
                 goal[0] -= self.runaway

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from sequencer_world import DT, KIN, SUPERVISOR, TRUSS, World, motion_purposes, stage_times
+from walker_supervisor.core.insertion import MAX_MOUTH_LINES, MOUTH_LINE_PROGRESS
 from walker_supervisor.core.transitions import MAX_FINE_LINES
 from walker_supervisor.core.commands import (
     GripperRequest, Notice, SetControlMode, TrajectoryRequest)
@@ -120,18 +121,38 @@ def test_after_a_line_at_the_mouth_the_screw_in_waits_settle_time():
     assert screw[0] - after_line >= parameters.settle_time - 1e-9
 
 
-def test_a_mouth_that_will_not_align_is_screwed_into_after_a_bounded_number_of_lines():
+def _mouth_lines_and_screw_in(world):
+    lines = [i for i, c in enumerate(world.log)
+             if isinstance(c, TrajectoryRequest) and c.purpose == 'fine']
+    screw = next(i for i, c in enumerate(world.log)
+                 if isinstance(c, GripperRequest) and c.action == 'screw_in')
+    return lines, screw
+
+
+def test_a_mouth_line_that_does_not_bring_the_tip_nearer_is_the_last():
+    """Each line stops as short as the descent: the tip is held where it rests."""
     world = World(descent_miss=0.0015, mouth_lines_miss=True)
     outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
     assert outcome.success, outcome.message  # the screw-in itself is the final check
     # the error reported is the joints' estimate where it screwed in, off the axis at the mouth
     assert outcome.insertion_error > SUPERVISOR.insertion_alignment
-    lines = [i for i, c in enumerate(world.log)
-             if isinstance(c, TrajectoryRequest) and c.purpose == 'fine']
-    assert len(lines) == MAX_FINE_LINES
-    screw = next(i for i, c in enumerate(world.log)
-                 if isinstance(c, GripperRequest) and c.action == 'screw_in')
-    assert screw > lines[-1]
+    lines, screw = _mouth_lines_and_screw_in(world)
+    assert len(lines) == 1 and screw > lines[-1]
+
+
+@pytest.mark.parametrize('kept, expected', [(0.7, MAX_MOUTH_LINES), (0.5, 2)])
+def test_mouth_lines_that_bring_the_tip_nearer_go_on_a_bounded_number_of_times(kept, expected):
+    """Each line stops short by ``kept`` of the last one's miss.
+
+    The descent leaves the tip 2.7 mm off the axis: 0.7 of it is still beyond
+    ``insertion_alignment`` after three lines, 0.5 is within it after two.
+    """
+    world = World(descent_miss=0.003, mouth_lines_miss=kept)
+    outcome = world.run_step(possible_steps(TRUSS, world.stance)[0])
+    assert outcome.success, outcome.message
+    assert kept < MOUTH_LINE_PROGRESS
+    lines, screw = _mouth_lines_and_screw_in(world)
+    assert len(lines) == expected and screw > lines[-1]
 
 
 def test_a_jammed_insertion_is_retried():

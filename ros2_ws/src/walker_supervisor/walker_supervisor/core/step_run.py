@@ -95,6 +95,8 @@ class Tries:
     insertions: int = 0
     fine_lines: int = 0
     mouth_lines: int = 0
+    #: [m] the tip's distance from the hole's axis when the last line at the mouth began
+    mouth_offset_lined: float = math.inf
     #: [m] the tip's distance from its target when insertion started (then from the axis at
     #: the screw-in); NaN before
     insertion_error: float = math.nan

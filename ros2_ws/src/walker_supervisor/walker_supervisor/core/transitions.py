@@ -11,6 +11,8 @@ it went down, INSERTION (:func:`enter_insertion`) from FINE.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from walker_core.kinematics import KinematicsError
@@ -102,7 +104,7 @@ def descent_request(run: StepRun) -> TrajectoryRequest:
 def enter_insertion(run: StepRun, now: float) -> list:
     """Enter INSERTION: the descent streams."""
     run.tries.insertion_error = run.tip_error()
-    run.tries.mouth_lines = 0
+    run.tries.mouth_lines, run.tries.mouth_offset_lined = 0, math.inf
     run.enter(Phase.INSERTION, now, Stage.DESCENDING)
     joints, point = descent_goal(run)
     run.tries.contact = DescentContact(float(run.targets.point_to[2]), float(point[2]))
