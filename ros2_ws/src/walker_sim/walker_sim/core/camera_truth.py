@@ -137,9 +137,22 @@ class FrameDraws:
         """[s] Draw the delay of a frame, uniformly in ``[0, exposure_latency]``."""
         return float(self._latency * self._generator.random()) if self._latency > 0.0 else 0.0
 
-    def noisy(self, image: np.ndarray) -> np.ndarray:
-        """Return an RGB image (uint8) with this frame's pixel noise added."""
+    def noise(self, shape: tuple[int, ...]) -> np.ndarray | None:
+        """Draw a frame's pixel noise, in standard deviations (None: ``pixel_noise`` is 0).
+
+        Drawn with the frame's latency, when the frame is exposed, so that the draws keep their
+        order however late the image is rendered; :meth:`add_noise` scales and adds it.
+        """
         if self._noise <= 0.0:
+            return None
+        return self._generator.standard_normal(shape)
+
+    def add_noise(self, image: np.ndarray, noise: np.ndarray | None) -> np.ndarray:
+        """Return an RGB image (uint8) with a frame's drawn noise (:meth:`noise`) added."""
+        if noise is None:
             return image
-        noise = self._noise * self._generator.standard_normal(image.shape)
-        return np.clip(np.rint(image + noise), 0, 255).astype(np.uint8)
+        return np.clip(np.rint(image + self._noise * noise), 0, 255).astype(np.uint8)
+
+    def noisy(self, image: np.ndarray) -> np.ndarray:
+        """Return an RGB image (uint8) with this frame's pixel noise drawn and added."""
+        return self.add_noise(image, self.noise(image.shape))

@@ -8,12 +8,19 @@ them, and the camera's own gripper (its body and its screw, which cast shadows o
 The rest of the robot is not drawn: from a gripper over a node it is out of view, though a
 link between the sun and the node would cast a shadow a real camera sees.
 
-A frame is rendered only when asked for (:meth:`WristCameras.frame`), with ``ER_TINY_RENDERER``
-(software: no GPU, no display): the client and its scene are built on the first frame, so a
-plant whose cameras are never asked (or are off, ``gripper.camera.enabled: false``) spends
-nothing on them. Each frame uses the camera's *true* mount, the sun's hard shadows, this
-frame's pixel noise and latency (:mod:`walker_sim.core.camera_truth`), and carries the truth a
-test or a report compares a measurement with: the nearest node's mouth in the gripper's frame.
+A frame is rendered only when asked for, with ``ER_TINY_RENDERER`` (software: no GPU, no
+display): the client and its scene are built on the first frame, so a plant whose cameras are
+never asked (or are off, ``gripper.camera.enabled: false``) spends nothing on them. Each frame
+uses the camera's *true* mount, the sun's hard shadows, this frame's pixel noise and latency
+(:mod:`walker_sim.core.camera_truth`), and carries the truth a test or a report compares a
+measurement with: the nearest node's mouth in the gripper's frame.
+
+A frame is taken in two parts: its *exposure* (:meth:`WristCameras.expose`: the gripper's pose,
+the nearest node, the truth and the frame's draws; cheap, at the plant's instant) and its
+*render* (:meth:`WristCameras.render`: two software renders, some hundred milliseconds), which
+the plant runs on a worker thread (:mod:`walker_sim.core.frame_worker`) while it steps on.
+:meth:`WristCameras.frame` does both at once. A frame depends on its exposure alone, not on
+when it is rendered.
 """
 
 from __future__ import annotations
@@ -31,7 +38,7 @@ from walker_sim.core.camera_truth import CameraRendering, FrameDraws, MountError
 from walker_sim.core.contact import NodeGeometry
 from walker_sim.core.node_mesh import node_mesh
 
-__all__ = ['CameraFrame', 'WristCameras', 'projection_matrix', 'view_matrix']
+__all__ = ['CameraFrame', 'Exposure', 'WristCameras', 'projection_matrix', 'view_matrix']
 
 _NODE_HALF_SIZE = 0.03  # [m] half edge of a node's block under its face (cosmetic)
 _MEMBER_RADIUS = 0.012  # [m] radius of a truss member (cosmetic)
@@ -87,6 +94,42 @@ class CameraFrame:
     def ready_time(self) -> float:
         """[s] Plant time the frame is ready."""
         return self.exposure_time + self.latency
+
+
+@dataclasses.dataclass(frozen=True)
+class Exposure:
+    """What a frame takes of the plant at its instant, before it is rendered.
+
+    Attributes
+    ----------
+    gripper : str
+        Whose camera.
+    pose : ndarray, shape (4, 4)
+        The gripper's true contact-point frame in the truss frame, at the exposure.
+    time : float
+        [s] Plant time of the exposure.
+    latency : float
+        [s] The frame's drawn exposure latency.
+    node : str
+        The node nearest the gripper's axis.
+    mouth_in_gripper : ndarray, shape (3,)
+        That node's true mouth [m] in the gripper's frame.
+    noise : ndarray, shape (height, width, 3), or None
+        The frame's drawn standard normal pixel noise (None: no noise).
+    """
+
+    gripper: str
+    pose: np.ndarray
+    time: float
+    latency: float
+    node: str
+    mouth_in_gripper: np.ndarray
+    noise: np.ndarray | None
+
+    @property
+    def ready_time(self) -> float:
+        """[s] Plant time the frame is ready."""
+        return self.time + self.latency
 
 
 def view_matrix(camera_in_world: np.ndarray) -> list[float]:
@@ -274,8 +317,64 @@ class WristCameras:
         return min(self._mouths, key=lambda name: float(np.hypot(
             *(self._mouths[name][:2] - np.asarray(position, dtype=float)[:2]))))
 
+    def expose(self, gripper: str, pose: np.ndarray, time: float) -> Exposure:
+        """Take what a frame of a gripper's camera needs of this instant, without rendering it.
+
+        Cheap, and in the plant's order: the gripper's pose, the node nearest it, the truth
+        (that node's mouth in the gripper's frame), then the frame's draws (latency, then
+        noise), so that frames stay seeded as they are drawn, whenever they are rendered.
+
+        Parameters
+        ----------
+        gripper : str
+            ``'a'`` or ``'b'``.
+        pose : ndarray, shape (4, 4)
+            The gripper's true contact-point frame in the truss frame.
+        time : float
+            [s] The plant's time now (the frame's exposure).
+
+        Returns
+        -------
+        Exposure
+            What :meth:`render` turns into the frame.
+        """
+        if gripper not in GRIPPERS:
+            raise ValueError(f"gripper must be 'a' or 'b', got {gripper!r}")
+        pose = np.array(pose, dtype=float)
+        node = self.nearest_node(pose[:3, 3])
+        mouth = pose[:3, :3].T @ (self._mouths[node] - pose[:3, 3])
+        draws = self._draws[gripper]
+        latency = draws.latency()
+        noise = draws.noise((self.model.height, self.model.width, 3))
+        return Exposure(gripper, pose, float(time), latency, node, mouth, noise)
+
+    def render(self, exposure: Exposure) -> CameraFrame:
+        """Render an exposure: the expensive part of a frame (two software renders).
+
+        The scene (its client built on the first frame) is this object's alone: render from
+        one thread at a time.
+        """
+        if self._client is None:
+            self._build()
+        pose = exposure.pose
+        self._show_neighbourhood(exposure.node)
+        local = pose.copy()  # in the scene, whose origin is the node's nominal place
+        local[:3, 3] -= self._origin
+        orientation = _quaternion(pose[:3, :3])
+        if self._own is None:
+            self._own = (self._place(self._gripper_body, local[:3, 3], orientation),
+                         self._place(self._screw, local[:3, 3], orientation))
+        for body in self._own:
+            pybullet.resetBasePositionAndOrientation(body, local[:3, 3].tolist(), orientation,
+                                                     physicsClientId=self._client)
+        camera = local @ self._mounts[exposure.gripper]
+        image = self._draws[exposure.gripper].add_noise(self._hard_shadows(camera),
+                                                       exposure.noise)
+        return CameraFrame(exposure.gripper, image, exposure.time, exposure.latency,
+                           exposure.node, exposure.mouth_in_gripper)
+
     def frame(self, gripper: str, pose: np.ndarray, time: float) -> CameraFrame:
-        """Render a gripper's camera at a gripper pose.
+        """Expose and render a gripper's camera at a gripper pose (:meth:`expose`, :meth:`render`).
 
         Parameters
         ----------
@@ -286,30 +385,7 @@ class WristCameras:
         time : float
             [s] The plant's time now (the frame's exposure).
         """
-        if gripper not in GRIPPERS:
-            raise ValueError(f"gripper must be 'a' or 'b', got {gripper!r}")
-        if self._client is None:
-            self._build()
-        pose = np.asarray(pose, dtype=float)
-        node = self.nearest_node(pose[:3, 3])
-        self._show_neighbourhood(node)
-        local = pose.copy()  # in the scene, whose origin is the node's nominal place
-        local[:3, 3] -= self._origin
-        orientation = _quaternion(pose[:3, :3])
-        if self._own is None:
-            self._own = (self._place(self._gripper_body, local[:3, 3], orientation),
-                         self._place(self._screw, local[:3, 3], orientation))
-        for body in self._own:
-            pybullet.resetBasePositionAndOrientation(body, local[:3, 3].tolist(), orientation,
-                                                     physicsClientId=self._client)
-        camera = local @ self._mounts[gripper]
-        image = self._hard_shadows(camera)
-        draws = self._draws[gripper]
-        latency = draws.latency()
-        mouth = pose[:3, :3].T @ (self._mouths[node] - pose[:3, 3])
-        return CameraFrame(gripper, draws.noisy(image), float(time),
-                           latency, node, mouth)
-
+        return self.render(self.expose(gripper, pose, time))
 
 def _quaternion(rotation: np.ndarray) -> list[float]:
     return [float(v) for v in quaternion_from_matrix(rotation)]
