@@ -51,6 +51,7 @@ from walker_sim.core.imperfections import JointSensors, NodePlacement
 from walker_sim.core.motor import DriveCommand, DriveModel
 from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
 from walker_sim.core.snapshot import PlantSnapshot
+from walker_sim.core.frame_worker import FrameWorker, PendingFrame
 from walker_sim.core.wrist_camera import CameraFrame, WristCameras
 
 __all__ = ['PlantError', 'Pose', 'GripperReport', 'PlantState', 'WalkerPlant',
@@ -241,6 +242,7 @@ class WalkerPlant:
         self._mouths = {name: tuple(float(v) for v in self.node_position(name))
                         for name in self.truss.node_names}
         self.cameras = self._wrist_cameras()
+        self._renders = FrameWorker(self.cameras.render) if self.cameras is not None else None
         self._contacts: list[ContactForce] = []
         self._contact_enabled = True
         self._contact_skip = 0  # physics steps the free gripper cannot reach a face in
@@ -301,6 +303,8 @@ class WalkerPlant:
         """Disconnect the physics clients (the plant cannot be used afterwards)."""
         for rooted in getattr(self, '_bodies', {}).values():
             rooted.disconnect()
+        if getattr(self, '_renders', None) is not None:
+            self._renders.close()  # the render under way is over before its client goes
         if getattr(self, 'cameras', None) is not None:
             self.cameras.close()
 
@@ -376,6 +380,7 @@ class WalkerPlant:
         self.sensors.restart()
         self.sensors.sample()
         if self.cameras is not None:
+            self._renders.discard()  # a frame of the plant before the reset is never had
             self.cameras.restart()
         return self.state()
 
@@ -648,10 +653,14 @@ class WalkerPlant:
             position, orientation = link_state[4], link_state[5]
         return Pose(np.array(position), np.array(orientation))
 
-    def camera_frame(self, gripper: str) -> CameraFrame:
-        """Render a gripper's wrist camera now, from the true state.
+    def expose_camera(self, gripper: str) -> PendingFrame:
+        """Expose a gripper's wrist camera now, from the true state; render it on the side.
 
-        See :mod:`walker_sim.core.wrist_camera`.
+        The exposure (the gripper's true pose, the truth, the frame's latency and noise) is
+        taken here and now; the two software renders run on the cameras' worker thread
+        (:mod:`walker_sim.core.frame_worker`), frames in the order they are exposed, while the
+        plant steps on. The handle tells when the render is done and waits for it. A reset
+        discards the frames exposed before it. See :mod:`walker_sim.core.wrist_camera`.
 
         Raises
         ------
@@ -663,7 +672,21 @@ class WalkerPlant:
             raise PlantError('the grippers carry no camera (gripper.camera.enabled is false)')
         if gripper not in GRIPPERS:
             raise PlantError(f"gripper must be 'a' or 'b', got {gripper!r}")
-        return self.cameras.frame(gripper, self._gripper_pose(gripper).matrix(), self.time)
+        exposure = self.cameras.expose(gripper, self._gripper_pose(gripper).matrix(), self.time)
+        return self._renders.submit(exposure)
+
+    def camera_frame(self, gripper: str) -> CameraFrame:
+        """Render a gripper's wrist camera now, from the true state, and wait for it.
+
+        :meth:`expose_camera` and the frame's render waited for: the same frame.
+
+        Raises
+        ------
+        PlantError
+            If the grippers carry no camera (``gripper.camera.enabled: false``) or the gripper
+            is not ``'a'`` or ``'b'``.
+        """
+        return self.expose_camera(gripper).result()
 
     # ------------------------------------------------------------------ grippers
     def screw_in(self, gripper: str) -> ScrewOutcome:
