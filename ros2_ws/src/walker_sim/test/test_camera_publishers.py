@@ -12,6 +12,7 @@ from walker_core.camera import CameraModel
 from walker_core.parameter_schema import replace_in_section
 from walker_sim.camera_publishers import (
     CameraPublishers, camera_info_msg, image_msg, image_topic, info_topic, trigger_service)
+from walker_sim.core.wrist_camera import CameraFrame
 
 PERIOD_NS = 2_000_000  # [ns] a control period (500 Hz)
 
@@ -49,6 +50,19 @@ class FakeNode:
         return callback(service_type.Request(), service_type.Response())
 
 
+class Drawn:
+    """A frame rendered at once (what ``expose_camera`` hands back)."""
+
+    def __init__(self, frame):
+        self.frame, self.latency, self.discarded = frame, frame.latency, False
+
+    def done(self):
+        return True
+
+    def result(self):
+        return self.frame
+
+
 class DrawnPlant:
     """Renders a blank frame per request, ready ``latency`` [s] after it shows (no renderer)."""
 
@@ -57,12 +71,10 @@ class DrawnPlant:
         self.rendered = []
         self.time = 0.0  # [s]
 
-    def camera_frame(self, gripper):
-        from walker_sim.core.wrist_camera import CameraFrame
-
+    def expose_camera(self, gripper):
         self.rendered.append((gripper, self.time))
         image = np.zeros((self.model.height, self.model.width, 3), dtype=np.uint8)
-        return CameraFrame(gripper, image, self.time, self.latency, 'n1_1', np.zeros(3))
+        return Drawn(CameraFrame(gripper, image, self.time, self.latency, 'n1_1', np.zeros(3)))
 
 
 def run_plant(cameras, plant, stamps):
@@ -79,9 +91,15 @@ class FakePlant:
         self.plant = plant
         self.rendered = []
 
-    def camera_frame(self, gripper):
+    def expose_camera(self, gripper):
         self.rendered.append(gripper)
-        return self.plant.camera_frame(gripper)
+        return self.plant.expose_camera(gripper)
+
+
+def settings(sim, frame_rate, sim_time):
+    """Return the plant's settings with a camera frame rate [Hz] and a clock mode."""
+    return replace_in_section(sim, {'sim.camera.frame_rate': frame_rate, 'sim.clock_mode':
+                                    'sim_time' if sim_time else 'real_time'}, 'sim.')
 
 
 @pytest.fixture
@@ -89,9 +107,9 @@ def seeing(params):
     return replace_in_section(params, {'gripper.camera.enabled': True})
 
 
-def test_a_robot_without_cameras_gets_no_camera_topic(params):
+def test_a_robot_without_cameras_gets_no_camera_topic(params, sim):
     node = FakeNode()
-    cameras = CameraPublishers(node, params, 2.0)
+    cameras = CameraPublishers(node, params, settings(sim, 2.0, True))
     cameras.publish(None, 0)  # nothing to publish, nothing asked of the plant
     assert node.publishers == {} and node.services == {}
 
@@ -102,12 +120,12 @@ def test_streamed_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(se
     plant = WalkerPlant(seeing, sim)
     try:
         node, watched = FakeNode(), FakePlant(plant)
-        CameraPublishers(node, seeing, 2.0).publish(watched, 0)
+        CameraPublishers(node, seeing, settings(sim, 2.0, True)).publish(watched, 0)
         assert set(node.publishers) == {image_topic(g) for g in 'ab'} | {
             info_topic(g) for g in 'ab'} | {f'camera_{g}/true_hole' for g in 'ab'}
         assert watched.rendered == []  # nobody listens
         node = FakeNode()
-        cameras = CameraPublishers(node, seeing, 2.0)
+        cameras = CameraPublishers(node, seeing, settings(sim, 2.0, True))
         node.publishers[image_topic('b')].subscribers = 1
         for stamp_ms in range(0, 1101, 2):  # 1.1 plant seconds of control periods
             cameras.publish(watched, stamp_ms * 1_000_000)
@@ -121,12 +139,14 @@ def test_streamed_frames_are_rendered_only_for_a_subscriber_and_at_their_rate(se
         plant.close()
 
 
+@pytest.mark.parametrize('sim_time', [True, False])
 @pytest.mark.parametrize('frame_rate', [0.0, 2.0])
-def test_a_trigger_renders_one_frame_at_the_next_step_and_sends_it_once_ready(seeing, frame_rate):
+def test_a_trigger_renders_one_frame_at_the_next_step_and_sends_it_once_ready(
+        seeing, sim, frame_rate, sim_time):
     """One frame a call, of the plant at the next state, stamped then, sent a latency later."""
     model = CameraModel.from_parameters(seeing.gripper.camera)
     node, plant = FakeNode(), DrawnPlant(model, latency=0.009)
-    cameras = CameraPublishers(node, seeing, frame_rate)
+    cameras = CameraPublishers(node, seeing, settings(sim, frame_rate, sim_time))
     assert set(node.services) == {trigger_service('a'), trigger_service('b')}
     run_plant(cameras, plant, range(0, 10 * PERIOD_NS, PERIOD_NS))
     plant.rendered.clear()  # what streaming (2 Hz, nobody listening: nothing) did
@@ -156,11 +176,11 @@ def test_a_trigger_renders_one_frame_at_the_next_step_and_sends_it_once_ready(se
     assert len(node.publishers[image_topic('a')].sent) == 2 and len(images) == 2
 
 
-def test_without_streaming_a_subscriber_gets_no_frame_untriggered(seeing):
+def test_without_streaming_a_subscriber_gets_no_frame_untriggered(seeing, sim):
     """``sim.camera.frame_rate`` 0: nothing rendered for subscribers, however long they listen."""
     model = CameraModel.from_parameters(seeing.gripper.camera)
     node, plant = FakeNode(), DrawnPlant(model, latency=0.0)
-    cameras = CameraPublishers(node, seeing, 0.0)
+    cameras = CameraPublishers(node, seeing, settings(sim, 0.0, True))
     for gripper in 'ab':
         node.publishers[image_topic(gripper)].subscribers = 1
     run_plant(cameras, plant, range(0, 2_000 * PERIOD_NS, PERIOD_NS))  # 4 s of plant time
@@ -169,8 +189,6 @@ def test_without_streaming_a_subscriber_gets_no_frame_untriggered(seeing):
 
 
 def test_the_messages_follow_rep_104(seeing, sim):
-    from walker_sim.core.wrist_camera import CameraFrame
-
     model = CameraModel.from_parameters(seeing.gripper.camera)
     pixels = np.arange(model.height * model.width * 3, dtype=np.uint32).astype(np.uint8)
     frame = CameraFrame('a', pixels.reshape(model.height, model.width, 3), 1.5, 0.01, 'n1_1',
@@ -191,7 +209,7 @@ def test_the_messages_follow_rep_104(seeing, sim):
                                atol=1e-9)
 
 
-def test_each_frame_comes_with_the_true_hole_of_its_instant_in_the_grippers_frame(seeing):
+def test_each_frame_comes_with_the_true_hole_of_its_instant_in_the_grippers_frame(seeing, sim):
     """``camera_<g>/true_hole``: the simulation's truth beside each image, at its stamp."""
     import dataclasses
 
@@ -200,12 +218,13 @@ def test_each_frame_comes_with_the_true_hole_of_its_instant_in_the_grippers_fram
     mouth = np.array([0.0012, -0.0007, -0.031])
 
     class TruthPlant(DrawnPlant):
-        def camera_frame(self, gripper):
-            return dataclasses.replace(super().camera_frame(gripper), mouth_in_gripper=mouth)
+        def expose_camera(self, gripper):
+            frame = super().expose_camera(gripper).frame
+            return Drawn(dataclasses.replace(frame, mouth_in_gripper=mouth))
 
     model = CameraModel.from_parameters(seeing.gripper.camera)
     node, plant = FakeNode(), TruthPlant(model, latency=0.0)
-    cameras = CameraPublishers(node, seeing, 0.0)
+    cameras = CameraPublishers(node, seeing, settings(sim, 0.0, True))
     node.call(trigger_service('b'))
     run_plant(cameras, plant, [7 * PERIOD_NS, 8 * PERIOD_NS])
     image, = node.publishers[image_topic('b')].sent
@@ -213,3 +232,70 @@ def test_each_frame_comes_with_the_true_hole_of_its_instant_in_the_grippers_fram
     assert truth.header.stamp == image.header.stamp and truth.header.frame_id == 'gripper_b'
     assert [truth.point.x, truth.point.y, truth.point.z] == mouth.tolist()
     assert node.publishers[camera_topic('a', TRUE_HOLE)].sent == []
+
+
+class HeldPlant:
+    """Exposes blank frames rendered on a worker thread, each render held until let through."""
+
+    def __init__(self, model):
+        import threading
+
+        from walker_sim.core.frame_worker import FrameWorker
+        from walker_sim.core.wrist_camera import Exposure
+
+        self.model, self.time = model, 0.0
+        self.let_through = threading.Event()
+        self.worker = FrameWorker(self._render)
+        self._exposure = Exposure
+        self.exposed = []
+
+    def _render(self, exposure):
+        self.let_through.wait()
+        image = np.zeros((self.model.height, self.model.width, 3), dtype=np.uint8)
+        return CameraFrame(exposure.gripper, image, exposure.time, exposure.latency,
+                           exposure.node, exposure.mouth_in_gripper)
+
+    def expose_camera(self, gripper):
+        self.exposed.append(self.worker.submit(self._exposure(
+            gripper, np.eye(4), self.time, 0.004, 'n1_1', np.zeros(3), None)))
+        return self.exposed[-1]
+
+
+def test_in_sim_time_the_plant_waits_at_the_state_a_frame_is_due_for_its_render(seeing, sim):
+    """The render outlasts the frame's latency: the state it is due at sends it all the same."""
+    import threading
+
+    model = CameraModel.from_parameters(seeing.gripper.camera)
+    node, plant = FakeNode(), HeldPlant(model)
+    cameras = CameraPublishers(node, seeing, settings(sim, 0.0, True))
+    images = node.publishers[image_topic('a')].sent
+    try:
+        node.call(trigger_service('a'))
+        run_plant(cameras, plant, [0, PERIOD_NS])  # exposed at 0, due at 4 ms
+        assert images == []
+        releaser = threading.Timer(0.05, plant.let_through.set)  # the render ends meanwhile
+        releaser.start()
+        run_plant(cameras, plant, [2 * PERIOD_NS])  # due: this state waits for the render
+        assert plant.let_through.is_set()
+        assert len(images) == 1 and images[0].header.stamp.nanosec == 0
+    finally:
+        plant.let_through.set()
+        plant.worker.close()
+
+
+def test_in_real_time_the_plant_sends_a_frame_late_rather_than_wait(seeing, sim):
+    model = CameraModel.from_parameters(seeing.gripper.camera)
+    node, plant = FakeNode(), HeldPlant(model)
+    cameras = CameraPublishers(node, seeing, settings(sim, 0.0, False))
+    images = node.publishers[image_topic('a')].sent
+    try:
+        node.call(trigger_service('a'))
+        run_plant(cameras, plant, range(0, 40 * PERIOD_NS, PERIOD_NS))  # due at 4 ms
+        assert images == []  # never waited for: the render is still held
+        plant.let_through.set()
+        plant.exposed[0].result()  # the render done
+        run_plant(cameras, plant, [40 * PERIOD_NS])
+        assert len(images) == 1 and images[0].header.stamp.nanosec == 0  # its exposure
+    finally:
+        plant.let_through.set()
+        plant.worker.close()

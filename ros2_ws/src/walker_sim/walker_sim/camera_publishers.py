@@ -6,13 +6,17 @@ serves ``camera_<g>/trigger`` (``std_srvs/srv/Trigger``) and publishes ``camera_
 plumb-bob, REP 104) in the frame ``camera_<g>_optical``, with the simulation's truth of each frame
 on ``camera_<g>/true_hole`` (``geometry_msgs/PointStamped``: where the hole really is, in the
 gripper's frame, :func:`~walker_sim.messages.true_hole_msg`). A trigger is answered at once; the
-frame is rendered at the plant's next published state (in sim time inside the lock-step, so it
-shows the plant at a step), and image and calibration are sent at the first state at or after
-the frame's ``ready_time`` (its exposure latency later), stamped with the exposure, the instant
-the image shows. Streaming is opt-in: with ``sim.camera.frame_rate`` above 0 a frame is also
-rendered at that rate of plant time while a subscriber listens to the image; at 0 (the default)
-a frame is rendered only when triggered, for a frame costs hundreds of control periods
-(docs/perception.md). A robot without cameras gets no publisher and no service at all.
+frame is exposed at the plant's next published state (in sim time inside the lock-step, so it
+shows the plant at a step) and rendered by the cameras' render process while the plant steps
+on (:meth:`walker_sim.core.plant.WalkerPlant.expose_camera`). Image, calibration and truth are
+sent, stamped with the exposure (the instant the image shows), at the first state at or after
+the frame's ``ready_time`` (its exposure latency later) once its render is done: in sim time
+the plant waits for the render there; in real time it never waits, and the frame goes out at
+the first state its render is done by (:mod:`walker_sim.core.frame_delivery`). Streaming is
+opt-in: with ``sim.camera.frame_rate`` above 0 a frame is also exposed at that rate of plant
+time while a subscriber listens to the image; at 0 (the default) a frame is rendered only when
+triggered, for a frame costs hundreds of control periods of rendering (docs/perception.md). A
+robot without cameras gets no publisher and no service at all.
 """
 
 from __future__ import annotations
@@ -28,14 +32,13 @@ from walker_core.camera import PLUMB_BOB, TRUE_HOLE, CameraModel, camera_topic, 
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.listened import ListenedPublisher
 from walker_runtime.qos import IMAGE_QOS, LOOK_IMAGE_QOS
+from walker_sim.core.frame_delivery import FrameDelivery
 from walker_sim.core.outputs import StampedRate
 from walker_sim.core.wrist_camera import CameraFrame
 from walker_sim.messages import time_msg, true_hole_msg
 
 __all__ = ['CameraPublishers', 'image_msg', 'camera_info_msg', 'image_topic', 'info_topic',
            'trigger_service']
-
-_NS_PER_S = 1_000_000_000
 
 
 def image_topic(gripper: str) -> str:
@@ -86,20 +89,21 @@ class CameraPublishers:
     node : Node
     params : WalkerParameters
         The model: ``gripper.camera.*``.
-    frame_rate : float
-        [Hz] Frames per second of plant time while heard (``sim.camera.frame_rate``); 0: a
-        frame only when triggered.
+    sim : SimParameters
+        ``sim.camera.frame_rate`` [Hz]: frames per second of plant time while heard (0: a
+        frame only when triggered); ``sim.clock_mode``: in ``sim_time`` (lock-step) a frame
+        due is waited for, in ``real_time`` never.
     """
 
-    def __init__(self, node: Node, params, frame_rate: float) -> None:
-        camera = params.gripper.camera
+    def __init__(self, node: Node, params, sim) -> None:
+        camera, frame_rate = params.gripper.camera, sim.camera.frame_rate
         self._model = CameraModel.from_parameters(camera) if camera.enabled else None
         self._rate = StampedRate(frame_rate) if frame_rate > 0.0 else None
         self._images: dict[str, ListenedPublisher] = {}
         self._infos = {}
         self._truths = {}
-        self._asked: set[str] = set()  # triggered, rendered at the next published state
-        self._rendered: list[tuple[int, int, CameraFrame]] = []  # (ready, exposure [ns], frame)
+        self._asked: set[str] = set()  # triggered, exposed at the next published state
+        self._exposed = FrameDelivery(wait_for_renders=sim.clock_mode == 'sim_time')
         if self._model is None:
             return
         for gripper in GRIPPERS:
@@ -121,24 +125,18 @@ class CameraPublishers:
         return response
 
     def publish(self, plant, stamp: int) -> None:
-        """Render the frames asked for or due at ``stamp`` [ns]; send those ready by then."""
+        """Expose the frames asked for or due at ``stamp`` [ns]; send those due by then."""
         asked, self._asked = self._asked, set()
         if self._rate is not None:
             heard = [g for g, publisher in self._images.items() if publisher.heard]
             if heard and self._rate.due(stamp):
                 asked.update(heard)
         for gripper in sorted(asked):
-            frame = plant.camera_frame(gripper)
-            self._rendered.append((stamp + round(frame.latency * _NS_PER_S), stamp, frame))
-        if not self._rendered:
+            self._exposed.add(plant.expose_camera(gripper), stamp)
+        if not self._exposed:
             return
-        waiting = []
-        for ready, exposure, frame in self._rendered:
-            if ready <= stamp or stamp < exposure:  # ready, or the plant's time went back
-                self._images[frame.gripper].publisher.publish(image_msg(frame, exposure))
-                self._infos[frame.gripper].publish(
-                    camera_info_msg(self._model, frame.gripper, exposure))
-                self._truths[frame.gripper].publish(true_hole_msg(frame, exposure))
-            else:
-                waiting.append((ready, exposure, frame))
-        self._rendered = waiting
+        for exposure, frame in self._exposed.due(stamp):
+            self._images[frame.gripper].publisher.publish(image_msg(frame, exposure))
+            self._infos[frame.gripper].publish(camera_info_msg(self._model, frame.gripper,
+                                                               exposure))
+            self._truths[frame.gripper].publish(true_hole_msg(frame, exposure))

@@ -100,7 +100,7 @@ class PlantNode(Node):
         self._clock_rate = StampedRate(self.sim.clock_rate)
         self._pose_rate = StampedRate(self.sim.pose_rate)
         self._out = PlantPublishers(self, self.params, self.sim_time)
-        self._cameras = CameraPublishers(self, self.params, self.sim.camera.frame_rate)
+        self._cameras = CameraPublishers(self, self.params, self.sim)
         self.create_subscription(JointState, 'effort_commands', self._on_effort, COMMAND_QOS)
         if self.sim_time:
             self.create_subscription(ClockMsg, 'supervisor/decided_until', self._on_decided,
