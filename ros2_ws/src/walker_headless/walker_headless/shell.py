@@ -15,11 +15,13 @@ carries out its commands on the loop's cores, as the node does over ROS
 * every :data:`~walker_supervisor.core.runner.WATCH_PERIOD`: the watchdog, on simulated time
   (the only clock there is);
 * its commands: the mode to the five controllers and the planner's hold, a gripper command to
-  the plant core, a look to the plant core's wrist camera (the frame is answered once its
-  exposure latency has passed), planner requests to
-  :class:`~walker_headless.planner.HeadlessPlanner`; the phase and the step reports to the bag
-  and the walk's records, each frame of a look (with its truth) and the hole it showed to the
-  bag (:class:`~walker_headless.camera_recording.CameraRecording`), the feedback to
+  the plant core, a look to the plant core's wrist camera (the frame is exposed at once and
+  rendered by the plant's render process while the loop steps on; it is answered once its
+  exposure latency has passed, its render waited for then, so the frames are the same however
+  long a render takes), planner requests to :class:`~walker_headless.planner.HeadlessPlanner`;
+  the phase and the step reports to the bag and the walk's records, each frame of a look (with
+  its truth) and the hole it showed to the bag
+  (:class:`~walker_headless.camera_recording.CameraRecording`), the feedback to
   ``progress``, its notices to ``say``. The answers come back as the node's do, after the
   commands of the call that asked for them, and take no simulated time (the graph holds its
   clock for them).
@@ -131,7 +133,7 @@ class WalkShell:
         self._next_tick = self._next_watch = 0  # [ns]
         self._poses: list = []  # (stamp [s], tip position [m]) since the last sample
         self._map_version = -1  # the truss map's version last drawn
-        self._frames: list = []  # wrist camera frames asked for and not yet ready
+        self._frames: list = []  # wrist camera frames exposed and not yet ready (PendingFrame)
         self._truths: dict = {}  # the true hole in the gripper's frame, by frame instant
         #: every look the runner took, against the plant's truth (:func:`look_record`)
         self.looks: list[dict] = []
@@ -159,8 +161,11 @@ class WalkShell:
             self._poses.append((stamp_seconds(stamp), state.poses[state.tip].position))
         for ticket, completed, message in self.planner.take_ended():
             self._carry_out(runner.follow_done(ticket, completed, message, now))
-        for frame in [f for f in self._frames if f.ready_time <= now]:
-            self._frames.remove(frame)
+        for pending in [f for f in self._frames if f.ready_time <= now]:
+            self._frames.remove(pending)
+            if pending.discarded:  # the plant was reset since
+                continue
+            frame = pending.result()  # rendered on the plant's worker while the loop stepped
             self._truths[frame.exposure_time] = frame.mouth_in_gripper[:2]
             if self._camera_bag is not None:
                 self._camera_bag.frame(stamp, frame)
@@ -246,7 +251,7 @@ class WalkShell:
                 answer = loop.plant.command_gripper(command.gripper, command.action)
                 answers.append(lambda a=answer: runner.gripper_answered(*a, now))
             elif isinstance(command, LookRequest):
-                self._frames.append(loop.plant.camera_frame(command.gripper))
+                self._frames.append(loop.plant.expose_camera(command.gripper))
             elif isinstance(command, HoleSighted):
                 if self._camera_bag is not None:
                     self._camera_bag.hole(loop.stamp, command)
