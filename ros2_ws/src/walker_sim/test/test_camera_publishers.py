@@ -245,15 +245,18 @@ class HeldPlant:
 
         self.model, self.time = model, 0.0
         self.let_through = threading.Event()
-        self.worker = FrameWorker(self._render)
+        self.worker = FrameWorker(lambda: self)
         self._exposure = Exposure
         self.exposed = []
 
-    def _render(self, exposure):
+    def render(self, exposure):
         self.let_through.wait()
         image = np.zeros((self.model.height, self.model.width, 3), dtype=np.uint8)
         return CameraFrame(exposure.gripper, image, exposure.time, exposure.latency,
                            exposure.node, exposure.mouth_in_gripper)
+
+    def close(self):
+        pass
 
     def expose_camera(self, gripper):
         self.exposed.append(self.worker.submit(self._exposure(

@@ -33,12 +33,16 @@ class HeldRender:
         self.let_through = threading.Event()
         self.started = threading.Event()
         self.rendered = []
+        self.closed = False
 
-    def __call__(self, exposure_):
+    def render(self, exposure_):
         self.started.set()
         self.let_through.wait()
         self.rendered.append(exposure_.time)
         return drawn(exposure_)
+
+    def close(self):
+        self.closed = True
 
 
 def test_the_worker_renders_the_blocking_frame_of_an_exposure(seeing, sim, one_attached):
@@ -67,7 +71,7 @@ def test_the_worker_renders_the_blocking_frame_of_an_exposure(seeing, sim, one_a
 
 def test_frames_come_out_in_the_order_they_were_exposed():
     render = HeldRender()
-    worker = FrameWorker(render)
+    worker = FrameWorker(lambda: render)
     try:
         pending = [worker.submit(exposure(time=t)) for t in (0.1, 0.2, 0.3, 0.4)]
         assert not any(p.done() for p in pending)  # the loop is never kept waiting
@@ -80,7 +84,7 @@ def test_frames_come_out_in_the_order_they_were_exposed():
 
 def test_a_discard_drops_the_frames_rendered_under_way_or_waiting():
     render = HeldRender()
-    worker = FrameWorker(render)
+    worker = FrameWorker(lambda: render)
     try:
         under_way = worker.submit(exposure(time=0.1))
         render.started.wait()
@@ -100,12 +104,12 @@ def test_a_discard_drops_the_frames_rendered_under_way_or_waiting():
 
 def test_a_closed_worker_takes_no_frame_and_yields_none_pending():
     render = HeldRender()
-    worker = FrameWorker(render)
+    worker = FrameWorker(lambda: render)
     pending = worker.submit(exposure())
     render.started.wait()
     render.let_through.set()
     worker.close()
-    assert pending.discarded
+    assert pending.discarded and render.closed
     with pytest.raises(RuntimeError, match='closed'):
         worker.submit(exposure())
 

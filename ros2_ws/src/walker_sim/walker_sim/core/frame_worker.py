@@ -1,12 +1,13 @@
-"""The wrist cameras' render worker: frames rendered on a thread of their own, in order.
+"""The wrist cameras' render worker: frames rendered beside the plant's loop, in order.
 
 A frame costs two software renders (:mod:`walker_sim.core.wrist_camera`), hundreds of control
 periods of the plant's loop. The loop's thread only *exposes* a frame (the gripper's pose, the
 truth, the frame's draws: cheap) and hands the exposure to :class:`FrameWorker`, whose single
-thread renders the exposures one after the other, in the order they were taken. pybullet
-releases the GIL while it renders, and the renderer has a client of its own, so the physics
-keeps stepping meanwhile. The handle, :class:`PendingFrame`, tells when the render is done and
-waits for it on request.
+thread has a renderer render the exposures one after the other, in the order they were taken.
+The plant's renderer is a process of its own (:class:`~walker_sim.core.render_process.
+RenderProcess`: pybullet holds Python's lock while it renders, so a thread could not render
+beside the loop); the worker's thread only waits for it, the lock let go. The handle,
+:class:`PendingFrame`, tells when the render is done and waits for it on request.
 
 A reset of the plant discards every frame exposed before it (:meth:`FrameWorker.discard`):
 their renders are cancelled, or finish unseen, and their handles never yield a frame.
@@ -16,10 +17,21 @@ from __future__ import annotations
 
 import concurrent.futures
 from collections.abc import Callable
+from typing import Protocol
 
 from walker_sim.core.wrist_camera import CameraFrame, Exposure
 
-__all__ = ['FrameDiscardedError', 'FrameWorker', 'PendingFrame']
+__all__ = ['FrameDiscardedError', 'FrameWorker', 'PendingFrame', 'Renderer']
+
+
+class Renderer(Protocol):
+    """What renders exposures for the worker (a :class:`RenderProcess`, or a test's)."""
+
+    def render(self, exposure: Exposure) -> CameraFrame:
+        """Render an exposure (called on the worker's thread only)."""
+
+    def close(self) -> None:
+        """Release what the renderer holds."""
 
 
 class FrameDiscardedError(RuntimeError):
@@ -110,25 +122,47 @@ class PendingFrame:
 
 
 class FrameWorker:
-    """One thread rendering exposures, in the order they are submitted.
+    """One thread having exposures rendered, in the order they are submitted.
 
     Parameters
     ----------
-    render : callable
-        ``render(exposure) -> CameraFrame`` (:meth:`WristCameras.render`); called on the
-        worker's thread only, so whatever it renders with is never used by two threads.
-
-    Notes
-    -----
-    The thread is started with the first frame: a plant whose cameras are never asked runs
-    none.
+    make_renderer : callable
+        ``make_renderer() -> Renderer``, called on the worker's thread, once, by :meth:`start`
+        or the first frame; the renderer is used by that thread alone.
     """
 
-    def __init__(self, render: Callable[[Exposure], CameraFrame]) -> None:
-        self._render = render
+    def __init__(self, make_renderer: Callable[[], Renderer]) -> None:
+        self._make_renderer = make_renderer
+        self._renderer: Renderer | None = None  # the worker thread's alone
         self._executor: concurrent.futures.ThreadPoolExecutor | None = None
         self._epoch = _Epoch()
         self._closed = False
+
+    def _thread(self) -> concurrent.futures.ThreadPoolExecutor:
+        if self._closed:
+            raise RuntimeError('the frame worker is closed')
+        if self._executor is None:
+            self._executor = concurrent.futures.ThreadPoolExecutor(
+                max_workers=1, thread_name_prefix='wrist_camera_render')
+        return self._executor
+
+    def _open(self) -> Renderer:
+        """Return the renderer, made on its first use (on the worker's thread)."""
+        if self._renderer is None:
+            self._renderer = self._make_renderer()
+        return self._renderer
+
+    def _render(self, exposure: Exposure) -> CameraFrame:
+        return self._open().render(exposure)
+
+    def _close_renderer(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def start(self) -> None:
+        """Make the renderer now, in the background, rather than at the first frame."""
+        self._thread().submit(self._open)
 
     def submit(self, exposure: Exposure) -> PendingFrame:
         """Queue an exposure's render; return its handle at once.
@@ -138,12 +172,7 @@ class FrameWorker:
         RuntimeError
             If the worker was closed.
         """
-        if self._closed:
-            raise RuntimeError('the frame worker is closed')
-        if self._executor is None:
-            self._executor = concurrent.futures.ThreadPoolExecutor(
-                max_workers=1, thread_name_prefix='wrist_camera_render')
-        future = self._executor.submit(self._render, exposure)
+        future = self._thread().submit(self._render, exposure)
         epoch = self._epoch
         epoch.futures = [f for f in epoch.futures if not f.done()] + [future]
         return PendingFrame(exposure, future, epoch)
@@ -151,16 +180,18 @@ class FrameWorker:
     def discard(self) -> None:
         """Discard every frame submitted so far (the plant was reset): none will be had.
 
-        Renders not started are cancelled; one under way finishes on the worker's thread, and
-        its frame is dropped.
+        Renders not started are cancelled; one under way finishes, and its frame is dropped.
         """
         self._epoch.end()
         self._epoch = _Epoch()
 
     def close(self) -> None:
-        """Discard every frame, wait for a render under way, and stop the thread."""
-        self._closed = True
+        """Discard every frame, wait for a render under way, close the renderer and the thread."""
+        if self._closed:
+            return
         self.discard()
         if self._executor is not None:
-            self._executor.shutdown(wait=True, cancel_futures=True)
+            self._executor.submit(self._close_renderer)
+            self._executor.shutdown(wait=True)
             self._executor = None
+        self._closed = True

@@ -52,6 +52,7 @@ from walker_sim.core.motor import DriveCommand, DriveModel
 from walker_sim.core.rooted import RootedBody, carry_state, load_rooted_body
 from walker_sim.core.snapshot import PlantSnapshot
 from walker_sim.core.frame_worker import FrameWorker, PendingFrame
+from walker_sim.core.render_process import RenderProcess
 from walker_sim.core.wrist_camera import CameraFrame, WristCameras
 
 __all__ = ['PlantError', 'Pose', 'GripperReport', 'PlantState', 'WalkerPlant',
@@ -241,8 +242,7 @@ class WalkerPlant:
         self.node_geometry = NodeGeometry.from_parameters(params)
         self._mouths = {name: tuple(float(v) for v in self.node_position(name))
                         for name in self.truss.node_names}
-        self.cameras = self._wrist_cameras()
-        self._renders = FrameWorker(self.cameras.render) if self.cameras is not None else None
+        self.cameras, self._renders = self._wrist_cameras()
         self._contacts: list[ContactForce] = []
         self._contact_enabled = True
         self._contact_skip = 0  # physics steps the free gripper cannot reach a face in
@@ -273,16 +273,23 @@ class WalkerPlant:
         self._motor_levels: tuple[float, ...] | None = None
         self._steps_of: dict[float, int] = {}  # step duration [s] -> physics steps
 
-    def _wrist_cameras(self) -> WristCameras | None:
-        """Return the grippers' cameras (``gripper.camera.*``), or None when there are none."""
+    def _wrist_cameras(self) -> tuple[WristCameras | None, FrameWorker | None]:
+        """Return the grippers' cameras (``gripper.camera.*``) and their renderer, or Nones.
+
+        The cameras here take the exposures; a process of their own, with cameras made alike,
+        renders them (started now, so that it is ready by the first frame).
+        """
         camera, imperfect = self.params.gripper.camera, self.sim.imperfections
         if not camera.enabled:
-            return None
-        return WristCameras(
-            CameraModel.from_parameters(camera), self.sim.camera,
+            return None, None
+        make_cameras = functools.partial(
+            WristCameras, CameraModel.from_parameters(camera), self.sim.camera,
             MountErrors(imperfect.camera_mount_position, imperfect.camera_mount_angle,
                         imperfect.seed),
             self.truss, self._mouths, self.node_geometry, imperfect.seed)
+        renders = FrameWorker(functools.partial(RenderProcess, make_cameras))
+        renders.start()
+        return make_cameras(), renders
 
     @property
     def client(self) -> int:
@@ -304,7 +311,7 @@ class WalkerPlant:
         for rooted in getattr(self, '_bodies', {}).values():
             rooted.disconnect()
         if getattr(self, '_renders', None) is not None:
-            self._renders.close()  # the render under way is over before its client goes
+            self._renders.close()  # after the render under way: its process ends
         if getattr(self, 'cameras', None) is not None:
             self.cameras.close()
 
@@ -657,7 +664,7 @@ class WalkerPlant:
         """Expose a gripper's wrist camera now, from the true state; render it on the side.
 
         The exposure (the gripper's true pose, the truth, the frame's latency and noise) is
-        taken here and now; the two software renders run on the cameras' worker thread
+        taken here and now; the two software renders run in the cameras' render process
         (:mod:`walker_sim.core.frame_worker`), frames in the order they are exposed, while the
         plant steps on. The handle tells when the render is done and waits for it. A reset
         discards the frames exposed before it. See :mod:`walker_sim.core.wrist_camera`.

@@ -18,7 +18,8 @@ measurement with: the nearest node's mouth in the gripper's frame.
 A frame is taken in two parts: its *exposure* (:meth:`WristCameras.expose`: the gripper's pose,
 the nearest node, the truth and the frame's draws; cheap, at the plant's instant) and its
 *render* (:meth:`WristCameras.render`: two software renders, some hundred milliseconds), which
-the plant runs on a worker thread (:mod:`walker_sim.core.frame_worker`) while it steps on.
+the plant has done by a process of its own (:mod:`walker_sim.core.frame_worker`,
+:mod:`walker_sim.core.render_process`) while it steps on.
 :meth:`WristCameras.frame` does both at once. A frame depends on its exposure alone, not on
 when it is rendered.
 """
@@ -194,6 +195,11 @@ class WristCameras:
         self._client: int | None = None
         self._own: tuple[int, int] | None = None  # the gripper being looked from
 
+    def prepare(self) -> None:
+        """Build the renderer's client and scene now rather than at the first frame."""
+        if self._client is None:
+            self._build()
+
     def restart(self) -> None:
         """Start the noise and latency draws over (the plant was reset)."""
         for draws in self._draws.values():
@@ -351,11 +357,10 @@ class WristCameras:
     def render(self, exposure: Exposure) -> CameraFrame:
         """Render an exposure: the expensive part of a frame (two software renders).
 
-        The scene (its client built on the first frame) is this object's alone: render from
-        one thread at a time.
+        The scene (its client built on the first frame, or by :meth:`prepare`) is this
+        object's alone: render from one thread at a time.
         """
-        if self._client is None:
-            self._build()
+        self.prepare()
         pose = exposure.pose
         self._show_neighbourhood(exposure.node)
         local = pose.copy()  # in the scene, whose origin is the node's nominal place
