@@ -165,7 +165,7 @@ class WalkShell:
             self._frames.remove(pending)
             if pending.discarded:  # the plant was reset since
                 continue
-            frame = pending.result()  # rendered on the plant's worker while the loop stepped
+            frame = pending.result()  # rendered beside the loop while it stepped
             self._truths[frame.exposure_time] = frame.mouth_in_gripper[:2]
             if self._camera_bag is not None:
                 self._camera_bag.frame(stamp, frame)
