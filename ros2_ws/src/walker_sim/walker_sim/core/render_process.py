@@ -12,7 +12,7 @@ The child's frames are the parent's bit for bit: a frame depends on its exposure
 
 The two talk over a socket pair with :mod:`multiprocessing.connection` (pickled messages). The
 child ignores Ctrl-C (its parent closes it) and ends when told to, or when its parent's end of
-the socket closes (the parent ended, whatever the way).
+the socket closes (the parent ended, whatever the way). Its errors go to the parent's stderr.
 """
 
 from __future__ import annotations
@@ -105,7 +105,8 @@ class RenderProcess:
         with theirs:
             self._process = subprocess.Popen(
                 [sys.executable, '-m', __name__, str(theirs.fileno())],
-                pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL, env=environment)
+                pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL, env=environment)  # stdout: pybullet's banner
         self._connection = Connection(ours.detach())
         self._stop = weakref.finalize(self, _stop, self._process, self._connection)
         self._connection.send(make_cameras)
