@@ -21,6 +21,7 @@ from walker_headless.camera_recording import CAMERA_TOPICS
 from walker_headless.recording import WalkRecording
 from walker_headless.runner import walk
 from walker_report.core.report import ReportOptions, make_report
+from walker_sim.core.frame_worker import PendingFrame
 from walker_sim.core.plant import WalkerPlant
 
 TARGET = 'n2_2'
@@ -35,23 +36,28 @@ def cameras():
 @pytest.fixture(scope='module')
 def walked(cameras, tmp_path_factory):
     """Walk with the cameras, recorded; return the result, the bag and every frame rendered."""
-    rendered = []
-    render = WalkerPlant.camera_frame
+    exposed, rendered = [], []
+    expose, render = WalkerPlant.expose_camera, PendingFrame.result
 
-    def keep(plant, gripper):
-        frame = render(plant, gripper)
-        rendered.append(frame)
-        return frame
+    def keep_exposure(plant, gripper):
+        exposed.append(expose(plant, gripper))
+        return exposed[-1]
+
+    def keep_frame(pending, timeout=None):
+        rendered.append(render(pending, timeout))
+        return rendered[-1]
 
     bag = tmp_path_factory.mktemp('camera_walk') / 'bag'
     recording = WalkRecording(bag, NAMESPACE)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(WalkerPlant, 'camera_frame', keep)
+        patch.setattr(WalkerPlant, 'expose_camera', keep_exposure)
+        patch.setattr(PendingFrame, 'result', keep_frame)
         try:
             result = walk(cameras, TARGET, recording)
         finally:
             recording.close()
     assert result.reached, result.message
+    assert len(rendered) == len(exposed), 'every frame exposed was rendered and taken'
     return result, bag, rendered
 
 
