@@ -64,8 +64,9 @@ class WalkSummary:
     periods : int
         Control periods simulated (headless).
     cpu_time : float
-        CPU time of the headless loop, from the walk's start to its end [s] (not part of the
-        walk's outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
+        CPU time of the headless loop, from the walk's start to its end [s], the wrist
+        cameras' renders (in a process of their own) included (not part of the walk's
+        outcome): ``sim_time / cpu_time`` is the loop's speed on one core.
     survey : dict, optional
         The truss map at the end (headless;
         :meth:`~walker_supervisor.core.truss_map.TrussMap.to_dict`).

@@ -94,7 +94,7 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
         if survey is not None:
             shell.runner.mapped.map.load(survey)
         shell.send_goal(goal, target)
-        cpu_started = time.process_time()
+        cpu_started = _cpu_time(loop)
         diagnostics_ns = round(DIAGNOSTICS_PERIOD * 1e9)
         next_diagnostics = 0
         periods = 0
@@ -119,10 +119,15 @@ def walk(configuration: WalkerConfiguration, target: str, recording=None,
             say('warning', failure)
         return dataclasses.replace(
             _result(target, shell, loop, started, message),
-            cpu_time=time.process_time() - cpu_started, timed_out=message is not None,
+            cpu_time=_cpu_time(loop) - cpu_started, timed_out=message is not None,
             survey=shell.runner.mapped.map.to_dict())
     finally:
         loop.close()
+
+
+def _cpu_time(loop: RobotLoop) -> float:
+    """[s] CPU time of this process and of the wrist cameras' renders, in their own process."""
+    return time.process_time() + loop.plant.render_cpu_time
 
 
 def _result(target: str, shell: WalkShell, loop: RobotLoop, started: float,

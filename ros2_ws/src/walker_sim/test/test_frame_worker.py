@@ -64,6 +64,7 @@ def test_the_worker_renders_the_blocking_frame_of_an_exposure(seeing, sim, one_a
             np.testing.assert_array_equal(got.mouth_in_gripper, frame.mouth_in_gripper)
             np.testing.assert_array_equal(got.image, frame.image)
         assert stepping.state().time > blocking.state().time
+        assert stepping.render_cpu_time > 0.0  # spent in the render process
     finally:
         blocking.close()
         stepping.close()

@@ -45,6 +45,7 @@ def test_the_process_renders_the_in_process_frame_of_each_exposure(make_cameras)
             assert (got.gripper, got.node, got.latency) == (gripper, node, expected.latency)
             np.testing.assert_array_equal(got.image, expected.image)
             np.testing.assert_array_equal(got.mouth_in_gripper, expected.mouth_in_gripper)
+        assert renderer.cpu_time > 0.0  # the child's, counted for whoever reports CPU time
     finally:
         renderer.close()
         here.close()

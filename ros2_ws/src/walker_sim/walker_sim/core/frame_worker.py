@@ -27,6 +27,8 @@ __all__ = ['FrameDiscardedError', 'FrameWorker', 'PendingFrame', 'Renderer']
 class Renderer(Protocol):
     """What renders exposures for the worker (a :class:`RenderProcess`, or a test's)."""
 
+    cpu_time: float  # [s] CPU time its renders took, wherever they ran
+
     def render(self, exposure: Exposure) -> CameraFrame:
         """Render an exposure (called on the worker's thread only)."""
 
@@ -159,6 +161,12 @@ class FrameWorker:
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+    @property
+    def cpu_time(self) -> float:
+        """[s] CPU time the renders took so far (in the render process: not the caller's)."""
+        renderer = self._renderer
+        return 0.0 if renderer is None else renderer.cpu_time
 
     def start(self) -> None:
         """Make the renderer now, in the background, rather than at the first frame."""

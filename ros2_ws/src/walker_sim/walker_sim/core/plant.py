@@ -682,6 +682,11 @@ class WalkerPlant:
         exposure = self.cameras.expose(gripper, self._gripper_pose(gripper).matrix(), self.time)
         return self._renders.submit(exposure)
 
+    @property
+    def render_cpu_time(self) -> float:
+        """[s] CPU time the cameras' renders took so far, in their process (0 without cameras)."""
+        return 0.0 if self._renders is None else self._renders.cpu_time
+
     def camera_frame(self, gripper: str) -> CameraFrame:
         """Render a gripper's wrist camera now, from the true state, and wait for it.
 

@@ -22,6 +22,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 import weakref
 from collections.abc import Callable
 from multiprocessing.connection import Connection
@@ -40,8 +41,8 @@ class RenderProcessError(RuntimeError):
 def serve(connection: Connection) -> None:
     """Build the cameras the parent sends first, then render what it sends until None or EOF.
 
-    Runs in the child. Each exposure is answered ``(True, frame)``, or ``(False, error)`` when
-    rendering it raised.
+    Runs in the child. Each exposure is answered ``(True, frame, cpu)``, or ``(False, error,
+    cpu)`` when rendering it raised, ``cpu`` the CPU time [s] the render took.
     """
     try:
         make_cameras = connection.recv()
@@ -57,10 +58,12 @@ def serve(connection: Connection) -> None:
                 return
             if exposure is None:
                 return
+            started = time.process_time()
             try:
                 reply = (True, cameras.render(exposure))
             except Exception as error:  # handed to the parent, which raises it
                 reply = (False, error)
+            reply += (time.process_time() - started,)
             try:
                 connection.send(reply)
             except OSError:  # the parent is gone
@@ -108,6 +111,7 @@ class RenderProcess:
                 pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
                 stdout=subprocess.DEVNULL, env=environment)  # stdout: pybullet's banner
         self._connection = Connection(ours.detach())
+        self.cpu_time = 0.0  # [s] the renders' CPU time in the child, so far
         self._stop = weakref.finalize(self, _stop, self._process, self._connection)
         self._connection.send(make_cameras)
 
@@ -126,11 +130,12 @@ class RenderProcess:
         """
         try:
             self._connection.send(exposure)
-            ok, value = self._connection.recv()
+            ok, value, cpu_time = self._connection.recv()
         except (EOFError, OSError) as error:
             raise RenderProcessError(
                 "the wrist cameras' render process ended (exit code "
                 f'{self._process.poll()})') from error
+        self.cpu_time += cpu_time
         if not ok:
             raise value
         return value
