@@ -11,8 +11,9 @@ approach height, at offsets drawn uniformly within 8 mm of the hole (seeded), po
 Reported:
 
 * the wall-clock cost of the first frame (the scene's build), of every later frame (its two
-  software renders, shadowed and not, for the hard shadows) and of a detection, median and
-  90th percentile;
+  software renders, shadowed and not, for the hard shadows), of a frame's exposure alone (what
+  the plant's loop spends on it: the truth and the draws of latency and pixel noise; the plant
+  renders in a process of its own) and of a detection, median and 90th percentile;
 * the vision error, measured against the truth each frame carries (deterministic: the same
   seed gives the same figures on any machine), median, 95th percentile and largest, and how
   many frames found no hole.
@@ -67,19 +68,22 @@ def measure(frames: int) -> dict:
                         sim.camera.pixel_noise)
     height = params.gripper.approach_height
     offsets = np.random.default_rng(SEED).uniform(-OFFSET, OFFSET, (frames + 1, 2))
-    render_s, detect_s, errors, sigmas, missed = [], [], [], [], 0
+    render_s, expose_s, detect_s, errors, sigmas, missed = [], [], [], [], [], 0
     first_s = None
     try:
         for i, offset in enumerate(offsets):
             pose = np.eye(4)
             pose[:3, 3] = truss.position('n2_1') + [*offset, height]
             start = time.perf_counter()
-            frame = cameras.frame('b', pose, 0.0)
+            exposure = cameras.expose('b', pose, 0.0)
+            exposed = time.perf_counter() - start
+            frame = cameras.render(exposure)
             elapsed = time.perf_counter() - start
             if i == 0:
                 first_s = elapsed
                 continue
             render_s.append(elapsed)
+            expose_s.append(exposed)
             start = time.perf_counter()
             found = finder.find(frame.image, height)
             detect_s.append(time.perf_counter() - start)
@@ -98,6 +102,7 @@ def measure(frames: int) -> dict:
     return {
         'image': [model.width, model.height], 'frames': frames,
         'first_frame_ms': round(1e3 * first_s, 2), 'frame': stats_ms(render_s),
+        'exposure': stats_ms(expose_s),
         'detection': stats_ms(detect_s),
         'vision_error_mm': {
             'median': round(1e3 * float(np.median(errors)), 4),
@@ -116,6 +121,8 @@ def table(results: dict) -> str:
         ('first frame (builds the scene)', f"{results['first_frame_ms']:.0f} ms"),
         ('frame, median / p90', f"{results['frame']['median_ms']:.0f} / "
                                 f"{results['frame']['p90_ms']:.0f} ms"),
+        ('exposure, median / p90', f"{results['exposure']['median_ms']:.1f} / "
+                                   f"{results['exposure']['p90_ms']:.1f} ms"),
         ('detection, median / p90', f"{results['detection']['median_ms']:.1f} / "
                                     f"{results['detection']['p90_ms']:.1f} ms"),
         ('vision error, median / p95 / max',
