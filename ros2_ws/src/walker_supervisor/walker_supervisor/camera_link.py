@@ -7,8 +7,8 @@ that gripper's ``camera_<g>/image_raw`` stamped at or after the look's ``since``
 carried out as every answer's. The frames a gripper's looks await are queued in the order they
 were asked for: a frame takes longer to render than the frames of a look are apart
 (``frame_interval``), so the next request comes before the last frame, and each frame answers
-the oldest request it was exposed after. A trigger whose service is not discovered, a frame lost or one
-that never comes cost nothing here: the runner goes on blind after
+the oldest request it was exposed after. A trigger whose service is not discovered, a frame
+lost or one that never comes cost nothing here: the runner goes on blind after
 :data:`~walker_supervisor.core.looking.LOOK_WAIT`, and the look is forgotten then. A robot
 without cameras (``gripper.camera.enabled`` false) has neither subscription nor client.
 
@@ -16,7 +16,7 @@ Each frame that showed the hole (the runner's :class:`~walker_supervisor.core.co
 HoleSighted`) is published on ``camera_<g>/hole`` (``geometry_msgs/PointStamped``, stamped with
 the frame's exposure, in the gripper's frame ``gripper_<g>``: x, y the hole's axis from the
 gripper's axis as that frame measured it, z the face's height the step assumed), beside the
-plant's ``camera_<g>/true_hole`` of the same stamp, reliable, keep last 1 as the images.
+plant's ``camera_<g>/true_hole`` of the same stamp, reliable, keep last 1.
 """
 
 from __future__ import annotations

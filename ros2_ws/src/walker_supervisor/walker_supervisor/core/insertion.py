@@ -41,8 +41,8 @@ from walker_supervisor.core.phases import Phase, Stage, StepOutcome
 from walker_supervisor.core.step_geometry import probe_targets
 from walker_supervisor.core.step_run import StepRun
 
-__all__ = ['MAX_MOUTH_LINES', 'MOUTH_LINE_PROGRESS', 'MAX_DEEPER_DESCENTS', 'feel_the_face', 'at_mouth',
-           'left_the_axis', 'jammed', 'follow_screwing']
+__all__ = ['MAX_MOUTH_LINES', 'MOUTH_LINE_PROGRESS', 'MAX_DEEPER_DESCENTS', 'feel_the_face',
+           'at_mouth', 'left_the_axis', 'jammed', 'follow_screwing']
 
 #: Fine lines at the mouth tried before the gripper is screwed in anyway (as above the hole).
 MAX_MOUTH_LINES = 3
