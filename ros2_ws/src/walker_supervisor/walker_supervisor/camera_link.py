@@ -4,11 +4,9 @@
 the gripper's ``camera_<g>/trigger`` (``std_srvs/srv/Trigger``) and hands the first image of
 that gripper's ``camera_<g>/image_raw`` stamped at or after the look's ``since`` to
 :meth:`~walker_supervisor.core.runner.WalkRunner.frame_seen`; the commands it gives back are
-carried out as every answer's. The frames a gripper's looks await are queued in the order they
-were asked for: a frame takes longer to render than the frames of a look are apart
-(``frame_interval``), so the next request comes before the last frame, and each frame answers
-the oldest request it was exposed after. A trigger whose service is not discovered, a frame
-lost or one that never comes cost nothing here: the runner goes on blind after
+carried out as every answer's (which frame answers which request:
+:class:`~walker_supervisor.core.awaited_frames.AwaitedFrames`). A trigger whose service is not
+discovered, a frame lost or one that never comes cost nothing here: the runner goes on blind after
 :data:`~walker_supervisor.core.looking.LOOK_WAIT`, and the look is forgotten then. A robot
 without cameras (``gripper.camera.enabled`` false) has neither subscription nor client.
 
@@ -21,7 +19,6 @@ plant's ``camera_<g>/true_hole`` of the same stamp, reliable, keep last 1.
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Callable
 
 import numpy as np
@@ -34,8 +31,8 @@ from walker_core.camera import HOLE, IMAGE, camera_topic
 from walker_core.joint_roles import GRIPPERS
 from walker_runtime.qos import IMAGE_QOS, LOOK_IMAGE_QOS
 from walker_supervisor.clocks import Clocks
+from walker_supervisor.core.awaited_frames import AwaitedFrames
 from walker_supervisor.core.commands import HoleSighted, LookRequest
-from walker_supervisor.core.looking import LOOK_WAIT
 from walker_supervisor.core.runner import WalkRunner
 from walker_supervisor.messages import hole_message, seconds, stamp_nanoseconds
 
@@ -86,8 +83,7 @@ class CameraLink:
         self._node, self._runner, self._clocks, self._answer = node, runner, clocks, answer
         self._triggers = {}
         self._holes = {}
-        # gripper -> since [s] of each frame its looks await, oldest first
-        self._pending: dict[str, deque[float]] = {gripper: deque() for gripper in GRIPPERS}
+        self._awaited = AwaitedFrames(GRIPPERS)
         if not enabled:
             return
         for gripper in GRIPPERS:
@@ -123,7 +119,7 @@ class CameraLink:
                 f'look with the camera of gripper {command.gripper} not taken: the plant '
                 f'{client.srv_name} service is not available')
             return
-        self._pending[command.gripper].append(command.since)
+        self._awaited.asked(command.gripper, round(command.since * 1e9))
         client.call_async(Trigger.Request()).add_done_callback(
             lambda future, g=command.gripper: self._triggered(g, future))
 
@@ -136,15 +132,9 @@ class CameraLink:
 
     def _on_image(self, gripper: str, message: Image) -> None:
         """Hand the frame the oldest request awaits to the runner; ignore every other."""
-        pending = self._pending[gripper]
         now = self._clocks.now()
-        while pending and now - pending[0] > LOOK_WAIT:  # the runner went on blind
-            pending.popleft()
-        if not pending:
+        if not self._awaited.answers(gripper, stamp_nanoseconds(message.header.stamp), now):
             return
-        if stamp_nanoseconds(message.header.stamp) < round(pending[0] * 1e9):
-            return  # exposed before the oldest request: not a frame a look asked for
-        pending.popleft()
         try:
             image = image_array(message)
         except ValueError as error:
